@@ -1,0 +1,57 @@
+"""One camera for the rasteriser and the ray tracer: GL matrices and pixel-centre rays."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import transforms as tf
+from .conventions import pixel_centres_ndc
+from .scene import CameraSpec
+
+
+@dataclass
+class Camera:
+    spec: CameraSpec
+    width: int
+    height: int
+
+    @property
+    def aspect(self) -> float:
+        return self.width / self.height
+
+    def view(self, t: float) -> np.ndarray:
+        eye, fwd, up = self.spec.pose(t)
+        return tf.look_at(eye, fwd, up)
+
+    def projection(self) -> np.ndarray:
+        s = self.spec
+        return tf.perspective(s.fov_y, self.aspect, s.near, s.far)
+
+    def view_projection(self, t: float) -> np.ndarray:
+        return self.projection() @ self.view(t)
+
+    def eye(self, t: float) -> np.ndarray:
+        return self.spec.pose(t)[0]
+
+    def rays(self, t: float, i, j) -> tuple[np.ndarray, np.ndarray]:
+        """Origins and unit directions of the rays through the centres of image pixels (i, j)."""
+        eye, fwd, up = self.spec.pose(t)
+        right = np.cross(fwd, up)
+        right /= np.linalg.norm(right)
+        true_up = np.cross(right, fwd)
+        x, y = pixel_centres_ndc(i, j, self.width, self.height)
+        tan_half = np.tan(np.radians(self.spec.fov_y) * 0.5)
+        d = (fwd[None, :] + (x * tan_half * self.aspect)[:, None] * right[None, :]
+             + (y * tan_half)[:, None] * true_up[None, :])
+        d /= np.linalg.norm(d, axis=1, keepdims=True)
+        return np.broadcast_to(eye, d.shape).copy(), d
+
+    def project(self, t: float, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """World points -> (GL window pixel coordinates x right / y up, view depth)."""
+        p = np.c_[np.asarray(points, dtype=np.float64), np.ones(len(points))]
+        view = p @ self.view(t).T
+        clip = view @ self.projection().T
+        ndc = clip[:, :2] / clip[:, 3:4]
+        win = (ndc * 0.5 + 0.5) * np.array([self.width, self.height])
+        return win, -view[:, 2]

@@ -1,0 +1,38 @@
+"""Conventions that several modules must agree on, stated once.
+
+Pixel centres: pixel (i, j) of a written image (column i from the left, row j from the
+top) samples the ray through (i + 0.5, j + 0.5). GL framebuffers are bottom-up, images are
+top-down: `to_image` flips rows and is the only place that does.
+
+Object ids: object k of the scene file (1-based, file order) is written as k into an
+unsigned integer target cleared to 0, so 0 means "background" with no offset.
+
+Velocity: the G-buffer's velocity is the full screen-space displacement of the surface
+point over the exposure, `p(t + shutter/2) - p(t - shutter/2)`, in pixels of the
+framebuffer, in GL window axes (x to the right, y UP). The filters blur from -v/2 to +v/2.
+
+Depth: linear view depth (distance along the camera's forward axis, positive, metres).
+Pixels that hit nothing get BACKGROUND_DEPTH, finite so that differences stay finite.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+BACKGROUND_DEPTH = 1.0e9
+
+
+def to_image(gl_rows: np.ndarray) -> np.ndarray:
+    """GL bottom-up rows -> image top-down rows (and back: the flip is its own inverse)."""
+    return np.ascontiguousarray(gl_rows[::-1])
+
+
+def pixel_centres_ndc(i, j, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+    """NDC (x right, y up) of the centre of image pixel (i, j), j counted from the top."""
+    x = (np.asarray(i, dtype=np.float64) + 0.5) / width * 2.0 - 1.0
+    y = 1.0 - (np.asarray(j, dtype=np.float64) + 0.5) / height * 2.0
+    return x, y
+
+
+def glsl_defines() -> dict[str, str]:
+    """Constants that GLSL needs from here, injected as #defines (never written twice)."""
+    return {"BACKGROUND_DEPTH": f"{BACKGROUND_DEPTH:.1f}"}

@@ -1,0 +1,131 @@
+"""The scene model: what a scene file describes, after loading and validation.
+
+`viewer.scene_loader.load_scene` builds these from TOML (SCENE_FORMAT.md). Everything here
+is plain numpy (float64) so the rasteriser, the ray tracer and the tests share one truth
+for transforms and motion.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import transforms as tf
+
+
+@dataclass
+class Texture:
+    kind: str                         # "checker", "stripes" or "image"
+    size: float = 1.0                 # checker / stripes cell size (mesh units)
+    axis: int = 0                     # stripes: 0, 1 or 2
+    albedo2: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    path: Path | None = None          # image
+    image: np.ndarray | None = None   # image: linear RGB float32, (H, W, 3), top row first
+
+
+@dataclass
+class Material:
+    albedo: np.ndarray = field(default_factory=lambda: np.full(3, 0.8))
+    specular: float = 0.0
+    shininess: float = 32.0
+    texture: Texture | None = None
+
+
+@dataclass
+class Mesh:
+    """A triangle mesh in its own (local) coordinates, as trimesh built it."""
+    vertices: np.ndarray              # (n, 3) float64
+    faces: np.ndarray                 # (m, 3) int64
+    vertex_normals: np.ndarray        # (n, 3) float64, trimesh's
+    face_normals: np.ndarray          # (m, 3) float64, trimesh's (winding)
+    uv: np.ndarray | None = None      # (n, 2) float64, origin bottom-left, or None
+
+
+def rotation_at(w, t: float) -> np.ndarray:
+    """Rot(w * t) as a 3x3 matrix."""
+    return tf.axis_angle(np.asarray(w, dtype=np.float64) * t)
+
+
+@dataclass
+class SceneObject:
+    name: str
+    id: int                           # 1, 2, 3 ... in file order; 0 is the background
+    mesh: Mesh
+    material: Material
+    shading: str = "smooth"           # "smooth" or "flat"
+    position: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    rotation: np.ndarray = field(default_factory=lambda: np.zeros(3))   # Euler degrees
+    scale: np.ndarray = field(default_factory=lambda: np.ones(3))
+    velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    angular_velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+    @property
+    def moving(self) -> bool:
+        return bool(np.any(self.velocity != 0) or np.any(self.angular_velocity != 0))
+
+    def matrix(self, t: float) -> np.ndarray:
+        """M(t) = T(position + velocity t) @ Rot(angular_velocity t) @ R0 @ S."""
+        return (tf.translate(self.position + self.velocity * t)
+                @ tf.homogeneous(rotation_at(self.angular_velocity, t))
+                @ tf.homogeneous(tf.euler_xyz_degrees(self.rotation))
+                @ tf.scale(self.scale))
+
+
+@dataclass
+class CameraSpec:
+    position: np.ndarray
+    look_at: np.ndarray
+    fov_y: float
+    up: np.ndarray = field(default_factory=lambda: np.array([0.0, 1.0, 0.0]))
+    near: float = 0.05
+    far: float = 100.0
+    shutter: float = 0.0
+    velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    angular_velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+    @property
+    def moving(self) -> bool:
+        return bool(np.any(self.velocity != 0) or np.any(self.angular_velocity != 0))
+
+    def pose(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(eye, forward, up) at time t; forward and up are turned by Rot(angular_velocity t)."""
+        r = rotation_at(self.angular_velocity, t)
+        eye = self.position + self.velocity * t
+        fwd = r @ (self.look_at - self.position)
+        return eye, fwd / np.linalg.norm(fwd), r @ self.up
+
+
+@dataclass
+class Light:
+    direction: np.ndarray             # the direction the light travels, unit length
+    color: np.ndarray = field(default_factory=lambda: np.ones(3))
+
+
+@dataclass
+class RenderDefaults:
+    width: int = 1280
+    height: int = 720
+    time: float = 0.0
+
+
+@dataclass
+class Scene:
+    name: str
+    path: Path | None
+    camera: CameraSpec
+    background: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    ambient: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    render: RenderDefaults = field(default_factory=RenderDefaults)
+    lights: list[Light] = field(default_factory=list)
+    objects: list[SceneObject] = field(default_factory=list)
+
+    def exposure(self, t: float) -> tuple[float, float]:
+        """[t - shutter/2, t + shutter/2]: the exposure is centred on the frame time."""
+        s = self.camera.shutter
+        return t - 0.5 * s, t + 0.5 * s
+
+    def sample_times(self, t: float, n: int) -> np.ndarray:
+        """The reference's stratified times t - s/2 + (k + 0.5) s / n, k = 0 .. n-1."""
+        s = self.camera.shutter
+        return t - 0.5 * s + (np.arange(n) + 0.5) * s / n
