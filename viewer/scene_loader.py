@@ -1,0 +1,471 @@
+"""Scene files (SCENE_FORMAT.md) -> `viewer.scene.Scene`, with every mistake a SceneError.
+
+`load_scene` takes a path to a TOML file or the name of a built-in scene in `scenes/`.
+Validation is strict and happens here, once: the renderers may trust a loaded Scene.
+Whatever the document holds, the loader raises nothing but SceneError, and each message
+names the file, the dotted key and what was expected. Array entries are numbered from 1
+in file order (`objects[2]` is the object with id 2), with the object's name beside it.
+
+Primitive parameters that the format leaves out are left out of the trimesh call too, so
+trimesh's own defaults apply (sphere radius 1, subdivisions 3; cylinder and revolve
+sections). A cylinder needs `radius` and `height` because trimesh does. Sizes are capped
+(subdivisions <= 7, sections <= 10000, frames <= 16384 px) so that a typo cannot hang the
+program or exhaust memory.
+"""
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from .errors import SceneError
+from .scene import (CameraSpec, Light, Material, Mesh, RenderDefaults, Scene, SceneObject,
+                    Texture)
+
+PRIMITIVES = ("box", "sphere", "cylinder", "revolve")
+SHADINGS = ("smooth", "flat")
+TEXTURE_KEYS = {
+    "checker": ("kind", "size", "albedo2"),
+    "stripes": ("kind", "axis", "size", "albedo2"),
+    "image": ("kind", "path"),
+}
+MAX_SUBDIVISIONS = 7
+MAX_SECTIONS = 10000
+MAX_FRAME_SIZE = 16384
+NUMBERING = "objects[k] and lights[k] count from 1 in file order"
+
+
+# ---------------------------------------------------------------- built-in scenes
+
+def builtin_dir() -> Path:
+    import scenes
+    return Path(scenes.__file__).resolve().parent
+
+
+def builtin_scene_names() -> list[str]:
+    return sorted(p.stem for p in builtin_dir().glob("*.toml"))
+
+
+def builtin_scene_path(name: str) -> Path:
+    path = builtin_dir() / f"{name}.toml"
+    if name not in builtin_scene_names():
+        raise SceneError(name, "", "no such scene file or built-in scene; built-in scenes: "
+                         + ", ".join(builtin_scene_names()))
+    return path
+
+
+def load_scene(source) -> Scene:
+    """A scene from a TOML path, or from a built-in name (no ".toml", not an existing path)."""
+    path = Path(source)
+    if not _is_file(path):
+        if isinstance(source, str) and not source.endswith(".toml") and not _exists(path):
+            path = builtin_scene_path(source)
+        elif _exists(path):
+            raise SceneError(path, "", "not a regular file")
+        else:
+            raise SceneError(path, "", "file not found")
+    return _Loader(path).load()
+
+
+def _is_file(p: Path) -> bool:
+    try:
+        return p.is_file()
+    except (OSError, ValueError):
+        return False
+
+
+def _exists(p: Path) -> bool:
+    try:
+        return p.exists()
+    except (OSError, ValueError):
+        return False
+
+
+# ---------------------------------------------------------------- value checks
+
+def _describe(v) -> str:
+    if isinstance(v, bool):
+        return f"the boolean {str(v).lower()}"
+    if isinstance(v, (int, float)):
+        return f"the number {v!r}"
+    if isinstance(v, str):
+        return f"the string {v[:40]!r}"
+    if isinstance(v, list):
+        return f"an array of {len(v)}"
+    if isinstance(v, dict):
+        return "a table"
+    return f"a {type(v).__name__}"
+
+
+def _join(prefix: str, key: str) -> str:
+    return f"{prefix}.{key}" if prefix else key
+
+
+class _Loader:
+    def __init__(self, path: Path):
+        self.path = path
+
+    def fail(self, key: str, expected: str):
+        if "[" in key:
+            expected += f" ({NUMBERING})"
+        raise SceneError(self.path, key, expected)
+
+    # -- scalars and vectors
+
+    def number(self, v, key: str) -> float:
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            self.fail(key, f"expected a number, got {_describe(v)}")
+        try:
+            x = float(v)
+        except OverflowError:
+            x = math.inf
+        if not math.isfinite(x):
+            self.fail(key, f"expected a finite number, got {_describe(v)}")
+        return x
+
+    def integer(self, v, key: str) -> int:
+        if isinstance(v, bool) or not isinstance(v, int):
+            self.fail(key, f"expected an integer, got {_describe(v)}")
+        return v
+
+    def string(self, v, key: str) -> str:
+        if not isinstance(v, str):
+            self.fail(key, f"expected a string, got {_describe(v)}")
+        return v
+
+    def table(self, v, key: str, allowed) -> dict:
+        if not isinstance(v, dict):
+            self.fail(key, f"expected a table, got {_describe(v)}")
+        for k in v:
+            if k not in allowed:
+                self.fail(_join(key, k), "unknown key; allowed here: " + ", ".join(allowed))
+        return v
+
+    def require(self, t: dict, k: str, prefix: str, what: str = "a value"):
+        if k not in t:
+            self.fail(_join(prefix, k), f"required key is missing ({what})")
+        return t[k]
+
+    def vec3(self, v, key: str) -> np.ndarray:
+        if not isinstance(v, list) or len(v) != 3:
+            self.fail(key, f"expected an array of 3 numbers, got {_describe(v)}")
+        return np.array([self.number(x, f"{key}[{i}]") for i, x in enumerate(v)],
+                        dtype=np.float64)
+
+    def colour(self, v, key: str) -> np.ndarray:
+        c = self.vec3(v, key)
+        if np.any(c < 0):
+            self.fail(key, f"expected colour components >= 0, got {c.tolist()}")
+        return c
+
+    def positive(self, v, key: str) -> float:
+        x = self.number(v, key)
+        if x <= 0:
+            self.fail(key, f"expected a number > 0, got {x!r}")
+        return x
+
+    def non_negative(self, v, key: str) -> float:
+        x = self.number(v, key)
+        if x < 0:
+            self.fail(key, f"expected a number >= 0, got {x!r}")
+        return x
+
+    def int_in(self, v, key: str, lo: int, hi: int) -> int:
+        n = self.integer(v, key)
+        if not lo <= n <= hi:
+            self.fail(key, f"expected an integer from {lo} to {hi}, got {n}")
+        return n
+
+    def array_of_tables(self, v, key: str) -> list:
+        if not isinstance(v, list) or not all(isinstance(x, dict) for x in v):
+            self.fail(key, f"expected an array of tables ([[{key}]]), got {_describe(v)}")
+        return v
+
+    def unit(self, v, key: str) -> np.ndarray:
+        d = self.vec3(v, key)
+        with np.errstate(all="ignore"):
+            n = d / np.linalg.norm(d)
+        if not np.all(np.isfinite(n)) or abs(np.linalg.norm(n) - 1.0) > 1e-9:
+            self.fail(key, f"expected a non-zero vector, got {d.tolist()}")
+        return n
+
+    # -- the document
+
+    def load(self) -> Scene:
+        doc = self.parse()
+        self.table(doc, "", ("name", "background", "ambient", "camera", "render", "lights",
+                             "objects"))
+        name = self.string(doc.get("name", self.path.stem), "name")
+        background = self.colour(doc.get("background", [0, 0, 0]), "background")
+        ambient = self.colour(doc.get("ambient", [0, 0, 0]), "ambient")
+        camera = self.camera(self.require(doc, "camera", "", "a [camera] table"))
+        render = self.render(doc.get("render", {}))
+        lights = [self.light(t, f"lights[{i}]")
+                  for i, t in enumerate(self.array_of_tables(doc.get("lights", []), "lights"), 1)]
+        objects = [self.object(t, i)
+                   for i, t in enumerate(self.array_of_tables(doc.get("objects", []), "objects"), 1)]
+        return Scene(name=name, path=self.path, camera=camera, background=background,
+                     ambient=ambient, render=render, lights=lights, objects=objects)
+
+    def parse(self) -> dict:
+        try:
+            text = self.path.read_bytes().decode("utf-8")
+        except OSError as e:
+            self.fail("", f"cannot read the file ({e.strerror or e})")
+        except UnicodeDecodeError as e:
+            self.fail("", f"expected UTF-8 text (TOML), bad byte at offset {e.start}")
+        try:
+            return tomllib.loads(text)
+        except tomllib.TOMLDecodeError as e:
+            self.fail("", f"TOML syntax error: {e}")
+        except (ValueError, RecursionError) as e:
+            self.fail("", f"TOML could not be read: {type(e).__name__}: {e}")
+
+    def camera(self, v) -> CameraSpec:
+        k = "camera"
+        t = self.table(v, k, ("position", "look_at", "up", "fov_y", "near", "far", "shutter",
+                              "velocity", "angular_velocity"))
+        position = self.vec3(self.require(t, "position", k, "3 numbers"), "camera.position")
+        look_at = self.vec3(self.require(t, "look_at", k, "3 numbers"), "camera.look_at")
+        fov_y = self.number(self.require(t, "fov_y", k, "degrees"), "camera.fov_y")
+        if not 0 < fov_y < 180:
+            self.fail("camera.fov_y", f"expected degrees strictly between 0 and 180, got {fov_y!r}")
+        up = self.vec3(t.get("up", [0, 1, 0]), "camera.up")
+        up_unit = self.unit(up.tolist(), "camera.up")
+        with np.errstate(all="ignore"):
+            fwd = look_at - position
+            fwd_unit = fwd / np.linalg.norm(fwd)
+        if not np.all(np.isfinite(fwd_unit)) or abs(np.linalg.norm(fwd_unit) - 1.0) > 1e-9:
+            self.fail("camera.look_at", f"expected a point distinct from camera.position "
+                      f"{position.tolist()}, got {look_at.tolist()}")
+        if np.linalg.norm(np.cross(fwd_unit, up_unit)) < 1e-6:
+            self.fail("camera.up", "expected a vector not parallel to the view direction "
+                      f"(look_at - position = {fwd.tolist()})")
+        near = self.positive(t.get("near", 0.05), "camera.near")
+        far = self.number(t.get("far", 100.0), "camera.far")
+        if not far > near:
+            self.fail("camera.far", f"expected a number > near ({near!r}), got {far!r}")
+        shutter = self.non_negative(t.get("shutter", 0.0), "camera.shutter")
+        return CameraSpec(
+            position=position, look_at=look_at, fov_y=fov_y,
+            up=up, near=near, far=far,
+            shutter=shutter,
+            velocity=self.vec3(t.get("velocity", [0, 0, 0]), "camera.velocity"),
+            angular_velocity=self.vec3(t.get("angular_velocity", [0, 0, 0]),
+                                       "camera.angular_velocity"))
+
+    def render(self, v) -> RenderDefaults:
+        t = self.table(v, "render", ("width", "height", "time"))
+        return RenderDefaults(
+            width=self.int_in(t.get("width", 1280), "render.width", 1, MAX_FRAME_SIZE),
+            height=self.int_in(t.get("height", 720), "render.height", 1, MAX_FRAME_SIZE),
+            time=self.number(t.get("time", 0.0), "render.time"))
+
+    def light(self, t: dict, k: str) -> Light:
+        self.table(t, k, ("direction", "color"))
+        direction = self.unit(self.require(t, "direction", k, "3 numbers, the direction the "
+                                           "light travels"), f"{k}.direction")
+        return Light(direction=direction, color=self.colour(t.get("color", [1, 1, 1]),
+                                                            f"{k}.color"))
+
+    def object(self, t: dict, number: int) -> SceneObject:
+        k = f"objects[{number}]"
+        name = t.get("name", f"object{number}")
+        if isinstance(name, str):
+            k = f"{k} ({name})"
+        self.table(t, k, ("name", "mesh", "position", "rotation", "scale", "shading",
+                          "material", "velocity", "angular_velocity"))
+        name = self.string(name, f"{k}.name")
+        mesh_value = self.require(t, "mesh", k, "a file path or a primitive table")
+        mesh = self.mesh(mesh_value, f"{k}.mesh")
+        default_shading = "flat" if isinstance(mesh_value, dict) and "box" in mesh_value \
+            else "smooth"
+        shading = self.string(t.get("shading", default_shading), f"{k}.shading")
+        if shading not in SHADINGS:
+            self.fail(f"{k}.shading", f"expected \"smooth\" or \"flat\", got {shading!r}")
+        scale_v = t.get("scale", 1.0)
+        if isinstance(scale_v, list):
+            scale = self.vec3(scale_v, f"{k}.scale")
+        elif isinstance(scale_v, (int, float)) and not isinstance(scale_v, bool):
+            scale = np.full(3, self.number(scale_v, f"{k}.scale"))
+        else:
+            self.fail(f"{k}.scale", f"expected a number or 3 numbers, got {_describe(scale_v)}")
+        if np.any(scale == 0):
+            self.fail(f"{k}.scale", f"expected non-zero scale factors, got {scale.tolist()}")
+        material = self.material(t.get("material", {}), f"{k}.material", mesh)
+        return SceneObject(
+            name=name, id=number, mesh=mesh, material=material, shading=shading,
+            position=self.vec3(t.get("position", [0, 0, 0]), f"{k}.position"),
+            rotation=self.vec3(t.get("rotation", [0, 0, 0]), f"{k}.rotation"),
+            scale=scale,
+            velocity=self.vec3(t.get("velocity", [0, 0, 0]), f"{k}.velocity"),
+            angular_velocity=self.vec3(t.get("angular_velocity", [0, 0, 0]),
+                                       f"{k}.angular_velocity"))
+
+    def material(self, v, k: str, mesh: Mesh) -> Material:
+        t = self.table(v, k, ("albedo", "specular", "shininess", "texture"))
+        texture = None
+        if "texture" in t:
+            texture = self.texture(t["texture"], f"{k}.texture", mesh)
+        return Material(
+            albedo=self.colour(t.get("albedo", [0.8, 0.8, 0.8]), f"{k}.albedo"),
+            specular=self.non_negative(t.get("specular", 0.0), f"{k}.specular"),
+            shininess=self.non_negative(t.get("shininess", 32.0), f"{k}.shininess"),
+            texture=texture)
+
+    def texture(self, v, k: str, mesh: Mesh) -> Texture:
+        if not isinstance(v, dict):
+            self.fail(k, f"expected a table, got {_describe(v)}")
+        kind = self.string(self.require(v, "kind", k, "\"checker\", \"stripes\" or \"image\""),
+                           f"{k}.kind")
+        if kind not in TEXTURE_KEYS:
+            self.fail(f"{k}.kind", f"expected \"checker\", \"stripes\" or \"image\", got {kind!r}")
+        self.table(v, k, TEXTURE_KEYS[kind])
+        if kind == "image":
+            if mesh.uv is None:
+                self.fail(k, "an image texture needs a mesh with UVs (texture coordinates); "
+                          "this mesh has none (primitives never do)")
+            rel = self.string(self.require(v, "path", k, "an image file"), f"{k}.path")
+            path = self.file(rel, f"{k}.path", "image")
+            return Texture(kind=kind, path=path, image=self.image(path, f"{k}.path"))
+        axis = 0
+        if kind == "stripes":
+            axis = self.integer(self.require(v, "axis", k, "0, 1 or 2"), f"{k}.axis")
+            if axis not in (0, 1, 2):
+                self.fail(f"{k}.axis", f"expected 0, 1 or 2 (x, y, z), got {axis}")
+        size = self.positive(self.require(v, "size", k, "a cell size > 0"), f"{k}.size")
+        albedo2 = self.colour(self.require(v, "albedo2", k, "a linear RGB colour"),
+                              f"{k}.albedo2")
+        return Texture(kind=kind, size=size, axis=axis, albedo2=albedo2)
+
+    # -- files
+
+    def file(self, rel: str, key: str, what: str) -> Path:
+        path = self.path.parent / rel
+        if not rel or not _is_file(path):
+            self.fail(key, f"{what} file not found: {path}")
+        return path
+
+    def image(self, path: Path, key: str) -> np.ndarray:
+        from PIL import Image
+        try:
+            with Image.open(path) as im:
+                srgb = np.asarray(im.convert("RGB"), dtype=np.float64) / 255.0
+        except Exception as e:   # Pillow raises many types for bad files
+            self.fail(key, f"expected a readable image, {path} failed: {type(e).__name__}: {e}")
+        if srgb.size == 0:
+            self.fail(key, f"expected a non-empty image, {path} has no pixels")
+        return srgb_to_linear(srgb).astype(np.float32)
+
+    # -- meshes
+
+    def mesh(self, v, k: str) -> Mesh:
+        import trimesh
+        if isinstance(v, str):
+            path = self.file(v, k, "mesh")
+            try:
+                # A raw read first: processing silently drops NaN vertices, which should
+                # be reported, not hidden.
+                raw = trimesh.load(str(path), force="mesh", process=False)
+                if not np.all(np.isfinite(np.asarray(raw.vertices, dtype=np.float64))):
+                    self.fail(k, f"expected finite vertex coordinates, {path} has NaN or inf")
+                tm = trimesh.load(str(path), force="mesh")
+            except SceneError:
+                raise
+            except Exception as e:   # trimesh raises many types for bad files
+                self.fail(k, f"expected a readable mesh file, {path} failed: "
+                          f"{type(e).__name__}: {e}")
+            return self.mesh_arrays(tm, k, str(path))
+        if not isinstance(v, dict):
+            self.fail(k, f"expected a file path or a primitive table ({', '.join(PRIMITIVES)}), "
+                      f"got {_describe(v)}")
+        kinds = [p for p in PRIMITIVES if p in v]
+        if len(kinds) != 1:
+            self.fail(k, f"expected exactly one of {', '.join(PRIMITIVES)}, got "
+                      f"{', '.join(kinds) or 'none'}")
+        kind = kinds[0]
+        self.table(v, k, (kind, "sections") if kind == "revolve" else (kind,))
+        pk = f"{k}.{kind}"
+        p = v[kind]
+        try:
+            if kind == "box":
+                ext = self.vec3(p, pk)
+                if np.any(ext <= 0):
+                    self.fail(pk, f"expected extents > 0, got {ext.tolist()}")
+                tm = trimesh.creation.box(extents=ext.tolist())
+            elif kind == "sphere":
+                t = self.table(p, pk, ("radius", "subdivisions"))
+                args = {}
+                if "subdivisions" in t:
+                    args["subdivisions"] = self.int_in(t["subdivisions"], f"{pk}.subdivisions",
+                                                       0, MAX_SUBDIVISIONS)
+                if "radius" in t:
+                    args["radius"] = self.positive(t["radius"], f"{pk}.radius")
+                tm = trimesh.creation.icosphere(**args)
+            elif kind == "cylinder":
+                t = self.table(p, pk, ("radius", "height", "sections"))
+                args = {"radius": self.positive(self.require(t, "radius", pk, "a number > 0"),
+                                                f"{pk}.radius"),
+                        "height": self.positive(self.require(t, "height", pk, "a number > 0"),
+                                                f"{pk}.height")}
+                if "sections" in t:
+                    args["sections"] = self.int_in(t["sections"], f"{pk}.sections", 3,
+                                                   MAX_SECTIONS)
+                tm = trimesh.creation.cylinder(**args)
+            else:
+                points = self.profile(p, pk)
+                args = {}
+                if "sections" in v:
+                    args["sections"] = self.int_in(v["sections"], f"{k}.sections", 3,
+                                                   MAX_SECTIONS)
+                tm = trimesh.creation.revolve(linestring=points, **args)
+        except SceneError:
+            raise
+        except Exception as e:   # a parameter set that trimesh itself rejects
+            self.fail(pk, f"trimesh could not build this {kind}: {type(e).__name__}: {e}")
+        return self.mesh_arrays(tm, pk, f"the {kind}")
+
+    def profile(self, v, k: str) -> np.ndarray:
+        if not isinstance(v, list) or len(v) < 2:
+            self.fail(k, f"expected an array of at least 2 [r, z] points, got {_describe(v)}")
+        pts = []
+        for i, p in enumerate(v):
+            if not isinstance(p, list) or len(p) != 2:
+                self.fail(f"{k}[{i}]", f"expected an [r, z] pair, got {_describe(p)}")
+            r, z = self.number(p[0], f"{k}[{i}][0]"), self.number(p[1], f"{k}[{i}][1]")
+            if r < 0:
+                self.fail(f"{k}[{i}][0]", f"expected a radius >= 0, got {r!r}")
+            pts.append((r, z))
+        return np.array(pts, dtype=np.float64)
+
+    def mesh_arrays(self, tm, k: str, what: str) -> Mesh:
+        import trimesh
+        if not isinstance(tm, trimesh.Trimesh) or len(tm.faces) == 0 or len(tm.vertices) == 0:
+            self.fail(k, f"expected a mesh with triangles, {what} has none")
+        with np.errstate(all="ignore"):
+            vertices = np.array(tm.vertices, dtype=np.float64)
+            faces = np.array(tm.faces, dtype=np.int64)
+            vn = np.array(tm.vertex_normals, dtype=np.float64)
+            fn = np.array(tm.face_normals, dtype=np.float64)
+        if not np.all(np.isfinite(vertices)):
+            self.fail(k, f"expected finite vertex coordinates, {what} has NaN or inf")
+        if not (np.all(np.isfinite(vn)) and np.all(np.isfinite(fn))):
+            self.fail(k, f"expected a mesh with finite normals, {what} is degenerate")
+        uv = getattr(tm.visual, "uv", None)
+        if uv is not None:
+            uv = np.array(uv, dtype=np.float64)
+            if uv.shape != (len(vertices), 2) or not np.all(np.isfinite(uv)):
+                self.fail(k, f"expected one finite (u, v) per vertex, {what} has UVs of shape "
+                          f"{uv.shape} for {len(vertices)} vertices")
+        return Mesh(vertices=vertices, faces=faces, vertex_normals=vn, face_normals=fn, uv=uv)
+
+
+def srgb_to_linear(c: np.ndarray) -> np.ndarray:
+    """The standard sRGB decoding (IEC 61966-2-1) of values in [0, 1]."""
+    c = np.asarray(c, dtype=np.float64)
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+__all__ = ["load_scene", "builtin_scene_names", "builtin_scene_path", "srgb_to_linear"]
