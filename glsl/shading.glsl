@@ -1,0 +1,53 @@
+// Surface shading of SCENE_FORMAT.md, shared by the raster G-buffer pass and the shading of
+// ray-revealed surfaces, so both layers are lit identically.
+// Needs MAX_LIGHTS defined.
+
+uniform vec3 u_ambient;
+uniform int u_num_lights;
+uniform vec3 u_light_dir[MAX_LIGHTS];      // direction the light travels (unit)
+uniform vec3 u_light_color[MAX_LIGHTS];
+
+uniform vec3 u_albedo;
+uniform float u_specular;
+uniform float u_shininess;
+uniform int u_tex_kind;                    // 0 none, 1 checker, 2 stripes, 3 image
+uniform float u_tex_size;
+uniform int u_tex_axis;
+uniform vec3 u_albedo2;
+uniform sampler2D u_tex_image;             // linear RGB, repeat, bilinear
+
+vec3 surface_albedo(vec3 p_local, vec2 uv) {
+    if (u_tex_kind == 1) {
+        vec3 c = floor(p_local / u_tex_size);
+        return mod(c.x + c.y + c.z, 2.0) == 0.0 ? u_albedo : u_albedo2;
+    }
+    if (u_tex_kind == 2) {
+        float c = floor(p_local[u_tex_axis] / u_tex_size);
+        return mod(c, 2.0) == 0.0 ? u_albedo : u_albedo2;
+    }
+    if (u_tex_kind == 3) {
+        return texture(u_tex_image, uv).rgb;
+    }
+    return u_albedo;
+}
+
+// n: world normal (any length); eye: the camera eye at the frame's time.
+vec3 shade(vec3 p_world, vec3 n, vec3 p_local, vec2 uv, vec3 eye) {
+    n = normalize(n);
+    vec3 v = normalize(eye - p_world);
+    if (dot(n, v) < 0.0) n = -n;                       // two-sided surfaces
+    vec3 diffuse = u_ambient;
+    vec3 spec = vec3(0.0);
+    for (int k = 0; k < u_num_lights; ++k) {
+        vec3 l = -u_light_dir[k];
+        float ndl = max(0.0, dot(n, l));
+        diffuse += ndl * u_light_color[k];
+        if (ndl > 0.0) {
+            float ndh = max(0.0, dot(n, normalize(l + v)));
+            // pow(0, 0) is undefined in GLSL; the contract's value is 1.
+            float s = (u_shininess == 0.0) ? 1.0 : pow(ndh, u_shininess);
+            spec += s * u_light_color[k];
+        }
+    }
+    return surface_albedo(p_local, uv) * diffuse + u_specular * spec;
+}

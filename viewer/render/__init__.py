@@ -1,0 +1,1 @@
+"""The render core: takes a moderngl.Context from its caller; never imports glfw or imgui."""

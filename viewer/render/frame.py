@@ -1,0 +1,77 @@
+"""What one frame's passes share: the context, the pool, the scene, the camera and time."""
+from __future__ import annotations
+
+import time as _time
+from dataclasses import dataclass, field
+
+import moderngl
+import numpy as np
+
+from ..camera import Camera
+from ..conventions import to_image
+from ..params import ParamSet
+from ..shaders import ProgramCache
+from .gpu_scene import GpuScene
+from .pool import ResourcePool
+
+
+@dataclass
+class Frame:
+    ctx: moderngl.Context
+    pool: ResourcePool
+    programs: ProgramCache
+    gpu: GpuScene
+    camera: Camera
+    time: float
+    params: ParamSet
+    seed: int = 0
+    timing: bool = False                       # finish() around each pass, CPU clock
+    stats: dict = field(default_factory=dict)  # counters: masked pixels, rays, ...
+    pass_ms: dict = field(default_factory=dict)
+    host: dict = field(default_factory=dict)   # host-side results (e.g. region maps)
+
+    @property
+    def scene(self):
+        return self.gpu.scene
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return self.pool.size
+
+    @property
+    def exposure(self) -> tuple[float, float]:
+        return self.scene.exposure(self.time)
+
+    def read(self, name: str) -> np.ndarray:
+        """A pool texture as numpy, image orientation (top row first), (H, W) or (H, W, C)."""
+        return read_texture(self.pool.get(name))
+
+
+_NP = {"f4": np.float32, "f2": np.float16, "u4": np.uint32, "u1": np.uint8, "i4": np.int32}
+
+
+def read_texture(tex: moderngl.Texture) -> np.ndarray:
+    w, h = tex.size
+    a = np.frombuffer(tex.read(), dtype=_NP[tex.dtype]).reshape(h, w, tex.components)
+    a = to_image(a)
+    return a[..., 0] if tex.components == 1 else a
+
+
+class PassTimer:
+    """Synchronised CPU timing of a pass: ctx.finish() before and after (llvmpipe's timer
+    queries report only submission time, so they are not used for the numbers we report)."""
+
+    def __init__(self, frame: Frame, name: str):
+        self.frame, self.name = frame, name
+
+    def __enter__(self):
+        if self.frame.timing:
+            self.frame.ctx.finish()
+            self.t0 = _time.perf_counter()
+        return self
+
+    def __exit__(self, *exc):
+        if self.frame.timing and exc[0] is None:
+            self.frame.ctx.finish()
+            ms = (_time.perf_counter() - self.t0) * 1e3
+            self.frame.pass_ms[self.name] = self.frame.pass_ms.get(self.name, 0.0) + ms

@@ -1,0 +1,62 @@
+"""The G-buffer pass: linear colour shaded per SCENE_FORMAT.md, linear view depth, world
+normal, object id and the screen-space displacement over the exposure."""
+from __future__ import annotations
+
+import moderngl
+
+from ..conventions import glsl_defines
+from .frame import Frame
+from .gpu_scene import MAX_LIGHTS, set_uniform
+from .passes import Pass
+from .pool import TexSpec
+
+GBUFFER = {
+    "color": TexSpec(4, "f4"),
+    "depth": TexSpec(1, "f4"),
+    "normal": TexSpec(4, "f2"),
+    "id": TexSpec(1, "u4"),
+    "velocity": TexSpec(2, "f4"),
+}
+
+
+class GBufferPass(Pass):
+    name = "gbuffer"
+
+    def __init__(self, prefix: str = ""):
+        """`prefix` names a second set of targets (the reference's sub-frames use "sub_")."""
+        self.prefix = prefix
+        self.produces = tuple(prefix + n for n in GBUFFER)
+
+    def outputs(self, frame: Frame):
+        return {self.prefix + n: spec for n, spec in GBUFFER.items()}
+
+    def execute(self, frame: Frame, time: float | None = None):
+        t = frame.time if time is None else time
+        t_open, t_close = frame.exposure if time is None else frame.scene.exposure(t)
+        ctx, cam, gpu = frame.ctx, frame.camera, frame.gpu
+        defines = {**glsl_defines(), "MAX_LIGHTS": MAX_LIGHTS}
+        fbo = frame.pool.framebuffer(self.produces, depth=True)
+        fbo.use()
+        fbo.viewport = (0, 0) + fbo.size
+        fbo.clear(depth=1.0)
+        # Background first, without depth test: fills every target where nothing is hit.
+        bg = frame.programs.get("fullscreen.vert", "background.frag", defines)
+        set_uniform(bg, "u_background", frame.scene.background)
+        ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE | moderngl.BLEND)
+        frame.programs.empty_vao(bg).render(moderngl.TRIANGLES, vertices=3)
+
+        ctx.enable(moderngl.DEPTH_TEST)
+        ctx.depth_func = "<"
+        prog = frame.programs.get("gbuffer.vert", "gbuffer.frag", defines)
+        set_uniform(prog, "u_view", cam.view(t))
+        set_uniform(prog, "u_proj", cam.projection())
+        set_uniform(prog, "u_view_open", cam.view(t_open))
+        set_uniform(prog, "u_view_close", cam.view(t_close))
+        set_uniform(prog, "u_eye", cam.eye(t))
+        set_uniform(prog, "u_viewport", tuple(float(x) for x in frame.size))
+        set_uniform(prog, "u_near", float(cam.spec.near))
+        gpu.bind_lights(prog)
+        for obj in frame.scene.objects:
+            gpu.bind_object(prog, obj, t, t_open, t_close)
+            gpu.vao(prog, obj).render(moderngl.TRIANGLES)
+        ctx.disable(moderngl.DEPTH_TEST)

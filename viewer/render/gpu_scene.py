@@ -1,0 +1,118 @@
+"""The scene on the GPU: one vertex buffer per object (mesh space, uploaded once), image
+textures, and the uniforms of materials and lights. Both the raster G-buffer pass and the
+shading of ray-revealed surfaces set their uniforms here, so both layers shade the same.
+"""
+from __future__ import annotations
+
+import moderngl
+import numpy as np
+
+from .. import transforms as tf
+from ..scene import Scene, SceneObject
+
+MAX_LIGHTS = 16
+TEX_KINDS = {None: 0, "checker": 1, "stripes": 2, "image": 3}
+TEXTURE_UNIT_IMAGE = 7
+
+
+def vertex_data(obj: SceneObject) -> np.ndarray:
+    """Unshared triangles: (3m, 8) float32 of mesh-space position, normal and UV. Flat
+    shading gets the face normal at all three corners, smooth the trimesh vertex normals."""
+    m = obj.mesh
+    corners = m.faces.reshape(-1)
+    pos = m.vertices[corners]
+    if obj.shading == "flat":
+        nrm = np.repeat(m.face_normals, 3, axis=0)
+    else:
+        nrm = m.vertex_normals[corners]
+    uv = m.uv[corners] if m.uv is not None else np.zeros((len(corners), 2))
+    return np.hstack([pos, nrm, uv]).astype(np.float32)
+
+
+def mat(m: np.ndarray) -> bytes:
+    """A numpy matrix (column-vector convention) as GLSL expects it (column-major)."""
+    return np.asarray(m, dtype=np.float32).T.tobytes()
+
+
+def set_uniform(prog: moderngl.Program, name: str, value):
+    if name not in prog:
+        return  # the compiler removed an unused uniform
+    u = prog[name]
+    if isinstance(value, np.ndarray) and value.ndim == 2:
+        u.write(mat(value))
+    elif isinstance(value, np.ndarray):
+        u.value = tuple(float(x) for x in value)
+    else:
+        u.value = value
+
+
+class GpuScene:
+    def __init__(self, ctx: moderngl.Context, scene: Scene):
+        if len(scene.lights) > MAX_LIGHTS:
+            raise ValueError(f"at most {MAX_LIGHTS} lights are supported")
+        self.ctx, self.scene = ctx, scene
+        self.buffers = [ctx.buffer(vertex_data(o).tobytes()) for o in scene.objects]
+        self.images: dict[int, moderngl.Texture] = {}
+        for o in scene.objects:
+            tex = o.material.texture
+            if tex is not None and tex.kind == "image":
+                img = np.ascontiguousarray(tex.image[::-1], dtype=np.float32)  # UV origin: bottom-left
+                t = ctx.texture((img.shape[1], img.shape[0]), 3, img.tobytes(), dtype="f4")
+                t.filter = (moderngl.LINEAR, moderngl.LINEAR)
+                t.repeat_x = t.repeat_y = True
+                self.images[o.id] = t
+        self._vaos: dict[tuple[int, int], moderngl.VertexArray] = {}
+
+    def vao(self, prog: moderngl.Program, obj: SceneObject) -> moderngl.VertexArray:
+        key = (prog.glo, obj.id)
+        if key not in self._vaos:
+            self._vaos[key] = self.ctx.vertex_array(
+                prog, [(self.buffers[obj.id - 1], "3f 3f 2f", "in_position", "in_normal", "in_uv")])
+        return self._vaos[key]
+
+    def bind_lights(self, prog: moderngl.Program):
+        s = self.scene
+        set_uniform(prog, "u_ambient", s.ambient)
+        set_uniform(prog, "u_num_lights", len(s.lights))
+        dirs = np.zeros((MAX_LIGHTS, 3), np.float32)
+        cols = np.zeros((MAX_LIGHTS, 3), np.float32)
+        for k, light in enumerate(s.lights):
+            dirs[k], cols[k] = light.direction, light.color
+        if "u_light_dir" in prog:
+            prog["u_light_dir"].write(dirs.tobytes())
+            prog["u_light_color"].write(cols.tobytes())
+
+    def bind_material(self, prog: moderngl.Program, obj: SceneObject):
+        m = obj.material
+        tex = m.texture
+        set_uniform(prog, "u_albedo", m.albedo)
+        set_uniform(prog, "u_specular", float(m.specular))
+        set_uniform(prog, "u_shininess", float(m.shininess))
+        set_uniform(prog, "u_tex_kind", TEX_KINDS[tex.kind if tex else None])
+        if tex is not None:
+            set_uniform(prog, "u_tex_size", float(tex.size))
+            set_uniform(prog, "u_tex_axis", int(tex.axis))
+            set_uniform(prog, "u_albedo2", tex.albedo2)
+        if obj.id in self.images:
+            self.images[obj.id].use(TEXTURE_UNIT_IMAGE)
+            set_uniform(prog, "u_tex_image", TEXTURE_UNIT_IMAGE)
+
+    def bind_object(self, prog: moderngl.Program, obj: SceneObject, t: float,
+                    t_open: float, t_close: float):
+        """Transforms of `obj` at the frame time and at shutter open and close."""
+        model = obj.matrix(t)
+        set_uniform(prog, "u_model", model)
+        set_uniform(prog, "u_model_open", obj.matrix(t_open))
+        set_uniform(prog, "u_model_close", obj.matrix(t_close))
+        set_uniform(prog, "u_normal_matrix", tf.normal_matrix(model))
+        set_uniform(prog, "u_object_id", obj.id)
+        self.bind_material(prog, obj)
+
+    def release(self):
+        for v in self._vaos.values():
+            v.release()
+        for b in self.buffers:
+            b.release()
+        for t in self.images.values():
+            t.release()
+        self._vaos.clear()

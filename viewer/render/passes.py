@@ -1,0 +1,85 @@
+"""Pass and pipeline: a pass names its inputs and its outputs (with formats), takes its
+parameters from the frame, and executes; a pipeline is the passes of one mode, in order,
+checked when built so every input is produced earlier."""
+from __future__ import annotations
+
+import moderngl
+
+from ..conventions import glsl_defines
+from .frame import Frame, PassTimer
+from .gpu_scene import set_uniform
+from .pool import TexSpec
+
+
+class Pass:
+    name: str = "pass"
+    inputs: tuple[str, ...] = ()
+    produces: tuple[str, ...] = ()        # output names; `outputs` gives their formats
+
+    def outputs(self, frame: Frame) -> dict[str, TexSpec]:
+        return {}
+
+    def execute(self, frame: Frame) -> None:
+        raise NotImplementedError
+
+    def allocate(self, frame: Frame):
+        return {n: frame.pool.texture(n, spec) for n, spec in self.outputs(frame).items()}
+
+
+class FullscreenPass(Pass):
+    """A fragment pass over a full-screen triangle (no vertex buffer)."""
+    fragment: str = ""
+
+    def defines(self, frame: Frame) -> dict:
+        return {}
+
+    def program(self, frame: Frame) -> moderngl.Program:
+        return frame.programs.get("fullscreen.vert", self.fragment,
+                                  {**glsl_defines(), **self.defines(frame)})
+
+    def draw(self, frame: Frame, outputs: tuple[str, ...], textures: dict[str, str],
+             uniforms: dict | None = None, blend: bool = False):
+        """Bind pool textures to sampler uniforms, set uniforms, draw into `outputs`."""
+        ctx = frame.ctx
+        prog = self.program(frame)
+        for unit, (uniform, tex_name) in enumerate(textures.items()):
+            frame.pool.get(tex_name).use(unit)
+            set_uniform(prog, uniform, unit)
+        for k, v in (uniforms or {}).items():
+            set_uniform(prog, k, v)
+        fbo = frame.pool.framebuffer(tuple(outputs))
+        fbo.use()
+        fbo.viewport = (0, 0) + fbo.size
+        ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
+        if blend:
+            ctx.enable(moderngl.BLEND)
+            ctx.blend_func = moderngl.ONE, moderngl.ONE
+        vao = frame.programs.empty_vao(prog)
+        vao.render(moderngl.TRIANGLES, vertices=3)
+        if blend:
+            ctx.disable(moderngl.BLEND)
+
+
+class Pipeline:
+    def __init__(self, mode: str, passes: list[Pass], output: str, produced=()):
+        self.mode, self.passes, self.output = mode, passes, output
+        have = set(produced)
+        for p in passes:
+            missing = [n for n in p.inputs if n not in have]
+            if missing:
+                raise ValueError(f"pipeline {mode}: pass {p.name} needs {missing}, not produced before it")
+            have |= set(p.produces)
+        if output not in have:
+            raise ValueError(f"pipeline {mode}: output {output} is not produced")
+
+    def run(self, frame: Frame):
+        for p in self.passes:
+            p.allocate(frame)
+            with PassTimer(frame, p.name):
+                p.execute(frame)
+
+    def describe(self) -> str:
+        lines = [f"mode {self.mode} -> {self.output}"]
+        for p in self.passes:
+            lines.append(f"  {p.name}: {', '.join(p.inputs) or '-'} -> {', '.join(p.produces)}")
+        return "\n".join(lines)

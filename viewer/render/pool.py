@@ -1,0 +1,87 @@
+"""Named, size-dependent textures and their framebuffers.
+
+The pool owns every render target. A pass asks for a texture by name with its spec; a
+changed spec or frame size reallocates it (so a resize needs no bookkeeping elsewhere), and
+framebuffers that used it are dropped. Nothing else holds a GL texture across frames.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import moderngl
+
+
+@dataclass(frozen=True)
+class TexSpec:
+    components: int
+    dtype: str                 # moderngl dtype: "f4", "f2", "u4", "u1"
+    tile: int = 1              # 1 = full resolution; k = ceil(size / k) tiles
+    filter: str = "nearest"    # or "linear"
+
+    def size(self, full: tuple[int, int]) -> tuple[int, int]:
+        return (-(-full[0] // self.tile), -(-full[1] // self.tile))
+
+
+class ResourcePool:
+    def __init__(self, ctx: moderngl.Context):
+        self.ctx = ctx
+        self.size = (1, 1)
+        self._tex: dict[str, tuple[TexSpec, tuple[int, int], moderngl.Texture]] = {}
+        self._fbo: dict[tuple, moderngl.Framebuffer] = {}
+        self._depth: dict[tuple[int, int], moderngl.Texture] = {}
+
+    def resize(self, size: tuple[int, int]):
+        self.size = (int(size[0]), int(size[1]))
+
+    def texture(self, name: str, spec: TexSpec) -> moderngl.Texture:
+        size = spec.size(self.size)
+        have = self._tex.get(name)
+        if have and have[0] == spec and have[1] == size:
+            return have[2]
+        if have:
+            self._drop(name)
+        tex = self.ctx.texture(size, spec.components, dtype=spec.dtype)
+        f = moderngl.LINEAR if spec.filter == "linear" else moderngl.NEAREST
+        tex.filter = (f, f)
+        tex.repeat_x = tex.repeat_y = False
+        self._tex[name] = (spec, size, tex)
+        return tex
+
+    def get(self, name: str) -> moderngl.Texture:
+        return self._tex[name][2]
+
+    def spec(self, name: str) -> TexSpec:
+        return self._tex[name][0]
+
+    def names(self) -> list[str]:
+        return list(self._tex)
+
+    def depth_buffer(self) -> moderngl.Texture:
+        if self.size not in self._depth:
+            for d in self._depth.values():
+                d.release()
+            self._depth = {self.size: self.ctx.depth_texture(self.size)}
+        return self._depth[self.size]
+
+    def framebuffer(self, names: tuple[str, ...], depth: bool = False) -> moderngl.Framebuffer:
+        key = (names, depth, self.size if depth else None)
+        fbo = self._fbo.get(key)
+        if fbo is None:
+            fbo = self.ctx.framebuffer([self.get(n) for n in names],
+                                       self.depth_buffer() if depth else None)
+            self._fbo[key] = fbo
+        return fbo
+
+    def _drop(self, name: str):
+        for key in [k for k in self._fbo if name in k[0]]:
+            self._fbo.pop(key).release()
+        self._tex.pop(name)[2].release()
+
+    def release(self):
+        for fbo in self._fbo.values():
+            fbo.release()
+        for _, _, tex in self._tex.values():
+            tex.release()
+        for d in self._depth.values():
+            d.release()
+        self._fbo.clear(), self._tex.clear(), self._depth.clear()

@@ -1,0 +1,89 @@
+"""The render core's front door: a scene, a size and a context in; images and named
+buffers out. The caller owns the context (EGL for the CLI and tests, GLFW for the viewer)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import moderngl
+import numpy as np
+
+from ..camera import Camera
+from ..errors import UserError
+from ..params import ParamSet
+from ..scene import Scene
+from ..shaders import ProgramCache
+from .frame import Frame
+from .gpu_scene import GpuScene
+from .modes import MODES
+from .pool import ResourcePool
+
+
+@dataclass
+class RenderResult:
+    mode: str
+    image: np.ndarray                    # linear RGB float32, (H, W, 3), top row first
+    stats: dict = field(default_factory=dict)
+    pass_ms: dict = field(default_factory=dict)
+    host: dict = field(default_factory=dict)
+
+
+class Renderer:
+    def __init__(self, ctx: moderngl.Context, scene: Scene, size: tuple[int, int]):
+        self.ctx, self.scene = ctx, scene
+        self.programs = ProgramCache(ctx)
+        self.gpu = GpuScene(ctx, scene)
+        self.pool = ResourcePool(ctx)
+        self._pipelines: dict = {}
+        self._host_passes: dict = {}     # per-scene host state (e.g. the ray tracer)
+        self.resize(size)
+
+    def resize(self, size: tuple[int, int]):
+        w, h = int(size[0]), int(size[1])
+        limit = min(self.ctx.info["GL_MAX_TEXTURE_SIZE"], *self.ctx.info["GL_MAX_VIEWPORT_DIMS"])
+        if not (1 <= w <= limit and 1 <= h <= limit):
+            raise UserError(f"--size {w}x{h}: expected 1 to {limit} pixels per side (GL limit)")
+        self.pool.resize((w, h))
+        self.camera = Camera(self.scene.camera, w, h)
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return self.pool.size
+
+    def pipeline(self, mode: str):
+        if mode not in MODES:
+            raise UserError(f"--mode {mode}: expected one of {', '.join(MODES)}")
+        if mode not in self._pipelines:
+            self._pipelines[mode] = MODES[mode]()
+        return self._pipelines[mode]
+
+    def frame(self, t: float, params: ParamSet, seed: int = 0, timing: bool = False) -> Frame:
+        return Frame(self.ctx, self.pool, self.programs, self.gpu, self.camera, float(t),
+                     params, seed=seed, timing=timing, host={"state": self._host_passes})
+
+    def render(self, mode: str, t: float, params: ParamSet | None = None, seed: int = 0,
+               timing: bool = False, record_visibility: bool = False,
+               read_image: bool = True) -> RenderResult:
+        params = params or ParamSet()
+        pipe = self.pipeline(mode)
+        frame = self.frame(t, params, seed, timing)
+        frame.host["record_visibility"] = record_visibility
+        pipe.run(frame)
+        image = frame.read(pipe.output)[..., :3].copy() if read_image else None
+        frame.host.pop("state", None)
+        return RenderResult(mode, image, frame.stats, frame.pass_ms, frame.host)
+
+    def output_name(self, mode: str) -> str:
+        return self.pipeline(mode).output
+
+    def buffers(self) -> dict[str, np.ndarray]:
+        """Every texture in the pool, image orientation."""
+        from .frame import read_texture
+        return {n: read_texture(self.pool.get(n)) for n in self.pool.names()}
+
+    def release(self):
+        for state in self._host_passes.values():
+            if hasattr(state, "release"):
+                state.release()
+        self.pool.release()
+        self.programs.clear()
+        self.gpu.release()
