@@ -3,9 +3,8 @@ averaged in unclamped linear colour (clamped once, at encoding). Optionally reco
 sub-frame's object ids and depths, from which the evaluation regions are classified."""
 from __future__ import annotations
 
-import numpy as np
-
 from ..params import group, param
+from ..regions import RegionAccumulator
 from .frame import Frame
 from .gbuffer import GBufferPass
 from .modes import mode
@@ -40,18 +39,18 @@ class ReferencePass(Pass):
         fbo = frame.pool.framebuffer(("reference",))
         fbo.use()
         fbo.clear(0.0, 0.0, 0.0, 0.0)
-        record = frame.host.get("record_visibility", False)
-        ids, depths = [], []
+        # Regions (ALGORITHMS.md 5.3) from every sub-frame's visibility against the frame
+        # time's G-buffer, streamed so no stack of N id buffers is kept.
+        regions = (RegionAccumulator(frame.read("id"), frame.read("depth"))
+                   if frame.host.get("record_visibility") else None)
         for tk in frame.scene.sample_times(frame.time, n):
             self.sub.execute(frame, time=float(tk))
             self.acc.draw(frame, ("reference",), {"u_src": "sub_color"},
                           {"u_weight": 1.0 / n}, blend=True)
-            if record:
-                ids.append(frame.read("sub_id"))
-                depths.append(frame.read("sub_depth"))
-        if record:
-            frame.host["sample_ids"] = np.stack(ids)
-            frame.host["sample_depths"] = np.stack(depths)
+            if regions is not None:
+                regions.add(frame.read("sub_id"), frame.read("sub_depth"))
+        if regions is not None:
+            frame.host["regions"] = regions.result()
         frame.stats["samples"] = n
 
 
