@@ -1,0 +1,168 @@
+"""Nearest-hit ray casting against a scene whose objects move, with Embree and no rebuilds.
+
+embreex has no instancing, no transforms and no refit, so the geometry is split once:
+every static object goes into one world-space Embree scene (one geometry each, so the
+geometry index names the object), and every moving object gets its own Embree scene in
+its local mesh coordinates. At time t a ray is carried into a moving object's space by
+the inverse of M(t); the direction is NOT renormalised, so Embree's hit parameter is
+still the distance along the unit world direction. The nearest valid hit over all the
+scenes wins.
+
+embreex's `run` starts every ray at tnear = 0 and takes no tnear, so a ray that must
+start further along (a restart past an excluded static object, a near plane, a deeper
+layer) has its origin moved forward instead, and the offset is added back to the
+distance it reports.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from embreex import rtcore as rtc
+from embreex import rtcore_scene as rtcs
+from embreex.mesh_construction import TriangleMesh
+
+from viewer.scene import Scene, SceneObject
+
+
+@dataclass
+class Hits:
+    """Nearest hit of each ray.
+
+    Barycentrics are Embree's: the hit point is (1 - u - v) * V0 + u * V1 + v * V2 where
+    V0, V1, V2 are the vertices of `Mesh.faces[prim_id]` in that order.
+    """
+    object_id: np.ndarray      # (n,) uint32, 0 = miss
+    prim_id: np.ndarray        # (n,) int32, face index in the object's Mesh.faces; -1 = miss
+    u: np.ndarray              # (n,) float32
+    v: np.ndarray              # (n,) float32
+    distance: np.ndarray       # (n,) float64, world units along the unit direction; inf = miss
+    restarts: int = 0          # rays re-issued past an excluded static object
+    unresolved: int = 0        # rays still on their excluded static object after max_restarts
+    queries: int = 0           # Embree ray queries issued (one ray into one Embree scene)
+
+    @property
+    def hit(self) -> np.ndarray:
+        return self.object_id != 0
+
+
+def _embree_run(scene: rtcs.EmbreeScene, origins: np.ndarray, dirs: np.ndarray,
+                tfar: np.ndarray) -> dict:
+    # run() writes the hit distances into `dists` in place: always hand it a fresh array.
+    return scene.run(np.ascontiguousarray(origins, dtype=np.float32),
+                     np.ascontiguousarray(dirs, dtype=np.float32),
+                     dists=np.array(tfar, dtype=np.float32), output=1)
+
+
+class RayScene:
+    """The Embree side of one loaded scene: built once, traced at any time t."""
+
+    def __init__(self, scene: Scene, restart_eps: float = 1e-5):
+        self.scene = scene
+        # A restart moves the origin past the excluded hit by restart_eps * (1 + |p|_max):
+        # about a hundred float32 ulps of the hit point's coordinates, so the same face
+        # is not found again, and far thinner than any wall of a real mesh.
+        self.restart_eps = float(restart_eps)
+        self.objects: dict[int, SceneObject] = {o.id: o for o in scene.objects}
+        self._device = rtc.EmbreeDevice()
+
+        static = [o for o in scene.objects if not o.moving and len(o.mesh.faces)]
+        self.static_ids = np.array([o.id for o in static], dtype=np.uint32)  # geomID -> id
+        self._static = None
+        if static:
+            self._static = rtcs.EmbreeScene(self._device)
+            for o in static:
+                m = o.matrix(0.0)    # a static object's matrix does not depend on t
+                world = o.mesh.vertices @ m[:3, :3].T + m[:3, 3]
+                TriangleMesh(self._static, world.astype(np.float32),
+                             o.mesh.faces.astype(np.int32))
+
+        self.moving: list[tuple[SceneObject, rtcs.EmbreeScene]] = []
+        for o in scene.objects:
+            if o.moving and len(o.mesh.faces):
+                es = rtcs.EmbreeScene(self._device)
+                TriangleMesh(es, o.mesh.vertices.astype(np.float32), o.mesh.faces.astype(np.int32))
+                self.moving.append((o, es))
+
+    def reveal(self, camera, t: float, pixels_ij, own_ids, layers: int = 1, max_depth: int = 8,
+               threads: int | None = None, **kw):
+        """`raytrace.reveal.reveal` on this scene."""
+        from .reveal import reveal   # reveal builds on this module: import it late
+        return reveal(self, camera, t, pixels_ij, own_ids, layers, max_depth, threads, **kw)
+
+    def intersect(self, origins, dirs, t: float, exclude_ids=None, max_restarts: int = 8,
+                  tnear=None, tfar=None) -> Hits:
+        """Nearest hit per ray at time t, skipping each ray's excluded object.
+
+        origins, dirs: (n, 3); dirs should be unit length for `distance` to be metres.
+        exclude_ids: (n,) object id each ray must pass through (0 or None: none). A moving
+        one is simply not traced; a static one is passed by restarting the ray just past
+        each hit on it, at most `max_restarts` times (then the ray reports what else it found
+        nearer, or a miss, and counts as unresolved).
+        tnear, tfar: optional (n,) distances along the ray bounding the hits (clipping);
+        distances are still reported from `origins`.
+        """
+        o = np.asarray(origins, dtype=np.float64).reshape(-1, 3)
+        d = np.asarray(dirs, dtype=np.float64).reshape(-1, 3)
+        n = len(o)
+        excl = (np.zeros(n, dtype=np.uint32) if exclude_ids is None
+                else np.asarray(exclude_ids, dtype=np.uint32).reshape(n))
+        start = np.zeros(n) if tnear is None else np.asarray(tnear, dtype=np.float64).reshape(n)
+        limit = np.full(n, np.inf) if tfar is None else np.asarray(tfar, dtype=np.float64).reshape(n)
+
+        object_id = np.zeros(n, dtype=np.uint32)
+        prim_id = np.full(n, -1, dtype=np.int32)
+        u = np.zeros(n, dtype=np.float32)
+        v = np.zeros(n, dtype=np.float32)
+        best = limit.copy()           # the nearest hit so far bounds every later query
+        queries = 0
+
+        def keep(rows, ids, r, dist):
+            """Take the hits of `rows` that are nearer than the best so far."""
+            nearer = (r["geomID"] >= 0) & (dist < best[rows])
+            w = rows[nearer]
+            object_id[w] = ids[nearer]
+            prim_id[w] = r["primID"][nearer]
+            u[w] = r["u"][nearer]
+            v[w] = r["v"][nearer]
+            best[w] = dist[nearer]
+
+        o_start = o + d * start[:, None]
+        for obj, es in self.moving:
+            rows = np.flatnonzero(excl != obj.id)
+            if rows.size == 0:
+                continue
+            inv = np.linalg.inv(obj.matrix(t))
+            lo = o_start[rows] @ inv[:3, :3].T + inv[:3, 3]
+            ld = d[rows] @ inv[:3, :3].T     # not renormalised: t stays in world units
+            r = _embree_run(es, lo, ld, best[rows] - start[rows])
+            queries += rows.size
+            ids = np.full(rows.size, obj.id, dtype=np.uint32)
+            keep(rows, ids, r, start[rows] + r["tfar"])
+
+        restarts = unresolved = 0
+        if self._static is not None:
+            rows = np.arange(n)
+            offset = start.copy()
+            for depth in range(max_restarts + 1):
+                if rows.size == 0:
+                    break
+                org = o[rows] + d[rows] * offset[rows, None]
+                r = _embree_run(self._static, org, d[rows], best[rows] - offset[rows])
+                queries += rows.size
+                gid = r["geomID"]
+                ids = np.where(gid >= 0, self.static_ids[np.maximum(gid, 0)], 0).astype(np.uint32)
+                dist = offset[rows] + r["tfar"]
+                own = (gid >= 0) & (ids == excl[rows])
+                r["geomID"] = np.where(own, -1, gid)
+                keep(rows, ids, r, dist)
+                if depth == max_restarts:
+                    unresolved = int(own.sum())
+                    break
+                rows, dist = rows[own], dist[own]
+                p = o[rows] + d[rows] * dist[:, None]
+                offset[rows] = dist + self.restart_eps * (1.0 + np.abs(p).max(axis=1, initial=0.0))
+                restarts += rows.size
+
+        distance = np.where(object_id != 0, best, np.inf)
+        return Hits(object_id, prim_id, u, v, distance, restarts, unresolved, queries)

@@ -1,0 +1,158 @@
+"""Ray reveal (ALGORITHMS.md 4): the surface hidden behind each masked pixel's own object.
+
+One primary ray per pixel through its centre, from the camera at time t (Camera.rays).
+Layer 1 is the first hit on an object other than the pixel's own (object identity, not
+luminance). Layer k+1, where asked for, continues the ray from the layer-k hit only where
+that surface belongs to a moving object, skipping that object: what lies behind a
+revealed moving object. Hits are clipped to the camera's [near, far] view depth, as the
+rasteriser clips, so the reveal sees what a raster pass without the own object would.
+
+Large batches are split into chunks over a thread pool: Embree's `run` releases the GIL
+and every ray is independent, so the result does not depend on the split.
+"""
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from viewer.camera import Camera
+from viewer.conventions import BACKGROUND_DEPTH
+
+from .attributes import local_surface
+from .embree_scene import RayScene
+
+MIN_CHUNK = 4096   # below this, a thread costs more than it saves
+
+
+@dataclass
+class RevealLayer:
+    """One revealed layer for n pixels; rows not traced at this layer read as misses."""
+    traced: np.ndarray          # (n,) bool: a ray was cast for this pixel at this layer
+    object_id: np.ndarray       # (n,) uint32, 0 = nothing revealed
+    prim_id: np.ndarray         # (n,) int32, face index in the object's Mesh.faces; -1 = miss
+    barycentrics: np.ndarray    # (n, 2) float32, Embree (u, v): weights of face vertices 1, 2
+    distance: np.ndarray        # (n,) float64, from the eye along the unit ray; inf = miss
+    depth: np.ndarray           # (n,) float64, view depth at t; BACKGROUND_DEPTH = miss
+    world_position: np.ndarray  # (n, 3) float64, eye + distance * dir; zeros on a miss
+    local_position: np.ndarray  # (n, 3) float64, mesh space (for checker/stripes)
+    local_normal: np.ndarray    # (n, 3) float64, mesh space, unit; flat or smooth per object
+    uv: np.ndarray              # (n, 2) float64, mesh uv interpolated; zeros without uv
+
+    @property
+    def hit(self) -> np.ndarray:
+        return self.object_id != 0
+
+
+@dataclass
+class RevealResult:
+    layers: list[RevealLayer]
+    rays: int = 0          # rays cast: one per pixel per layer traced, plus every restart
+    queries: int = 0       # Embree queries (one ray into one Embree scene)
+    restarts: int = 0      # restarts past a static own object
+    unresolved: int = 0    # rays that ran out of restarts
+    pixels_hit: int = 0    # pixels whose layer 1 found a surface
+
+
+def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
+                  own_ids: np.ndarray, layers: int, max_depth: int) -> RevealResult:
+    n = len(pixels_ij)
+    origin, direction = camera.rays(t, pixels_ij[:, 0], pixels_ij[:, 1])
+    eye, fwd, _ = camera.spec.pose(t)
+    # Clip by view depth like the rasteriser: depth = distance * cos(ray, forward).
+    cos = direction @ fwd
+    near = camera.spec.near / cos
+    far = camera.spec.far / cos
+
+    result = RevealResult(layers=[])
+    traced = np.ones(n, dtype=bool)
+    exclude = np.asarray(own_ids, dtype=np.uint32).reshape(n)
+    tnear = near
+    for k in range(layers):
+        rows = np.flatnonzero(traced)
+        hits = rs.intersect(origin[rows], direction[rows], t, exclude[rows],
+                            max_restarts=max_depth, tnear=tnear[rows], tfar=far[rows])
+        layer = RevealLayer(
+            traced=traced.copy(),
+            object_id=np.zeros(n, dtype=np.uint32),
+            prim_id=np.full(n, -1, dtype=np.int32),
+            barycentrics=np.zeros((n, 2), dtype=np.float32),
+            distance=np.full(n, np.inf),
+            depth=np.full(n, BACKGROUND_DEPTH),
+            world_position=np.zeros((n, 3)),
+            local_position=np.zeros((n, 3)),
+            local_normal=np.zeros((n, 3)),
+            uv=np.zeros((n, 2)))
+        layer.object_id[rows] = hits.object_id
+        layer.prim_id[rows] = hits.prim_id
+        layer.barycentrics[rows] = np.stack([hits.u, hits.v], axis=1)
+        layer.distance[rows] = hits.distance
+        h = rows[hits.hit]
+        layer.world_position[h] = origin[h] + direction[h] * layer.distance[h, None]
+        layer.depth[h] = (layer.world_position[h] - eye) @ fwd
+        surf = local_surface(rs.objects, layer.object_id[h], layer.prim_id[h],
+                             layer.barycentrics[h, 0], layer.barycentrics[h, 1])
+        layer.local_position[h] = surf.position
+        layer.local_normal[h] = surf.normal
+        layer.uv[h] = surf.uv
+        result.layers.append(layer)
+        result.rays += rows.size + hits.restarts
+        result.queries += hits.queries
+        result.restarts += hits.restarts
+        result.unresolved += hits.unresolved
+
+        # Go deeper only behind revealed moving objects, skipping that object.
+        moving_ids = np.array([o.id for o, _ in rs.moving], dtype=np.uint32)
+        traced = layer.hit & np.isin(layer.object_id, moving_ids)
+        exclude = layer.object_id
+        tnear = np.where(traced, layer.distance, 0.0)
+    result.pixels_hit = int(result.layers[0].hit.sum()) if result.layers else 0
+    return result
+
+
+def _concatenate(parts: list[RevealResult]) -> RevealResult:
+    if len(parts) == 1:
+        return parts[0]
+    layers = []
+    for k in range(len(parts[0].layers)):
+        cols = {f.name: np.concatenate([getattr(p.layers[k], f.name) for p in parts])
+                for f in fields(RevealLayer)}
+        layers.append(RevealLayer(**cols))
+    out = RevealResult(layers=layers)
+    for name in ("rays", "queries", "restarts", "unresolved", "pixels_hit"):
+        setattr(out, name, sum(getattr(p, name) for p in parts))
+    return out
+
+
+def reveal(rs: RayScene, camera: Camera, t: float, pixels_ij, own_ids, layers: int = 1,
+           max_depth: int = 8, threads: int | None = None,
+           min_chunk: int = MIN_CHUNK) -> RevealResult:
+    """Reveal what lies behind each pixel's own object.
+
+    pixels_ij: (n, 2) int image coordinates (column i from the left, row j from the top).
+    own_ids: (n,) the object id of each pixel (0 for none: plain primary rays).
+    layers: how many surfaces to reveal (layer k+1 only behind a moving layer-k object).
+    max_depth: restarts allowed to pass a static own object.
+    threads: worker threads for large batches (default: the CPU count; 1 = no pool).
+    min_chunk: the fewest pixels worth a chunk of their own.
+    """
+    if layers < 1:
+        raise ValueError(f"layers must be at least 1, got {layers}")
+    pixels_ij = np.asarray(pixels_ij, dtype=np.int64).reshape(-1, 2)
+    own_ids = np.asarray(own_ids, dtype=np.uint32).reshape(-1)
+    if len(own_ids) != len(pixels_ij):
+        raise ValueError(f"{len(pixels_ij)} pixels but {len(own_ids)} own ids")
+    n = len(pixels_ij)
+    threads = (os.cpu_count() or 1) if threads is None else max(1, int(threads))
+    n_chunks = min(threads * 4, n // max(1, min_chunk)) if threads > 1 else 1
+    if n_chunks <= 1:
+        return _reveal_chunk(rs, camera, t, pixels_ij, own_ids, layers, max_depth)
+    bounds = np.linspace(0, n, n_chunks + 1).astype(np.int64)
+    with ThreadPoolExecutor(max_workers=threads) as pool:
+        parts = list(pool.map(
+            lambda ab: _reveal_chunk(rs, camera, t, pixels_ij[ab[0]:ab[1]],
+                                     own_ids[ab[0]:ab[1]], layers, max_depth),
+            zip(bounds[:-1], bounds[1:])))
+    return _concatenate(parts)

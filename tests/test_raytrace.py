@@ -1,0 +1,432 @@
+"""The CPU ray tracer against analytic scenes, an independent numpy ray caster and the
+conformance data of an independent Embree renderer."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from raytrace import RayScene, barycentric_weights, local_surface, reveal
+from viewer.camera import Camera
+from viewer.conventions import BACKGROUND_DEPTH
+from viewer.scene import CameraSpec, Material, Mesh, Scene, SceneObject
+
+CONFORMANCE = Path(__file__).parent / "conformance"
+A = np.array
+
+
+# ---------------------------------------------------------------- scene building helpers
+
+def mesh_of(tm: trimesh.Trimesh, uv=None) -> Mesh:
+    return Mesh(np.asarray(tm.vertices, dtype=np.float64), np.asarray(tm.faces, dtype=np.int64),
+                np.asarray(tm.vertex_normals, dtype=np.float64),
+                np.asarray(tm.face_normals, dtype=np.float64), uv)
+
+
+def box(extents) -> Mesh:
+    return mesh_of(trimesh.creation.box(extents=extents))
+
+
+def obj(oid: int, mesh: Mesh, shading="flat", **kw) -> SceneObject:
+    kw = {k: np.asarray(v, dtype=np.float64) for k, v in kw.items()}
+    return SceneObject(f"o{oid}", oid, mesh, Material(), shading, **kw)
+
+
+def scene_of(objects, eye=(0, 0, 0), look_at=(0, 0, -1), fov_y=90.0, near=0.05, far=100.0):
+    cam = CameraSpec(A(eye, dtype=float), A(look_at, dtype=float), fov_y, near=near, far=far)
+    return Scene("test", None, cam, objects=list(objects))
+
+
+def down_z(n=1, xy=(0.0, 0.0)):
+    """Rays from (x, y, 0) along -z."""
+    o = np.tile(np.r_[xy, 0.0], (n, 1)).astype(np.float32)
+    d = np.tile([0.0, 0.0, -1.0], (n, 1)).astype(np.float32)
+    return o, d
+
+
+def moller_trumbore(o, d, tri):
+    """Independent reference: nearest hit of rays (n,3) against triangles (m,3,3)."""
+    e1 = tri[:, 1] - tri[:, 0]
+    e2 = tri[:, 2] - tri[:, 0]
+    p = np.cross(d[:, None, :], e2[None])                      # (n, m, 3)
+    det = np.einsum("mk,nmk->nm", e1, p)
+    ok = np.abs(det) > 1e-12
+    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+    s = o[:, None, :] - tri[None, :, 0]
+    u = np.einsum("nmk,nmk->nm", s, p) * inv
+    q = np.cross(s, e1[None])
+    v = np.einsum("nk,nmk->nm", d, q) * inv
+    t = np.einsum("mk,nmk->nm", e2, q) * inv
+    valid = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
+    t = np.where(valid, t, np.inf)
+    k = np.argmin(t, axis=1)
+    r = np.arange(len(o))
+    return k, t[r, k], u[r, k], v[r, k]
+
+
+# ---------------------------------------------------------------- embree conventions
+
+def test_barycentrics_weight_vertices_1_and_2_and_distance_is_metres():
+    v = A([[1.0, -1.0, -4.0], [3.0, 0.5, -5.0], [0.0, 2.0, -6.0]])
+    tri = Mesh(v, A([[0, 1, 2]]), np.tile([0.0, 0.0, 1.0], (3, 1)), A([[0.0, 0.0, 1.0]]))
+    rs = RayScene(scene_of([obj(1, tri)]))
+    w_true = A([[0.2, 0.5, 0.3], [0.6, 0.1, 0.3], [0.1, 0.1, 0.8]])
+    target = w_true @ v
+    o = np.zeros((3, 3), dtype=np.float32)
+    d = target / np.linalg.norm(target, axis=1, keepdims=True)
+    hits = rs.intersect(o, d.astype(np.float32), 0.0)
+    assert hits.object_id.tolist() == [1, 1, 1]
+    assert hits.prim_id.tolist() == [0, 0, 0]
+    # u weights V1 and v weights V2: hit = (1-u-v) V0 + u V1 + v V2.
+    np.testing.assert_allclose(np.c_[hits.u, hits.v], w_true[:, 1:], atol=2e-6)
+    np.testing.assert_allclose(barycentric_weights(hits.u, hits.v), w_true, atol=2e-6)
+    np.testing.assert_allclose(hits.distance, np.linalg.norm(target, axis=1), rtol=1e-6)
+
+
+def test_miss_reads_id_zero_prim_minus_one_distance_inf():
+    rs = RayScene(scene_of([obj(1, box([1, 1, 1]), position=[0, 0, -5])]))
+    o, d = down_z(2)
+    o[1] = [5.0, 0.0, 0.0]
+    hits = rs.intersect(o, d, 0.0)
+    assert hits.object_id.tolist() == [1, 0]
+    assert hits.prim_id[1] == -1 and np.isinf(hits.distance[1]) and not hits.hit[1]
+    assert hits.distance[0] == pytest.approx(4.5, rel=1e-6)
+
+
+def test_empty_batch():
+    rs = RayScene(scene_of([obj(1, box([1, 1, 1]), position=[0, 0, -5])]))
+    hits = rs.intersect(np.zeros((0, 3), np.float32), np.zeros((0, 3), np.float32), 0.0)
+    assert hits.object_id.shape == (0,) and hits.queries == 0
+
+
+# ---------------------------------------------------------------- analytic scenes
+
+def wall_scene():
+    """A static slab whose front face is the plane z = -2.9 and another at z = -7.9."""
+    return scene_of([obj(1, box([20, 20, 0.2]), position=[0, 0, -3]),
+                     obj(2, box([40, 40, 0.2]), position=[0, 0, -8])])
+
+
+def test_static_planes_at_analytic_distances():
+    rs = RayScene(wall_scene())
+    d = A([[0.0, 0.0, -1.0], [0.3, 0.1, -1.0], [-0.5, 0.4, -1.0]])
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    hits = rs.intersect(np.zeros((3, 3), np.float32), d.astype(np.float32), 0.0)
+    assert hits.object_id.tolist() == [1, 1, 1]
+    np.testing.assert_allclose(hits.distance, 2.9 / -d[:, 2], rtol=1e-6)
+
+
+def test_rays_through_pixel_centres_project_back_to_them():
+    spec_scene = scene_of([obj(1, box([20, 20, 0.2]), position=[0, 0, -3]),
+                           obj(2, mesh_of(trimesh.creation.icosphere(2, radius=0.5)),
+                               "smooth", position=[0.4, -0.2, -2.0])],
+                          eye=(0.3, 0.2, 1.0), look_at=(0.1, -0.1, -3.0), fov_y=50.0)
+    cam = Camera(spec_scene.camera, 12, 8)
+    jj, ii = np.mgrid[0:8, 0:12]
+    pix = np.c_[ii.ravel(), jj.ravel()]
+    res = reveal(RayScene(spec_scene), cam, 0.0, pix, np.zeros(len(pix)), threads=1)
+    layer = res.layers[0]
+    assert layer.hit.all() and set(layer.object_id.tolist()) == {1, 2}
+    win, depth = cam.project(0.0, layer.world_position)
+    # GL window y is up: image row j's centre is at height - (j + 0.5).
+    np.testing.assert_allclose(win[:, 0], pix[:, 0] + 0.5, atol=1e-6)
+    np.testing.assert_allclose(win[:, 1], 8 - (pix[:, 1] + 0.5), atol=1e-6)
+    np.testing.assert_allclose(layer.depth, depth, rtol=1e-9)
+    # The wall part: the front face z = -2.9, so view depth follows from the plane.
+    eye, fwd, _ = spec_scene.camera.pose(0.0)
+    on_wall = layer.object_id == 1
+    np.testing.assert_allclose(layer.world_position[on_wall, 2], -2.9, atol=1e-5)
+
+
+def test_near_and_far_clip_like_the_rasteriser():
+    s = scene_of([obj(1, box([4, 4, 0.02]), position=[0, 0, -0.03]),     # in front of near
+                  obj(2, box([4, 4, 0.2]), position=[0, 0, -3])], near=0.05, far=5.0)
+    cam = Camera(s.camera, 3, 3)
+    res = reveal(RayScene(s), cam, 0.0, A([[1, 1]]), A([0]), threads=1)
+    assert res.layers[0].object_id.tolist() == [2]
+    assert res.layers[0].depth[0] == pytest.approx(2.9, rel=1e-6)
+    far = scene_of(s.objects[1:], far=2.0)
+    res = reveal(RayScene(far), Camera(far.camera, 3, 3), 0.0, A([[1, 1]]), A([0]), threads=1)
+    assert res.layers[0].object_id.tolist() == [0]
+    assert res.layers[0].depth[0] == BACKGROUND_DEPTH and np.isinf(res.layers[0].distance[0])
+
+
+# ---------------------------------------------------------------- moving objects
+
+def moving_object(oid=1):
+    """A non-uniformly scaled, rotated, translating and spinning icosphere."""
+    return obj(oid, mesh_of(trimesh.creation.icosphere(1, radius=0.6)), "smooth",
+               position=[0.2, -0.1, -4.0], rotation=[20.0, -35.0, 10.0], scale=[1.5, 0.7, 1.1],
+               velocity=[3.0, 1.0, -2.0], angular_velocity=[0.5, 2.0, -1.0])
+
+
+@pytest.mark.parametrize("t", [-0.1, 0.0, 0.13])
+def test_moving_hit_matches_numpy_raycast_of_transformed_mesh(t):
+    o_ = moving_object()
+    rs = RayScene(scene_of([o_]))
+    m = o_.matrix(t)
+    world = o_.mesh.vertices @ m[:3, :3].T + m[:3, 3]
+    centre = m[:3, 3]
+    rng = np.random.default_rng(7)
+    eye = A([0.1, 0.3, 0.5])
+    aim = centre + rng.uniform(-1.2, 1.2, size=(200, 3))
+    d = aim - eye
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    o = np.tile(eye, (len(d), 1))
+    hits = rs.intersect(o.astype(np.float32), d.astype(np.float32), t)
+    k, dist, u, v = moller_trumbore(o, d, world[o_.mesh.faces])
+    ref_hit = np.isfinite(dist)
+    assert 40 < ref_hit.sum() < 200           # both hits and misses are exercised
+    # Rays grazing an edge may round to either side; all but a few must agree exactly.
+    agree = (hits.hit == ref_hit) & (~ref_hit | (hits.prim_id == k))
+    assert (~agree).sum() <= 2
+    both = agree & ref_hit
+    np.testing.assert_allclose(hits.distance[both], dist[both], rtol=2e-5)
+    np.testing.assert_allclose(hits.u[both], u[both], atol=5e-4)
+    np.testing.assert_allclose(hits.v[both], v[both], atol=5e-4)
+    assert (hits.object_id[ref_hit & agree] == 1).all()
+
+
+def test_local_position_maps_by_m_of_t_to_the_world_hit():
+    t = 0.07
+    o_ = moving_object(2)
+    s = scene_of([obj(1, box([20, 20, 0.2]), position=[0, 0, -9]), o_], fov_y=60.0)
+    cam = Camera(s.camera, 40, 40)
+    jj, ii = np.mgrid[0:40, 0:40]
+    pix = np.c_[ii.ravel(), jj.ravel()]
+    layer = reveal(RayScene(s), cam, t, pix, np.zeros(len(pix)), threads=1).layers[0]
+    for oid in (1, 2):
+        h = layer.object_id == oid
+        assert h.sum() > 20
+        m = s.objects[oid - 1].matrix(t)
+        world = layer.local_position[h] @ m[:3, :3].T + m[:3, 3]
+        np.testing.assert_allclose(world, layer.world_position[h], atol=2e-5)
+
+
+def test_scaled_moving_object_reports_world_distance():
+    # Scale 2 in local space: a renormalised local direction would halve the distance.
+    s = scene_of([obj(1, box([1, 1, 1]), position=[0, 0, -6], scale=[2.0, 3.0, 2.0],
+                      velocity=[0.5, 0, 0])])
+    hits = RayScene(s).intersect(*down_z(1), t=0.0)
+    assert hits.object_id[0] == 1 and hits.distance[0] == pytest.approx(5.0, rel=1e-6)
+    hits = RayScene(s).intersect(*down_z(1, xy=(1.4, 0.0)), t=1.0)     # moved +0.5 in x
+    assert hits.object_id[0] == 1 and hits.distance[0] == pytest.approx(5.0, rel=1e-6)
+    hits = RayScene(s).intersect(*down_z(1, xy=(-0.9, 0.0)), t=1.0)
+    assert hits.object_id[0] == 0
+
+
+# ---------------------------------------------------------------- exclusion and restarts
+
+def test_moving_own_object_reveals_the_static_wall_behind():
+    s = scene_of([obj(1, box([20, 20, 0.2]), position=[0, 0, -3]),
+                  obj(2, mesh_of(trimesh.creation.icosphere(2, radius=0.5)), "smooth",
+                      position=[0, 0, -1.5], velocity=[1.0, 0, 0])])
+    rs = RayScene(s)
+    o, d = down_z(2)
+    plain = rs.intersect(o, d, 0.0)
+    assert plain.object_id.tolist() == [2, 2]
+    assert plain.distance[0] == pytest.approx(1.0, abs=1e-2)   # tessellated sphere
+    hits = rs.intersect(o, d, 0.0, exclude_ids=A([2, 1]))
+    assert hits.object_id.tolist() == [1, 2]
+    assert hits.distance[0] == pytest.approx(2.9, rel=1e-6)
+    assert hits.restarts == 0          # a moving object is skipped, not restarted
+
+
+def test_static_own_object_is_passed_by_restarts():
+    rs = RayScene(wall_scene())
+    o, d = down_z(3)
+    hits = rs.intersect(o, d, 0.0, exclude_ids=A([1, 2, 0]))
+    assert hits.object_id.tolist() == [2, 1, 1]
+    np.testing.assert_allclose(hits.distance, [7.9, 2.9, 2.9], rtol=1e-6)
+    # Ray 0 stops on the slab's front face and its back face: two restarts.
+    assert hits.restarts == 2 and hits.unresolved == 0
+    assert hits.queries == 3 + 2
+
+
+def test_restarts_are_bounded_by_max_restarts():
+    rs = RayScene(wall_scene())
+    hits = rs.intersect(*down_z(1), t=0.0, exclude_ids=A([1]), max_restarts=1)
+    assert hits.object_id.tolist() == [0] and hits.unresolved == 1 and hits.restarts == 1
+
+
+def test_static_own_restart_stops_at_a_nearer_moving_object():
+    # A moving sheet between the two faces of the own slab wins over the wall behind it.
+    s = scene_of([obj(1, box([20, 20, 1.0]), position=[0, 0, -3]),
+                  obj(2, box([20, 20, 0.2]), position=[0, 0, -8]),
+                  obj(3, box([1, 1, 0.1]), position=[0, 0, -3], velocity=[0, 1, 0])])
+    hits = RayScene(s).intersect(*down_z(1), t=0.0, exclude_ids=A([1]))
+    assert hits.object_id.tolist() == [3]
+    assert hits.distance[0] == pytest.approx(2.95, rel=1e-6)
+    assert hits.restarts == 1          # the front face only; the moving hit bounds the rest
+
+
+def same_colour_pair():
+    """Two moving boxes of the same material: A (id 2) at z=-2, B (id 3) at z=-4 to the
+    right, over a static wall (id 1) at z = -6 (front face -5.9)."""
+    return scene_of([obj(1, box([40, 40, 0.2]), position=[0, 0, -6]),
+                     obj(2, box([2, 2, 0.2]), position=[0, 0, -2], velocity=[1, 0, 0]),
+                     obj(3, box([2, 2, 0.2]), position=[1.5, 0, -4], velocity=[-1, 0, 0])])
+
+
+def test_same_coloured_moving_objects_reveal_by_id():
+    rs = RayScene(same_colour_pair())
+    o = A([[0.8, 0.0, 0.0], [-0.8, 0.0, 0.0]], dtype=np.float32)   # behind A: B; nothing
+    d = np.tile(A([0, 0, -1.0], dtype=np.float32), (2, 1))
+    plain = rs.intersect(o, d, 0.0)
+    assert plain.object_id.tolist() == [2, 2]
+    hits = rs.intersect(o, d, 0.0, exclude_ids=A([2, 2]))
+    assert hits.object_id.tolist() == [3, 1]
+    np.testing.assert_allclose(hits.distance, [3.9, 5.9], rtol=1e-6)
+    # B's own pixel reveals the wall, never A (which is in front of it, not behind).
+    assert rs.intersect(o[:1] + A([[0, 0, -3.0]], dtype=np.float32), d[:1], 0.0,
+                        exclude_ids=A([3])).object_id.tolist() == [1]
+
+
+def pair_camera(s, n=32):
+    return Camera(s.camera, n, n)
+
+
+def test_second_layer_only_behind_moving_revealed_objects():
+    s = same_colour_pair()
+    cam = pair_camera(s)
+    jj, ii = np.mgrid[0:32, 0:32]
+    pix = np.c_[ii.ravel(), jj.ravel()]
+    own = np.full(len(pix), 2)
+    res = reveal(RayScene(s), cam, 0.0, pix, own, layers=2, threads=1)
+    l1, l2 = res.layers
+    behind_a = l1.object_id == 3
+    assert behind_a.sum() > 10 and (l1.object_id == 1).sum() > 10
+    np.testing.assert_array_equal(l2.traced, behind_a)
+    assert (l2.object_id[behind_a] == 1).all() and (l2.object_id[~behind_a] == 0).all()
+    # The wall's front face is the plane z = -5.9, and the camera looks down -z.
+    np.testing.assert_allclose(l2.depth[behind_a], 5.9, rtol=1e-6)
+    np.testing.assert_allclose(l1.depth[behind_a], 3.9, rtol=1e-6)
+    assert (l2.depth[~behind_a] == BACKGROUND_DEPTH).all()
+    assert res.rays == len(pix) + behind_a.sum()
+    assert res.pixels_hit == l1.hit.sum() == len(pix)
+
+
+# ---------------------------------------------------------------- attributes
+
+def one_triangle(uv=None) -> Mesh:
+    v = A([[-1.0, -1.0, -3.0], [2.0, -1.0, -3.0], [-1.0, 2.0, -3.0]])
+    vn = A([[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [0.0, 2.0, 1.0]])     # deliberately unequal
+    return Mesh(v, A([[0, 1, 2]]), vn, A([[0.0, 0.0, 1.0]]), uv)
+
+
+def test_smooth_normal_is_the_normalised_barycentric_blend():
+    s = scene_of([obj(1, one_triangle(), "smooth")])
+    hits = RayScene(s).intersect(*down_z(1, xy=(0.5, 0.0)), t=0.0)
+    # (0.5, 0) = (1-u-v) V0 + u V1 + v V2 with u = 0.5, v = 1/3.
+    assert (hits.u[0], hits.v[0]) == pytest.approx((0.5, 1 / 3), abs=1e-6)
+    surf = local_surface({1: s.objects[0]}, hits.object_id, hits.prim_id, hits.u, hits.v)
+    blend = A([0.5 * 1.0, 2.0 / 3.0, 1.0])          # (1/6) n0 + (1/2) n1 + (1/3) n2
+    np.testing.assert_allclose(surf.normal[0], blend / np.linalg.norm(blend), atol=1e-6)
+    np.testing.assert_allclose(surf.position[0], [0.5, 0.0, -3.0], atol=1e-6)
+
+
+def test_flat_normal_is_the_face_normal():
+    s = scene_of([obj(1, one_triangle(), "flat")])
+    hits = RayScene(s).intersect(*down_z(1, xy=(0.5, 0.0)), t=0.0)
+    surf = local_surface({1: s.objects[0]}, hits.object_id, hits.prim_id, hits.u, hits.v)
+    np.testing.assert_array_equal(surf.normal[0], [0.0, 0.0, 1.0])
+
+
+def test_box_flat_normals_follow_the_face_hit():
+    b = box([1, 1, 1])
+    s = scene_of([obj(1, b, position=[0, 0, -3], rotation=[0, 90, 0], velocity=[0, 0, 1])])
+    layer = reveal(RayScene(s), Camera(s.camera, 3, 3), 0.0, A([[1, 1]]), A([0]),
+                   threads=1).layers[0]
+    # Rotated 90 degrees about y, the face seen from +z is the local -x face.
+    np.testing.assert_allclose(layer.local_normal[0], [-1.0, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_array_equal(layer.local_normal[0], b.face_normals[layer.prim_id[0]])
+
+
+def test_uv_is_interpolated_and_zero_without_uv():
+    uv = A([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    s = scene_of([obj(1, one_triangle(uv)), obj(2, box([9, 9, 0.1]), position=[0, 0, -5])])
+    rs = RayScene(s)
+    o = A([[0.5, 0.0, 0.0], [2.5, 2.5, 0.0]], dtype=np.float32)
+    d = np.tile(A([0, 0, -1.0], dtype=np.float32), (2, 1))
+    hits = rs.intersect(o, d, 0.0)
+    assert hits.object_id.tolist() == [1, 2]
+    surf = local_surface(rs.objects, hits.object_id, hits.prim_id, hits.u, hits.v)
+    np.testing.assert_allclose(surf.uv, [[0.5, 1 / 3], [0.0, 0.0]], atol=1e-6)
+
+
+# ---------------------------------------------------------------- threads and determinism
+
+def busy_scene():
+    return scene_of([obj(1, box([40, 40, 0.2]), position=[0, 0, -8]),
+                     obj(2, box([3, 3, 0.5]), position=[-1, 0, -5]),
+                     moving_object(3),
+                     obj(4, mesh_of(trimesh.creation.icosphere(2, radius=0.8)), "smooth",
+                         position=[1.0, 0.5, -5.0], velocity=[-2, 0, 0])], fov_y=60.0)
+
+
+def test_threads_give_the_single_threaded_result():
+    s = busy_scene()
+    rs = RayScene(s)
+    cam = Camera(s.camera, 48, 40)
+    jj, ii = np.mgrid[0:40, 0:48]
+    pix = np.c_[ii.ravel(), jj.ravel()]
+    rng = np.random.default_rng(1)
+    own = rng.integers(0, 5, len(pix))
+    single = reveal(rs, cam, 0.05, pix, own, layers=2, threads=1)
+    # 1920 pixels in 12 chunks of 160 over 3 threads.
+    multi = reveal(rs, cam, 0.05, pix, own, layers=2, threads=3, min_chunk=50)
+    again = reveal(rs, cam, 0.05, pix, own, layers=2, threads=3, min_chunk=50)
+    assert single.restarts > 0 and single.layers[1].traced.any()
+    for r in (multi, again):
+        for name in ("rays", "queries", "restarts", "unresolved", "pixels_hit"):
+            assert getattr(r, name) == getattr(single, name), name
+        for la, lb in zip(single.layers, r.layers):
+            for name in la.__dataclass_fields__:
+                np.testing.assert_array_equal(getattr(la, name), getattr(lb, name), name)
+
+
+def test_reveal_checks_its_arguments():
+    s = busy_scene()
+    rs = RayScene(s)
+    cam = Camera(s.camera, 4, 4)
+    with pytest.raises(ValueError, match="own ids"):
+        reveal(rs, cam, 0.0, A([[0, 0], [1, 1]]), A([0]))
+    with pytest.raises(ValueError, match="layers"):
+        reveal(rs, cam, 0.0, A([[0, 0]]), A([0]), layers=0)
+
+
+# ---------------------------------------------------------------- conformance
+
+def basic_scene() -> Scene:
+    """tests/conformance/basic.toml, built by hand with the trimesh calls of SCENE_FORMAT."""
+    sphere = mesh_of(trimesh.creation.icosphere(subdivisions=3, radius=0.35))
+    objects = [
+        obj(1, box([6.1, 0.1, 6.1]), position=[0.0, -0.05, 0.0]),
+        obj(2, box([6.1, 3.1, 0.1]), position=[0.0, 1.5, -1.5]),
+        obj(3, sphere, "smooth", position=[-0.4, 0.8, 0.8], velocity=[12.0, 0.0, 0.0]),
+        obj(4, box([0.5, 0.5, 0.5]), position=[0.9, 0.45, 0.2], rotation=[0.0, 30.0, 0.0],
+            angular_velocity=[0.0, 15.0, 0.0]),
+    ]
+    s = scene_of(objects, eye=(0.0, 1.0, 4.0), look_at=(0.0, 0.7, 0.0), fov_y=40.0)
+    s.camera.shutter = 0.05
+    return s
+
+
+def test_conformance_basic_ids_and_depths():
+    ref = np.load(CONFORMANCE / "basic.npz")
+    h, w = ref["centre_id"].shape
+    s = basic_scene()
+    jj, ii = np.mgrid[0:h, 0:w]
+    pix = np.c_[ii.ravel(), jj.ravel()]
+    res = reveal(RayScene(s), Camera(s.camera, w, h), 0.0, pix, np.zeros(len(pix)), threads=2)
+    ids = res.layers[0].object_id.reshape(h, w)
+    depth = res.layers[0].depth.reshape(h, w)
+    assert set(np.unique(ids).tolist()) == {0, 1, 2, 3, 4}
+    assert (ids != ref["centre_id"]).sum() <= 10          # silhouette pixels at most
+    same = (ids == ref["centre_id"]) & (ids > 0)
+    rel = np.abs(depth[same] - ref["centre_depth"][same]) / ref["centre_depth"][same]
+    assert rel.max() < 1e-3
+    assert (depth[ids == 0] == BACKGROUND_DEPTH).all()
+    assert res.pixels_hit == (ids > 0).sum()
