@@ -118,50 +118,58 @@ class RayScene:
         queries = 0
 
         def keep(rows, ids, r, dist):
-            """Take the hits of `rows` that are nearer than the best so far."""
-            nearer = (r["geomID"] >= 0) & (dist < best[rows])
-            w = rows[nearer]
-            object_id[w] = ids[nearer]
+            """Take the hits of `rows` (None: all rays) nearer than the best so far."""
+            nearer = (r["geomID"] >= 0) & (dist < (best if rows is None else best[rows]))
+            w = np.flatnonzero(nearer) if rows is None else rows[nearer]
+            object_id[w] = ids if np.isscalar(ids) else ids[nearer]
             prim_id[w] = r["primID"][nearer]
             u[w] = r["u"][nearer]
             v[w] = r["v"][nearer]
             best[w] = dist[nearer]
 
-        o_start = o + d * start[:, None]
+        def take(a, rows):
+            return a if rows is None else a[rows]
+
+        o_start = o + d * start[:, None] if tnear is not None else o
         for obj, es in self.moving:
-            rows = np.flatnonzero(excl != obj.id)
-            if rows.size == 0:
+            skip = excl == obj.id
+            rows = np.flatnonzero(~skip) if skip.any() else None   # None: every ray
+            if rows is not None and rows.size == 0:
                 continue
             inv = np.linalg.inv(obj.matrix(t))
-            lo = o_start[rows] @ inv[:3, :3].T + inv[:3, 3]
-            ld = d[rows] @ inv[:3, :3].T     # not renormalised: t stays in world units
-            r = _embree_run(es, lo, ld, best[rows] - start[rows])
-            queries += rows.size
-            ids = np.full(rows.size, obj.id, dtype=np.uint32)
-            keep(rows, ids, r, start[rows] + r["tfar"])
+            lo = take(o_start, rows) @ inv[:3, :3].T + inv[:3, 3]
+            ld = take(d, rows) @ inv[:3, :3].T     # not renormalised: t stays in world units
+            s0 = take(start, rows)
+            r = _embree_run(es, lo, ld, take(best, rows) - s0)
+            queries += len(lo)
+            keep(rows, np.uint32(obj.id), r, s0 + r["tfar"])
 
         restarts = unresolved = 0
         if self._static is not None:
-            rows = np.arange(n)
-            offset = start.copy()
+            # geomID + 1 -> object id, with geomID -1 (a miss) -> 0.
+            id_of = np.r_[np.uint32(0), self.static_ids]
+            rows, org, offset = None, o_start, start.copy()
             for depth in range(max_restarts + 1):
-                if rows.size == 0:
-                    break
-                org = o[rows] + d[rows] * offset[rows, None]
-                r = _embree_run(self._static, org, d[rows], best[rows] - offset[rows])
-                queries += rows.size
-                gid = r["geomID"]
-                ids = np.where(gid >= 0, self.static_ids[np.maximum(gid, 0)], 0).astype(np.uint32)
-                dist = offset[rows] + r["tfar"]
-                own = (gid >= 0) & (ids == excl[rows])
-                r["geomID"] = np.where(own, -1, gid)
+                s0 = take(offset, rows)
+                r = _embree_run(self._static, org, take(d, rows), take(best, rows) - s0)
+                queries += len(s0)
+                ids = id_of[r["geomID"] + 1]
+                dist = s0 + r["tfar"]
+                own = (ids == take(excl, rows)) & (ids != 0)
+                if own.any():
+                    r["geomID"][own] = -1
                 keep(rows, ids, r, dist)
+                if not own.any():
+                    break
                 if depth == max_restarts:
                     unresolved = int(own.sum())
                     break
-                rows, dist = rows[own], dist[own]
+                rows = np.flatnonzero(own) if rows is None else rows[own]
+                dist = dist[own]
                 p = o[rows] + d[rows] * dist[:, None]
-                offset[rows] = dist + self.restart_eps * (1.0 + np.abs(p).max(axis=1, initial=0.0))
+                scale = np.maximum(np.maximum(np.abs(p[:, 0]), np.abs(p[:, 1])), np.abs(p[:, 2]))
+                offset[rows] = dist + self.restart_eps * (1.0 + scale)
+                org = o[rows] + d[rows] * offset[rows, None]
                 restarts += rows.size
 
         distance = np.where(object_id != 0, best, np.inf)

@@ -430,3 +430,53 @@ def test_conformance_basic_ids_and_depths():
     assert rel.max() < 1e-3
     assert (depth[ids == 0] == BACKGROUND_DEPTH).all()
     assert res.pixels_hit == (ids > 0).sum()
+
+
+def loaded(name: str) -> Scene:
+    from viewer.scene_loader import load_scene
+    return load_scene(CONFORMANCE / f"{name}.toml")
+
+
+def all_pixels(w, h):
+    jj, ii = np.mgrid[0:h, 0:w]
+    return np.c_[ii.ravel(), jj.ravel()]
+
+
+@pytest.mark.parametrize("name", ["basic", "vase_pan"])
+def test_conformance_loaded_scenes_match_ids_and_depths(name):
+    ref = np.load(CONFORMANCE / f"{name}.npz")
+    s = loaded(name)
+    w, h, t = s.render.width, s.render.height, s.render.time
+    assert ref["centre_id"].shape == (h, w)
+    res = reveal(RayScene(s), Camera(s.camera, w, h), t, all_pixels(w, h),
+                 np.zeros(w * h), threads=2)
+    ids = res.layers[0].object_id.reshape(h, w)
+    depth = res.layers[0].depth.reshape(h, w)
+    assert (ids != ref["centre_id"]).sum() <= 10
+    same = (ids == ref["centre_id"]) & (ids > 0)
+    rel = np.abs(depth[same] - ref["centre_depth"][same]) / ref["centre_depth"][same]
+    assert rel.max() < 1e-3
+
+
+def test_reveal_equals_casting_the_scene_without_the_own_object():
+    """The oracle of ALGORITHMS 4.2: for primary rays, passing the own object is the same
+    as removing it. Every pixel of basic, own = its own object, static ones included."""
+    s = loaded("basic")
+    w, h, t = 160, 90, 0.01
+    cam = Camera(s.camera, w, h)
+    pix = all_pixels(w, h)
+    rs = RayScene(s)
+    own = reveal(rs, cam, t, pix, np.zeros(len(pix)), threads=1).layers[0].object_id
+    res = reveal(rs, cam, t, pix, own, threads=1)
+    got = res.layers[0]
+    assert res.restarts > 0 and res.unresolved == 0
+    for k in np.unique(own[own > 0]):
+        rows = own == k
+        without = Scene(s.name, None, s.camera, objects=[o for o in s.objects if o.id != k])
+        want = reveal(RayScene(without), cam, t, pix[rows], np.zeros(rows.sum()),
+                      threads=1).layers[0]
+        differ = got.object_id[rows] != want.object_id
+        assert differ.sum() <= 3, (k, differ.sum())
+        both = ~differ & want.hit
+        np.testing.assert_allclose(got.depth[rows][both], want.depth[both], rtol=1e-5)
+        np.testing.assert_array_equal(got.prim_id[rows][both], want.prim_id[both])
