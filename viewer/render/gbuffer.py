@@ -19,22 +19,32 @@ GBUFFER = {
 }
 
 
+# Target sets by GBUFFER_LAYOUT (glsl/gbuffer_outputs.glsl), in attachment order.
+LAYOUTS = {
+    "full": (0, ("color", "depth", "normal", "id", "velocity")),
+    "visibility": (1, ("color", "depth", "id")),
+    "color": (2, ("color",)),
+}
+
+
 class GBufferPass(Pass):
     name = "gbuffer"
 
-    def __init__(self, prefix: str = ""):
-        """`prefix` names a second set of targets (the reference's sub-frames use "sub_")."""
+    def __init__(self, prefix: str = "", layout: str = "full"):
+        """`prefix` names a second set of targets (the reference's sub-frames use "sub_");
+        `layout` writes fewer targets where the rest would be thrown away."""
         self.prefix = prefix
-        self.produces = tuple(prefix + n for n in GBUFFER)
+        self.layout_id, names = LAYOUTS[layout]
+        self.produces = tuple(prefix + n for n in names)
 
     def outputs(self, frame: Frame):
-        return {self.prefix + n: spec for n, spec in GBUFFER.items()}
+        return {p: GBUFFER[p[len(self.prefix):]] for p in self.produces}
 
     def execute(self, frame: Frame, time: float | None = None):
         t = frame.time if time is None else time
         t_open, t_close = frame.exposure if time is None else frame.scene.exposure(t)
         ctx, cam, gpu = frame.ctx, frame.camera, frame.gpu
-        defines = {**glsl_defines(), "MAX_LIGHTS": MAX_LIGHTS}
+        defines = {**glsl_defines(), "MAX_LIGHTS": MAX_LIGHTS, "GBUFFER_LAYOUT": self.layout_id}
         fbo = frame.pool.framebuffer(self.produces, depth=True)
         fbo.use()
         fbo.viewport = (0, 0) + fbo.size

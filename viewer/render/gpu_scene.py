@@ -66,8 +66,16 @@ class GpuScene:
     def vao(self, prog: moderngl.Program, obj: SceneObject) -> moderngl.VertexArray:
         key = (prog.glo, obj.id)
         if key not in self._vaos:
+            # Attributes the compiler dropped are skipped in the layout ("12x" = 3 floats).
+            fmt, names = [], []
+            for name, n in (("in_position", 3), ("in_normal", 3), ("in_uv", 2)):
+                if name in prog:
+                    fmt.append(f"{n}f")
+                    names.append(name)
+                else:
+                    fmt.append(f"{4 * n}x")
             self._vaos[key] = self.ctx.vertex_array(
-                prog, [(self.buffers[obj.id - 1], "3f 3f 2f", "in_position", "in_normal", "in_uv")])
+                prog, [(self.buffers[obj.id - 1], " ".join(fmt), *names)])
         return self._vaos[key]
 
     def bind_lights(self, prog: moderngl.Program):

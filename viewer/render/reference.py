@@ -27,7 +27,8 @@ class ReferencePass(Pass):
     produces = ("reference",)
 
     def __init__(self):
-        self.sub = GBufferPass(prefix="sub_")
+        self.sub_color = GBufferPass(prefix="sub_", layout="color")
+        self.sub_visibility = GBufferPass(prefix="sub_", layout="visibility")
         self.acc = Accumulate()
 
     def outputs(self, frame: Frame):
@@ -35,7 +36,6 @@ class ReferencePass(Pass):
 
     def execute(self, frame: Frame):
         n = frame.params["reference"].samples
-        self.sub.allocate(frame)
         fbo = frame.pool.framebuffer(("reference",))
         fbo.use()
         fbo.clear(0.0, 0.0, 0.0, 0.0)
@@ -43,8 +43,10 @@ class ReferencePass(Pass):
         # time's G-buffer, streamed so no stack of N id buffers is kept.
         regions = (RegionAccumulator(frame.read("id"), frame.read("depth"))
                    if frame.host.get("record_visibility") else None)
+        sub = self.sub_color if regions is None else self.sub_visibility
+        sub.allocate(frame)
         for tk in frame.scene.sample_times(frame.time, n):
-            self.sub.execute(frame, time=float(tk))
+            sub.execute(frame, time=float(tk))
             self.acc.draw(frame, ("reference",), {"u_src": "sub_color"},
                           {"u_weight": 1.0 / n}, blend=True)
             if regions is not None:
