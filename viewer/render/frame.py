@@ -46,6 +46,17 @@ class Frame:
         """A pool texture as numpy, image orientation (top row first), (H, W) or (H, W, C)."""
         return read_texture(self.pool.get(name))
 
+    def write(self, name: str, array: np.ndarray):
+        """Upload an image-orientation array into the pool texture `name` (already allocated)."""
+        tex = self.pool.get(name)
+        a = np.asarray(array, dtype=_NP[tex.dtype])
+        if a.ndim == 2:
+            a = a[..., None]
+        if a.shape != (tex.size[1], tex.size[0], tex.components):
+            raise ValueError(f"{name}: array {a.shape} does not fit texture "
+                             f"{(tex.size[1], tex.size[0], tex.components)}")
+        tex.write(to_image(a).tobytes())
+
 
 _NP = {"f4": np.float32, "f2": np.float16, "u4": np.uint32, "u1": np.uint8, "i4": np.int32}
 
