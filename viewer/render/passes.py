@@ -45,6 +45,8 @@ class FullscreenPass(Pass):
         for unit, (uniform, tex_name) in enumerate(textures.items()):
             frame.pool.get(tex_name).use(unit)
             set_uniform(prog, uniform, unit)
+        set_uniform(prog, "u_seed", int(frame.seed) & 0xFFFFFFFF)   # glsl/noise.glsl
+        set_uniform(prog, "u_viewport", tuple(float(x) for x in frame.size))
         for k, v in (uniforms or {}).items():
             set_uniform(prog, k, v)
         fbo = frame.pool.framebuffer(tuple(outputs))
