@@ -80,6 +80,33 @@ def read_sidecar(path: str) -> dict:
     return data
 
 
+CAMERA_VECTORS = ("position", "look_at", "up", "velocity", "angular_velocity")
+CAMERA_NUMBERS = ("fov_y", "near", "far", "shutter")
+
+
+def apply_camera(scene: Scene, data, source: str):
+    """Override the scene's camera with a sidecar's (the viewer may have moved it)."""
+    import numpy as np
+    if not isinstance(data, dict):
+        raise UserError(f"{source}: camera: expected a table")
+    cam = scene.camera
+    for key, value in data.items():
+        if key in CAMERA_VECTORS:
+            try:
+                v = np.asarray(value, dtype=np.float64)
+            except (TypeError, ValueError):
+                v = None
+            if v is None or v.shape != (3,) or not np.all(np.isfinite(v)):
+                raise UserError(f"{source}: camera.{key}: expected 3 finite numbers")
+            setattr(cam, key, v)
+        elif key in CAMERA_NUMBERS:
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise UserError(f"{source}: camera.{key}: expected a finite number")
+            setattr(cam, key, float(value))
+        else:
+            raise UserError(f"{source}: camera.{key}: unknown key")
+
+
 def setup(args) -> Setup:
     params = ParamSet()
     side = read_sidecar(args.params) if getattr(args, "params", None) else None
@@ -89,6 +116,8 @@ def setup(args) -> Setup:
     seed = 0
     if side is not None:
         params.update(side.get("params", {}), source=f"--params {args.params}")
+        if "camera" in side:
+            apply_camera(scene, side["camera"], f"--params {args.params}")
         if "size" in side:
             size = parse_size("x".join(str(x) for x in side["size"]))
         if "time" in side:
