@@ -24,7 +24,8 @@ from viewer.conventions import BACKGROUND_DEPTH
 from .attributes import local_surface
 from .embree_scene import RayScene
 
-MIN_CHUNK = 4096   # below this, a thread costs more than it saves
+MIN_CHUNK = 4096     # below this, a thread costs more than it saves
+MAX_CHUNK = 32768    # above this, the per-ray numpy temporaries fall out of the caches
 
 
 @dataclass
@@ -56,59 +57,79 @@ class RevealResult:
     pixels_hit: int = 0    # pixels whose layer 1 found a surface
 
 
+def _layer(rs: RayScene, hits, origin, direction, cos, traced) -> RevealLayer:
+    """The layer of the traced rays (compact: one row per traced ray)."""
+    hit = hits.hit
+    dist = np.where(hit, hits.distance, 0.0)
+    surf = local_surface(rs.objects, hits.object_id, hits.prim_id, hits.u, hits.v)
+    return RevealLayer(
+        traced=traced,
+        object_id=hits.object_id,
+        prim_id=hits.prim_id,
+        barycentrics=np.stack([hits.u, hits.v], axis=1),
+        distance=hits.distance,
+        # The rays are unit length from the eye: view depth = distance * cos(ray, forward).
+        depth=np.where(hit, dist * cos, BACKGROUND_DEPTH),
+        world_position=(origin + direction * dist[:, None]) * hit[:, None],
+        local_position=surf.position,
+        local_normal=surf.normal,
+        uv=surf.uv)
+
+
+_MISS = {"object_id": 0, "prim_id": -1, "barycentrics": 0.0, "distance": np.inf,
+         "depth": BACKGROUND_DEPTH, "world_position": 0.0, "local_position": 0.0,
+         "local_normal": 0.0, "uv": 0.0}
+
+
+def _expand(compact: RevealLayer, traced: np.ndarray) -> RevealLayer:
+    """A compact layer spread over all n pixels; untraced pixels read as misses."""
+    cols = {"traced": traced}
+    for name, miss in _MISS.items():
+        a = getattr(compact, name)
+        full = np.full((len(traced),) + a.shape[1:], miss, dtype=a.dtype)
+        full[traced] = a
+        cols[name] = full
+    return RevealLayer(**cols)
+
+
 def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
                   own_ids: np.ndarray, layers: int, max_depth: int) -> RevealResult:
     n = len(pixels_ij)
     origin, direction = camera.rays(t, pixels_ij[:, 0], pixels_ij[:, 1])
-    eye, fwd, _ = camera.spec.pose(t)
+    _, fwd, _ = camera.spec.pose(t)
     # Clip by view depth like the rasteriser: depth = distance * cos(ray, forward).
-    cos = direction @ fwd
+    cos = np.einsum("nk,k->n", direction, fwd)
     near = camera.spec.near / cos
     far = camera.spec.far / cos
+    moving_ids = np.array([o.id for o, _ in rs.moving], dtype=np.uint32)
 
     result = RevealResult(layers=[])
-    traced = np.ones(n, dtype=bool)
+    rows = None                   # the pixels traced at this layer; None = all
     exclude = np.asarray(own_ids, dtype=np.uint32).reshape(n)
     tnear = near
     for k in range(layers):
-        rows = np.flatnonzero(traced)
-        hits = rs.intersect(origin[rows], direction[rows], t, exclude[rows],
-                            max_restarts=max_depth, tnear=tnear[rows], tfar=far[rows])
-        layer = RevealLayer(
-            traced=traced.copy(),
-            object_id=np.zeros(n, dtype=np.uint32),
-            prim_id=np.full(n, -1, dtype=np.int32),
-            barycentrics=np.zeros((n, 2), dtype=np.float32),
-            distance=np.full(n, np.inf),
-            depth=np.full(n, BACKGROUND_DEPTH),
-            world_position=np.zeros((n, 3)),
-            local_position=np.zeros((n, 3)),
-            local_normal=np.zeros((n, 3)),
-            uv=np.zeros((n, 2)))
-        layer.object_id[rows] = hits.object_id
-        layer.prim_id[rows] = hits.prim_id
-        layer.barycentrics[rows] = np.stack([hits.u, hits.v], axis=1)
-        layer.distance[rows] = hits.distance
-        h = rows[hits.hit]
-        layer.world_position[h] = origin[h] + direction[h] * layer.distance[h, None]
-        layer.depth[h] = (layer.world_position[h] - eye) @ fwd
-        surf = local_surface(rs.objects, layer.object_id[h], layer.prim_id[h],
-                             layer.barycentrics[h, 0], layer.barycentrics[h, 1])
-        layer.local_position[h] = surf.position
-        layer.local_normal[h] = surf.normal
-        layer.uv[h] = surf.uv
+        pick = (lambda a: a) if rows is None else (lambda a: a[rows])
+        hits = rs.intersect(pick(origin), pick(direction), t, exclude,
+                            max_restarts=max_depth, tnear=tnear, tfar=pick(far))
+        if rows is None:
+            layer = _layer(rs, hits, origin, direction, cos, np.ones(n, dtype=bool))
+        else:
+            traced = np.zeros(n, dtype=bool)
+            traced[rows] = True
+            layer = _expand(_layer(rs, hits, origin[rows], direction[rows], cos[rows], traced),
+                            traced)
         result.layers.append(layer)
-        result.rays += rows.size + hits.restarts
+        result.rays += len(hits.object_id) + hits.restarts
         result.queries += hits.queries
         result.restarts += hits.restarts
         result.unresolved += hits.unresolved
 
         # Go deeper only behind revealed moving objects, skipping that object.
-        moving_ids = np.array([o.id for o, _ in rs.moving], dtype=np.uint32)
-        traced = layer.hit & np.isin(layer.object_id, moving_ids)
-        exclude = layer.object_id
-        tnear = np.where(traced, layer.distance, 0.0)
-    result.pixels_hit = int(result.layers[0].hit.sum()) if result.layers else 0
+        deeper = np.isin(hits.object_id, moving_ids)       # compact, over this layer's rays
+        rows = np.flatnonzero(deeper) if rows is None else rows[deeper]
+        exclude = hits.object_id[deeper]
+        tnear = hits.distance[deeper]
+    result.pixels_hit = int(result.layers[0].hit.sum())
     return result
 
 
@@ -146,13 +167,17 @@ def reveal(rs: RayScene, camera: Camera, t: float, pixels_ij, own_ids, layers: i
         raise ValueError(f"{len(pixels_ij)} pixels but {len(own_ids)} own ids")
     n = len(pixels_ij)
     threads = (os.cpu_count() or 1) if threads is None else max(1, int(threads))
-    n_chunks = min(threads * 4, n // max(1, min_chunk)) if threads > 1 else 1
+    n_chunks = max(-(-n // MAX_CHUNK),
+                   min(threads * 4, n // max(1, min_chunk)) if threads > 1 else 1)
     if n_chunks <= 1:
         return _reveal_chunk(rs, camera, t, pixels_ij, own_ids, layers, max_depth)
     bounds = np.linspace(0, n, n_chunks + 1).astype(np.int64)
+
+    def run(k):
+        a, b = bounds[k], bounds[k + 1]
+        return _reveal_chunk(rs, camera, t, pixels_ij[a:b], own_ids[a:b], layers, max_depth)
+
+    if threads == 1:
+        return _concatenate([run(k) for k in range(n_chunks)])
     with ThreadPoolExecutor(max_workers=threads) as pool:
-        parts = list(pool.map(
-            lambda ab: _reveal_chunk(rs, camera, t, pixels_ij[ab[0]:ab[1]],
-                                     own_ids[ab[0]:ab[1]], layers, max_depth),
-            zip(bounds[:-1], bounds[1:])))
-    return _concatenate(parts)
+        return _concatenate(list(pool.map(run, range(n_chunks))))
