@@ -149,7 +149,7 @@ def _concatenate(parts: list[RevealResult]) -> RevealResult:
 
 def reveal(rs: RayScene, camera: Camera, t: float, pixels_ij, own_ids, layers: int = 1,
            max_depth: int = 8, threads: int | None = None,
-           min_chunk: int = MIN_CHUNK) -> RevealResult:
+           min_chunk: int = MIN_CHUNK, max_chunk: int = MAX_CHUNK) -> RevealResult:
     """Reveal what lies behind each pixel's own object.
 
     pixels_ij: (n, 2) int image coordinates (column i from the left, row j from the top).
@@ -157,7 +157,7 @@ def reveal(rs: RayScene, camera: Camera, t: float, pixels_ij, own_ids, layers: i
     layers: how many surfaces to reveal (layer k+1 only behind a moving layer-k object).
     max_depth: restarts allowed to pass a static own object.
     threads: worker threads for large batches (default: the CPU count; 1 = no pool).
-    min_chunk: the fewest pixels worth a chunk of their own.
+    min_chunk, max_chunk: the fewest pixels worth a thread's chunk, the most in one chunk.
     """
     if layers < 1:
         raise ValueError(f"layers must be at least 1, got {layers}")
@@ -167,7 +167,7 @@ def reveal(rs: RayScene, camera: Camera, t: float, pixels_ij, own_ids, layers: i
         raise ValueError(f"{len(pixels_ij)} pixels but {len(own_ids)} own ids")
     n = len(pixels_ij)
     threads = (os.cpu_count() or 1) if threads is None else max(1, int(threads))
-    n_chunks = max(-(-n // MAX_CHUNK),
+    n_chunks = max(-(-n // max(1, max_chunk)),
                    min(threads * 4, n // max(1, min_chunk)) if threads > 1 else 1)
     if n_chunks <= 1:
         return _reveal_chunk(rs, camera, t, pixels_ij, own_ids, layers, max_depth)

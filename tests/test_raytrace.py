@@ -378,13 +378,21 @@ def test_threads_give_the_single_threaded_result():
     # 1920 pixels in 12 chunks of 160 over 3 threads.
     multi = reveal(rs, cam, 0.05, pix, own, layers=2, threads=3, min_chunk=50)
     again = reveal(rs, cam, 0.05, pix, own, layers=2, threads=3, min_chunk=50)
+    serial = reveal(rs, cam, 0.05, pix, own, layers=2, threads=1, max_chunk=333)
     assert single.restarts > 0 and single.layers[1].traced.any()
-    for r in (multi, again):
+    for r in (multi, again, serial):
         for name in ("rays", "queries", "restarts", "unresolved", "pixels_hit"):
             assert getattr(r, name) == getattr(single, name), name
         for la, lb in zip(single.layers, r.layers):
             for name in la.__dataclass_fields__:
                 np.testing.assert_array_equal(getattr(la, name), getattr(lb, name), name)
+
+
+def test_reveal_of_no_pixels():
+    s = busy_scene()
+    res = reveal(RayScene(s), Camera(s.camera, 4, 4), 0.0, np.zeros((0, 2), int), [], layers=2)
+    assert [len(la.object_id) for la in res.layers] == [0, 0]
+    assert res.rays == res.queries == res.pixels_hit == 0
 
 
 def test_reveal_checks_its_arguments():
