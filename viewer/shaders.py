@@ -95,9 +95,9 @@ def _rewrite_errors(message: str, sources: list[Source]) -> str:
 
 
 def build_program(ctx: moderngl.Context, vertex: str, fragment: str,
-                  defines: dict | None = None) -> moderngl.Program:
+                  defines: dict | None = None, root: Path = GLSL_DIR) -> moderngl.Program:
     """Compile vertex + fragment files from glsl/ with the defines; errors name file:line."""
-    vs, fs = preprocess(vertex, defines), preprocess(fragment, defines)
+    vs, fs = preprocess(vertex, defines, root), preprocess(fragment, defines, root)
     try:
         return ctx.program(vertex_shader=vs.text, fragment_shader=fs.text)
     except moderngl.Error as exc:
