@@ -22,6 +22,18 @@ class TexSpec:
         return (-(-full[0] // self.tile), -(-full[1] // self.tile))
 
 
+def park_framebuffer(ctx: moderngl.Context):
+    """Bind a 1x1 framebuffer that lives as long as the context before releasing others:
+    moderngl re-binds its last bound framebuffer when it creates the next one, and a
+    released one would leave GL_INVALID_OPERATION behind."""
+    if not isinstance(ctx.extra, dict):
+        ctx.extra = {}
+    fbo = ctx.extra.get("parking_fbo")
+    if fbo is None:
+        fbo = ctx.extra["parking_fbo"] = ctx.framebuffer([ctx.renderbuffer((1, 1))])
+    fbo.use()
+
+
 class ResourcePool:
     def __init__(self, ctx: moderngl.Context):
         self.ctx = ctx
@@ -58,6 +70,7 @@ class ResourcePool:
 
     def depth_buffer(self) -> moderngl.Texture:
         if self.size not in self._depth:
+            park_framebuffer(self.ctx)
             for d in self._depth.values():
                 d.release()
             self._depth = {self.size: self.ctx.depth_texture(self.size)}
@@ -73,11 +86,13 @@ class ResourcePool:
         return fbo
 
     def _drop(self, name: str):
+        park_framebuffer(self.ctx)
         for key in [k for k in self._fbo if name in k[0]]:
             self._fbo.pop(key).release()
         self._tex.pop(name)[2].release()
 
     def release(self):
+        park_framebuffer(self.ctx)
         for fbo in self._fbo.values():
             fbo.release()
         for _, _, tex in self._tex.values():

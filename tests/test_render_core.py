@@ -1,0 +1,250 @@
+"""The G-buffer and the `off` / `reference` modes against numpy, analytic cases and an
+independent ray cast."""
+import textwrap
+
+import numpy as np
+import pytest
+
+from viewer.camera import Camera
+from viewer.conventions import BACKGROUND_DEPTH
+from viewer.imageio import linear_to_srgb8
+from viewer.params import ParamSet
+from viewer.render.renderer import Renderer
+from viewer.scene_loader import load_scene
+
+
+def scene_from(tmp_path, text, name="s"):
+    p = tmp_path / f"{name}.toml"
+    p.write_text(textwrap.dedent(text))
+    return load_scene(p)
+
+
+TWO_BOXES = """
+    background = [0.1, 0.2, 0.3]
+    ambient = [0.2, 0.2, 0.2]
+    [camera]
+    position = [0.0, 0.5, 5.0]
+    look_at = [0.0, 0.3, 0.0]
+    fov_y = 40.0
+    shutter = 0.05
+    [[lights]]
+    direction = [-0.3, -1.0, -0.5]
+    [[objects]]
+    mesh = { box = [1.0, 1.0, 1.0] }
+    position = [-0.8, 0.3, 0.0]
+    rotation = [10.0, 30.0, 0.0]
+    velocity = [4.0, 1.0, 0.0]
+    angular_velocity = [0.0, 0.0, 6.0]
+    material = { albedo = [0.9, 0.2, 0.2], texture = { kind = "checker", size = 0.25, albedo2 = [0.1, 0.1, 0.9] } }
+    [[objects]]
+    mesh = { sphere = { radius = 0.5, subdivisions = 2 } }
+    position = [0.9, 0.3, -0.5]
+    material = { albedo = [0.2, 0.8, 0.2], specular = 0.5, shininess = 20.0 }
+"""
+
+
+def test_ids_background_and_depth(ctx, tmp_path):
+    sc = scene_from(tmp_path, TWO_BOXES)
+    r = Renderer(ctx, sc, (96, 64))
+    try:
+        res = r.render("off", 0.0)
+        b = r.buffers()
+    finally:
+        r.release()
+    assert set(np.unique(b["id"])) == {0, 1, 2}
+    bg = b["id"] == 0
+    assert np.all(b["depth"][bg] == np.float32(BACKGROUND_DEPTH))
+    assert np.allclose(res.image[bg], [0.1, 0.2, 0.3])
+    assert np.all(b["velocity"][bg] == 0)
+    assert np.all((b["depth"][~bg] > 3.0) & (b["depth"][~bg] < 7.0))
+
+
+def world_points_at_pixels(cam, t, depth, ii, jj):
+    o, d = cam.rays(t, ii, jj)
+    fwd = cam.spec.pose(t)[1]
+    return o + d * (depth[jj, ii] / (d @ fwd))[:, None]
+
+
+@pytest.mark.parametrize("camera_motion", [False, True])
+def test_velocity_is_the_exposure_displacement(ctx, tmp_path, camera_motion):
+    text = TWO_BOXES
+    if camera_motion:
+        text = text.replace("shutter = 0.05", "shutter = 0.05\nvelocity = [1.0, 0.5, -2.0]\n"
+                                                "angular_velocity = [0.0, 0.8, 0.3]")
+    sc = scene_from(tmp_path, text)
+    t = 0.1
+    r = Renderer(ctx, sc, (128, 96))
+    try:
+        r.render("off", t)
+        b = r.buffers()
+    finally:
+        r.release()
+    cam = Camera(sc.camera, 128, 96)
+    t0, t1 = sc.exposure(t)
+    checked = 0
+    for obj in sc.objects:
+        jj, ii = np.nonzero(b["id"] == obj.id)
+        pick = np.linspace(0, len(ii) - 1, 40).astype(int)
+        ii, jj = ii[pick], jj[pick]
+        world = world_points_at_pixels(cam, t, b["depth"], ii, jj)
+        local = (np.linalg.inv(obj.matrix(t)) @ np.c_[world, np.ones(len(world))].T).T
+        p0 = (obj.matrix(t0) @ local.T).T[:, :3]
+        p1 = (obj.matrix(t1) @ local.T).T[:, :3]
+        expect = cam.project(t1, p1)[0] - cam.project(t0, p0)[0]
+        got = b["velocity"][jj, ii]
+        assert np.allclose(got, expect, atol=0.02 + 1e-3 * np.abs(expect).max())
+        checked += len(ii)
+    assert checked == 80
+
+
+def test_velocity_stays_finite_across_the_near_plane(ctx, tmp_path):
+    # A wall rushing at the camera: at shutter close its points are behind the near plane.
+    sc = scene_from(tmp_path, """
+        [camera]
+        position = [0.0, 0.0, 2.0]
+        look_at = [0.0, 0.0, 0.0]
+        fov_y = 60.0
+        near = 0.1
+        shutter = 0.1
+        [[objects]]
+        mesh = { box = [4.0, 4.0, 0.1] }
+        velocity = [0.0, 0.0, 30.0]
+    """)
+    r = Renderer(ctx, sc, (64, 48))
+    try:
+        r.render("off", 0.0)
+        v, ids = r.buffers()["velocity"], r.buffers()["id"]
+    finally:
+        r.release()
+    assert np.all(ids == 1)
+    assert np.all(np.isfinite(v))
+    # Radial expansion: displacement points away from the image centre (GL axes, y up).
+    jj, ii = np.mgrid[0:48, 0:64]
+    rx, ry = ii + 0.5 - 32, (47 - jj) + 0.5 - 24
+    away = v[..., 0] * rx + v[..., 1] * ry
+    assert np.all(away[np.hypot(rx, ry) > 4] > 0)
+
+
+def test_reference_equals_off_for_a_static_scene(ctx, tmp_path):
+    sc = scene_from(tmp_path, TWO_BOXES.replace("velocity = [4.0, 1.0, 0.0]", "")
+                    .replace("angular_velocity = [0.0, 0.0, 6.0]", ""))
+    r = Renderer(ctx, sc, (80, 48))
+    params = ParamSet()
+    params.set("reference.samples", 16)
+    try:
+        off = r.render("off", 0.3).image
+        ref = r.render("reference", 0.3, params).image
+    finally:
+        r.release()
+    assert np.allclose(off, ref, atol=1e-6)
+    assert np.array_equal(linear_to_srgb8(off), linear_to_srgb8(ref))
+
+
+def test_reference_of_a_translating_quad_matches_analytic_coverage(ctx, tmp_path):
+    # An unlit quad (ambient 1, no lights) crossing a black background: each pixel's value is
+    # the albedo times the fraction of the exposure its centre is covered.
+    sc = scene_from(tmp_path, """
+        ambient = [1.0, 1.0, 1.0]
+        [camera]
+        position = [0.0, 0.0, 4.0]
+        look_at = [0.0, 0.0, 0.0]
+        fov_y = 50.0
+        shutter = 0.1
+        [[objects]]
+        mesh = { box = [0.6, 1.0, 0.01] }
+        material = { albedo = [0.5, 0.25, 1.0] }
+        velocity = [8.0, 0.0, 0.0]
+    """)
+    n = 256
+    params = ParamSet()
+    params.set("reference.samples", n)
+    w, h = 120, 40
+    r = Renderer(ctx, sc, (w, h))
+    try:
+        ref = r.render("reference", 0.0, params).image
+    finally:
+        r.release()
+    cam = Camera(sc.camera, w, h)
+    row = h // 2
+    o, d = cam.rays(0.0, np.arange(w), np.full(w, row))
+    x = (o + d * ((0.005 - o[:, 2]) / d[:, 2])[:, None])[:, 0]   # front face at z = 0.005
+    t0, t1 = -0.05, 0.05
+    # covered while -0.3 + 8 t <= x <= 0.3 + 8 t
+    lo, hi = np.maximum((x - 0.3) / 8, t0), np.minimum((x + 0.3) / 8, t1)
+    coverage = np.clip(hi - lo, 0, None) / (t1 - t0)
+    assert np.isclose(coverage.max(), 0.75) and coverage.min() == 0.0   # moves 0.8, 0.6 wide
+    assert np.allclose(ref[row, :, 0], 0.5 * coverage, atol=0.5 / n + 1e-4)
+    assert np.allclose(ref[row, :, 2], 1.0 * coverage, atol=1.0 / n + 1e-4)
+
+
+def independent_ray_cast(sc, w, h, t):
+    """Object ids at pixel centres from a numpy ray cast written here, with its own rays."""
+    eye = sc.camera.position
+    fwd = (sc.camera.look_at - eye) / np.linalg.norm(sc.camera.look_at - eye)
+    right = np.cross(fwd, sc.camera.up)
+    right /= np.linalg.norm(right)
+    up = np.cross(right, fwd)
+    th = np.tan(np.radians(sc.camera.fov_y) / 2)
+    jj, ii = np.mgrid[0:h, 0:w]
+    x = ((ii + 0.5) / w * 2 - 1) * th * w / h
+    y = (1 - (jj + 0.5) / h * 2) * th
+    dirs = fwd + x.reshape(-1, 1) * right + y.reshape(-1, 1) * up
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    best = np.full(len(dirs), np.inf)
+    ids = np.zeros(len(dirs), np.uint32)
+    for obj in sc.objects:
+        v = (obj.matrix(t) @ np.c_[obj.mesh.vertices, np.ones(len(obj.mesh.vertices))].T).T[:, :3]
+        for a, b, c in v[obj.mesh.faces]:          # Moller-Trumbore, all rays at once
+            e1, e2 = b - a, c - a
+            p = np.cross(dirs, e2)
+            det = p @ e1
+            ok = np.abs(det) > 1e-12
+            inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+            s_ = eye - a
+            u = (p @ s_) * inv
+            q = np.cross(s_, e1)
+            w_ = (dirs @ q) * inv
+            dist = (q @ e2) * inv
+            hit = ok & (u >= 0) & (w_ >= 0) & (u + w_ <= 1) & (dist > 0) & (dist < best)
+            best[hit] = dist[hit]
+            ids[hit] = obj.id
+    return ids.reshape(h, w)
+
+
+def test_off_ids_match_an_independent_ray_cast(ctx, tmp_path):
+    sc = scene_from(tmp_path, TWO_BOXES)
+    w, h = 64, 40
+    r = Renderer(ctx, sc, (w, h))
+    try:
+        r.render("off", 0.02)
+        ids = r.buffers()["id"]
+    finally:
+        r.release()
+    expect = independent_ray_cast(sc, w, h, 0.02)
+    assert (expect > 0).sum() > 200
+    assert (ids != expect).sum() <= 6      # silhouette pixels rounded the other way
+
+
+def test_same_input_same_bytes(ctx, tmp_path):
+    sc = scene_from(tmp_path, TWO_BOXES)
+    r = Renderer(ctx, sc, (64, 40))
+    params = ParamSet()
+    params.set("reference.samples", 8)
+    try:
+        a = r.render("reference", 0.1, params).image
+        b = r.render("reference", 0.1, params).image
+    finally:
+        r.release()
+    assert a.tobytes() == b.tobytes()
+
+
+def test_resize_reallocates(ctx, tmp_path):
+    sc = scene_from(tmp_path, TWO_BOXES)
+    r = Renderer(ctx, sc, (64, 40))
+    try:
+        assert r.render("off", 0.0).image.shape == (40, 64, 3)
+        r.resize((33, 17))
+        assert r.render("off", 0.0).image.shape == (17, 33, 3)
+        assert r.pool.get("color").size == (33, 17)
+    finally:
+        r.release()
