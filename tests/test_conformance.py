@@ -8,7 +8,7 @@ from viewer.imageio import linear_to_srgb8
 from viewer.render.renderer import Renderer
 from viewer.scene_loader import load_scene
 
-from .conftest import CONFORMANCE
+from conftest import CONFORMANCE
 
 
 def psnr(a, b):
@@ -18,7 +18,7 @@ def psnr(a, b):
 
 @pytest.fixture(scope="module", params=["basic", "vase_pan"])
 def rendered(request):
-    from .conftest import _context
+    from conftest import _context
     ctx = _context()
     name = request.param
     sc = load_scene(CONFORMANCE / f"{name}.toml")
