@@ -99,6 +99,17 @@ def _describe(v) -> str:
     return f"a {type(v).__name__}"
 
 
+def _normalised(d: np.ndarray) -> np.ndarray | None:
+    """d / |d|, or None where |d| is zero, underflows or overflows (as numpy computes it,
+    so that the camera, which normalises the same way, never divides by 0 or inf)."""
+    with np.errstate(all="ignore"):
+        n = np.linalg.norm(d)
+        u = d / n
+    if not (np.isfinite(n) and n > 0 and np.all(np.isfinite(u))):
+        return None
+    return u
+
+
 def _join(prefix: str, key: str) -> str:
     return f"{prefix}.{key}" if prefix else key
 
@@ -184,11 +195,9 @@ class _Loader:
         return v
 
     def unit(self, v, key: str) -> np.ndarray:
-        d = self.vec3(v, key)
-        with np.errstate(all="ignore"):
-            n = d / np.linalg.norm(d)
-        if not np.all(np.isfinite(n)) or abs(np.linalg.norm(n) - 1.0) > 1e-9:
-            self.fail(key, f"expected a non-zero vector, got {d.tolist()}")
+        n = _normalised(self.vec3(v, key))
+        if n is None:
+            self.fail(key, f"expected a non-zero vector, got {v}")
         return n
 
     # -- the document
@@ -236,10 +245,10 @@ class _Loader:
         up_unit = self.unit(up.tolist(), "camera.up")
         with np.errstate(all="ignore"):
             fwd = look_at - position
-            fwd_unit = fwd / np.linalg.norm(fwd)
-        if not np.all(np.isfinite(fwd_unit)) or abs(np.linalg.norm(fwd_unit) - 1.0) > 1e-9:
+        fwd_unit = _normalised(fwd)
+        if fwd_unit is None:
             self.fail("camera.look_at", f"expected a point distinct from camera.position "
-                      f"{position.tolist()}, got {look_at.tolist()}")
+                      f"{position.tolist()} (at a finite distance), got {look_at.tolist()}")
         if np.linalg.norm(np.cross(fwd_unit, up_unit)) < 1e-6:
             self.fail("camera.up", "expected a vector not parallel to the view direction "
                       f"(look_at - position = {fwd.tolist()})")
@@ -444,11 +453,15 @@ class _Loader:
         import trimesh
         if not isinstance(tm, trimesh.Trimesh) or len(tm.faces) == 0 or len(tm.vertices) == 0:
             self.fail(k, f"expected a mesh with triangles, {what} has none")
-        with np.errstate(all="ignore"):
-            vertices = np.array(tm.vertices, dtype=np.float64)
-            faces = np.array(tm.faces, dtype=np.int64)
-            vn = np.array(tm.vertex_normals, dtype=np.float64)
-            fn = np.array(tm.face_normals, dtype=np.float64)
+        try:
+            with np.errstate(all="ignore"):
+                vertices = np.array(tm.vertices, dtype=np.float64)
+                faces = np.array(tm.faces, dtype=np.int64)
+                vn = np.array(tm.vertex_normals, dtype=np.float64)
+                fn = np.array(tm.face_normals, dtype=np.float64)
+        except Exception as e:   # trimesh failing on degenerate geometry
+            self.fail(k, f"expected a valid mesh, trimesh failed on {what}: "
+                      f"{type(e).__name__}: {e}")
         if not np.all(np.isfinite(vertices)):
             self.fail(k, f"expected finite vertex coordinates, {what} has NaN or inf")
         if not (np.all(np.isfinite(vn)) and np.all(np.isfinite(fn))):
