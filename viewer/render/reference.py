@@ -45,7 +45,10 @@ class ReferencePass(Pass):
                    if frame.host.get("record_visibility") else None)
         sub = self.sub_color if regions is None else self.sub_visibility
         sub.allocate(frame)
-        for tk in frame.scene.sample_times(frame.time, n):
+        progress = frame.host.get("progress")
+        for k, tk in enumerate(frame.scene.sample_times(frame.time, n)):
+            if progress is not None:
+                progress(k, n)
             sub.execute(frame, time=float(tk))
             self.acc.draw(frame, ("reference",), {"u_src": "sub_color"},
                           {"u_weight": 1.0 / n}, blend=True)

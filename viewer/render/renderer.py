@@ -62,11 +62,14 @@ class Renderer:
 
     def render(self, mode: str, t: float, params: ParamSet | None = None, seed: int = 0,
                timing: bool = False, record_visibility: bool = False,
-               read_image: bool = True) -> RenderResult:
+               read_image: bool = True, progress=None) -> RenderResult:
+        """`progress(k, n)` is called as long passes (the reference) advance."""
         params = params or ParamSet()
         pipe = self.pipeline(mode)
         frame = self.frame(t, params, seed, timing)
         frame.host["record_visibility"] = record_visibility
+        if progress is not None:
+            frame.host["progress"] = progress
         pipe.run(frame)
         image = frame.read(pipe.output)[..., :3].copy() if read_image else None
         frame.host.pop("state", None)
