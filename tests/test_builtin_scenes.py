@@ -1,0 +1,173 @@
+"""The built-in scenes: they load by name and each shows the motion it exists for.
+
+Blur lengths are measured as the screen displacement over the exposure with
+viewer.camera.Camera.project at the shutter open and close times, at 1280x720.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from viewer.camera import Camera
+from viewer.errors import SceneError
+from viewer.scene_loader import builtin_scene_names, builtin_scene_path, load_scene
+
+NAMES = ["living_room", "pan", "spinner", "thin"]
+
+
+def world(obj, t, local_points):
+    p = np.c_[np.asarray(local_points, dtype=np.float64), np.ones(len(local_points))]
+    return (p @ obj.matrix(t).T)[:, :3]
+
+
+def screen(scene, obj, t, local_points):
+    cam = Camera(scene.camera, 1280, 720)
+    return cam.project(t, world(obj, t, local_points))
+
+
+def by_name(scene, name):
+    (obj,) = [o for o in scene.objects if o.name == name]
+    return obj
+
+
+def displacement(scene, obj, local_points, t=None):
+    t = scene.render.time if t is None else t
+    t0, t1 = scene.exposure(t)
+    a, _ = screen(scene, obj, t0, local_points)
+    b, _ = screen(scene, obj, t1, local_points)
+    return np.linalg.norm(b - a, axis=1)
+
+
+def centre(obj):
+    v = obj.mesh.vertices
+    return (0.5 * (v.min(0) + v.max(0)))[None, :]
+
+
+@pytest.fixture(scope="module")
+def scenes():
+    return {n: load_scene(n) for n in NAMES}
+
+
+def test_names_and_paths():
+    assert builtin_scene_names() == NAMES
+    for n in NAMES:
+        p = builtin_scene_path(n)
+        assert p.is_file() and p.name == f"{n}.toml" and p.parent.name == "scenes"
+
+
+def test_unknown_name_lists_the_available_scenes():
+    with pytest.raises(SceneError) as info:
+        load_scene("kitchen")
+    msg = str(info.value)
+    assert "kitchen" in msg
+    for n in NAMES:
+        assert n in msg
+
+
+def test_every_scene_is_modest_and_has_detailed_backgrounds(scenes):
+    for name, s in scenes.items():
+        assert s.name == name
+        assert (s.render.width, s.render.height) == (1280, 720)
+        assert s.camera.shutter > 0
+        assert sum(len(o.mesh.faces) for o in s.objects) < 4000, name
+        textured = [o for o in s.objects if o.material.texture is not None]
+        assert len(textured) >= 2, name
+        assert any(o.moving for o in s.objects) or s.camera.moving
+
+
+def test_no_textured_face_lies_on_a_cell_boundary(scenes):
+    # A face whose constant coordinate is a multiple of the cell size would pick a colour
+    # by rounding noise, differently in a rasteriser and a ray tracer.
+    for name, s in scenes.items():
+        for o in s.objects:
+            tx = o.material.texture
+            if tx is None or tx.kind == "image":
+                continue
+            tri = o.mesh.vertices[o.mesh.faces]
+            for a in ([0, 1, 2] if tx.kind == "checker" else [tx.axis]):
+                flat = np.ptp(tri[:, :, a], axis=1) < 1e-12
+                q = tri[flat][:, 0, a] / tx.size
+                assert np.all(np.abs(q - np.round(q)) > 1e-3), (name, o.name, a)
+
+
+def test_living_room_vase_blur_and_what_it_covers(scenes):
+    s = scenes["living_room"]
+    vase = by_name(s, "vase")
+    moving = [o.name for o in s.objects if o.moving]
+    assert moving == ["vase"] and not s.camera.moving
+    d = displacement(s, vase, centre(vase))[0]
+    assert 60 <= d <= 150, d
+
+    # The vase's path on screen crosses the gap between two seat cushions, in front of them.
+    t0, t1 = s.exposure(s.render.time)
+    (a, za), (b, zb) = screen(s, vase, t0, centre(vase)), screen(s, vase, t1, centre(vase))
+    left = by_name(s, "seat cushion left")
+    half_l = left.mesh.vertices.max(0)
+    top_front_right_of_left = [[half_l[0], half_l[1], half_l[2]]]
+    gap, zgap = screen(s, left, 0.0, top_front_right_of_left)
+    lo, hi = sorted([a[0, 0], b[0, 0]])
+    assert lo < gap[0, 0] < hi
+    vz = vase.mesh.vertices[:, 2]                          # revolve axis: local z
+    ends = np.c_[np.zeros((2, 2)), [vz.min(), vz.max()]]
+    ys, _ = screen(s, vase, 0.0, ends)
+    assert ys[:, 1].min() < gap[0, 1] < ys[:, 1].max()
+    assert max(za[0], zb[0]) < zgap[0] - 1.0               # at least a metre in front
+
+
+def test_living_room_picture_is_an_image_on_a_uv_quad(scenes):
+    pic = by_name(scenes["living_room"], "picture")
+    tx = pic.material.texture
+    assert tx.kind == "image" and tx.image.shape[2] == 3 and tx.image.dtype == np.float32
+    assert pic.mesh.uv is not None and pic.mesh.uv.shape == (len(pic.mesh.vertices), 2)
+    assert tx.path.parent.name == "assets"
+
+
+def test_assets_match_their_generator():
+    from scenes import make_assets
+    png = np.asarray(Image.open(make_assets.ASSETS / "painting.png").convert("RGB"))
+    np.testing.assert_array_equal(png, make_assets.painting())
+    assert (make_assets.ASSETS / "quad_uv.obj").read_text() == make_assets.QUAD_OBJ
+
+
+def test_thin_rod_moves_much_farther_than_its_width(scenes):
+    s = scenes["thin"]
+    rod = by_name(s, "rod")
+    cam = Camera(s.camera, 1280, 720)
+    _, fwd, up = s.camera.pose(0.0)
+    right = np.cross(fwd, up)
+    right /= np.linalg.norm(right)
+    c = world(rod, 0.0, centre(rod))[0]
+    r = rod.mesh.vertices[:, 0].max()                      # cylinder radius (axis: local z)
+    edges, _ = cam.project(0.0, np.array([c - r * right, c + r * right]))
+    width = abs(edges[1, 0] - edges[0, 0])
+    d = displacement(s, rod, centre(rod))[0]
+    assert width > 3.0                                     # a few pixels, not sub-pixel
+    assert d > 4 * width, (d, width)
+
+
+def test_pan_moves_the_camera_and_nothing_else(scenes):
+    s = scenes["pan"]
+    assert s.camera.moving
+    assert not any(o.moving for o in s.objects)
+    cam = Camera(s.camera, 1280, 720)
+    t0, t1 = s.exposure(0.0)
+    wall = by_name(s, "back wall")
+    p = world(wall, 0.0, [[0.0, 0.0, 0.05], [1.0, 0.5, 0.05]])
+    d = np.linalg.norm(cam.project(t1, p)[0] - cam.project(t0, p)[0], axis=1)
+    assert np.all(d > 20), d
+
+
+def test_spinner_blade_tips_move_fast_on_arcs(scenes):
+    s = scenes["spinner"]
+    blades = [o for o in s.objects if o.name.startswith("blades")]
+    assert len(blades) == 3
+    for b in blades:
+        tip = [[b.mesh.vertices[:, 0].max(), 0.0, 0.0]]
+        assert displacement(s, b, tip)[0] > 40
+        # curved: the mid-exposure position is off the chord between open and close
+        t0, t1 = s.exposure(0.0)
+        a, m, c = (screen(s, b, t, tip)[0][0] for t in (t0, 0.0, t1))
+        chord = c - a
+        off = abs(chord[0] * (m - a)[1] - chord[1] * (m - a)[0]) / np.linalg.norm(chord)
+        assert off > 2.0, off
