@@ -1,0 +1,37 @@
+"""The ceiling for the reveal's throughput: bare Embree `run` calls on exactly the rays the
+reveal traced, into the same scenes, with nothing else timed (no exclusion, restarts,
+attribute fetches or Python bookkeeping). The rays are transformed into each moving
+object's space before the clock starts."""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from .embree_scene import RayScene, _embree_run, apply3
+
+
+def bare_embree_rays_per_s(batch: dict | None, repeats: int = 5) -> float:
+    """`batch`: {"rayscene": RayScene, "origins": (n,3), "dirs": (n,3), "t": float} as the
+    hybrid mode records it. Median over `repeats` of n / (time of all the run calls)."""
+    if not batch or len(batch["origins"]) == 0:
+        return 0.0
+    rs: RayScene = batch["rayscene"]
+    o = np.ascontiguousarray(batch["origins"], dtype=np.float32)
+    d = np.ascontiguousarray(batch["dirs"], dtype=np.float32)
+    t = float(batch["t"])
+    jobs = []
+    if rs._static is not None:
+        jobs.append((rs._static, o, d))
+    for obj, es in rs.moving:
+        inv = np.linalg.inv(obj.matrix(t))
+        jobs.append((es, (apply3(inv[:3, :3], o) + inv[:3, 3]).astype(np.float32),
+                     apply3(inv[:3, :3], d).astype(np.float32)))
+    far = np.full(len(o), np.inf, dtype=np.float32)
+    runs = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for es, oo, dd in jobs:
+            _embree_run(es, oo, dd, far)
+        runs.append(time.perf_counter() - t0)
+    return len(o) / float(np.median(runs))

@@ -1,0 +1,174 @@
+"""`hmblur bench`: frame and per-pass times of every real-time mode (medians and spread of
+synchronised timings: ctx.finish() and a CPU clock, because llvmpipe's timer queries only
+see submission), the hybrid reveal's rays and throughput against bare Embree on the same
+rays, and the ratios hybrid/McGuire and UE4/McGuire, all measured in one run."""
+from __future__ import annotations
+
+import platform
+import time
+
+import numpy as np
+
+from . import cliargs
+from .glcontext import create_headless, device_name
+from .imageio import write_json_atomic
+from .progress import Progress
+from .render.modes import MODES
+from .render.renderer import Renderer
+
+REALTIME = ("off", "mcguire", "ue4", "hybrid")
+
+
+def register(sub):
+    p = sub.add_parser("bench", help="time every real-time mode and pass")
+    cliargs.add_scene_args(p, samples=False)
+    p.add_argument("--frames", default="30", help="timed frames per mode (default 30)")
+    p.add_argument("--warmup", default="3", help="untimed frames first (default 3)")
+    p.add_argument("--modes", default=None, help="comma-separated subset of the real-time modes")
+    p.add_argument("--json", default=None, metavar="PATH", help="write the results as JSON")
+    p.add_argument("--speeds", default=None, metavar="S1,S2,...",
+                   help="also scale every object's velocity by each factor and tabulate the "
+                        "hybrid reveal's ms against the masked pixel count")
+    p.set_defaults(run=run)
+
+
+def cpu_name() -> str:
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def summary(values) -> dict:
+    a = np.asarray(values, dtype=np.float64)
+    return {"median": float(np.median(a)), "p10": float(np.percentile(a, 10)),
+            "p90": float(np.percentile(a, 90)), "n": int(a.size)}
+
+
+def time_mode(r: Renderer, mode: str, s, frames: int, warmup: int, progress) -> dict:
+    ctx = r.ctx
+    for _ in range(warmup):
+        r.render(mode, s.time, s.params, seed=s.seed, read_image=False)
+    frame_ms, passes, stats = [], {}, []
+    for k in range(frames):
+        # Frame time: one finish() at the end only, so passes overlap as they would.
+        ctx.finish()
+        t0 = time.perf_counter()
+        res = r.render(mode, s.time, s.params, seed=s.seed, read_image=False)
+        ctx.finish()
+        frame_ms.append((time.perf_counter() - t0) * 1e3)
+        # Pass times: a second frame with finish() around every pass.
+        res = r.render(mode, s.time, s.params, seed=s.seed, read_image=False, timing=True)
+        for name, ms in res.pass_ms.items():
+            passes.setdefault(name, []).append(ms)
+        stats.append(res.stats)
+        progress(k, frames)
+    out = {"frame_ms": float(np.median(frame_ms)), "frame": summary(frame_ms),
+           "passes": {n: float(np.median(v)) for n, v in passes.items()},
+           "passes_spread": {n: summary(v) for n, v in passes.items()}}
+    keys = set().union(*[st.keys() for st in stats]) if stats else set()
+    out["stats"] = {k: float(np.median([st[k] for st in stats if k in st])) for k in sorted(keys)
+                    if all(isinstance(st.get(k, 0), (int, float)) for st in stats)}
+    return out
+
+
+def reveal_summary(r: Renderer, s, res_modes: dict) -> dict | None:
+    """Reveal throughput next to bare Embree on exactly the rays the reveal traced."""
+    hyb = res_modes.get("hybrid")
+    if hyb is None:
+        return None
+    from raytrace.bench import bare_embree_rays_per_s
+    res = r.render("hybrid", s.time, s.params, seed=s.seed, read_image=False)
+    st = hyb["stats"]
+    rays = int(st.get("rays", 0))
+    reveal_ms = st.get("reveal_ms", 0.0)
+    ceiling = bare_embree_rays_per_s(res.host.get("reveal_batch"))
+    rps = rays / (reveal_ms / 1e3) if reveal_ms > 0 else 0.0
+    return {"rays": rays, "masked_pixels": int(st.get("masked_pixels", 0)),
+            "reveal_ms": reveal_ms, "rays_per_s": rps, "embree_rays_per_s": ceiling,
+            "fraction_of_embree": (rps / ceiling) if ceiling else None}
+
+
+def speed_table(r: Renderer, s, speeds: list[float], frames: int) -> list[dict]:
+    rows = []
+    base = [(o.velocity.copy(), o.angular_velocity.copy()) for o in s.scene.objects]
+    try:
+        for f in speeds:
+            for o, (v, w) in zip(s.scene.objects, base):
+                o.velocity, o.angular_velocity = v * f, w * f
+            ms, masked, rays = [], [], []
+            for _ in range(frames):
+                res = r.render("hybrid", s.time, s.params, seed=s.seed, read_image=False)
+                ms.append(res.stats.get("reveal_ms", 0.0))
+                masked.append(res.stats.get("masked_pixels", 0))
+                rays.append(res.stats.get("rays", 0))
+            rows.append({"speed": f, "masked_pixels": int(np.median(masked)),
+                         "rays": int(np.median(rays)), "reveal_ms": float(np.median(ms))})
+    finally:
+        for o, (v, w) in zip(s.scene.objects, base):
+            o.velocity, o.angular_velocity = v, w
+    return rows
+
+
+def run(args) -> int:
+    s = cliargs.setup(args)
+    frames = cliargs.parse_int("--frames", args.frames, 1)
+    warmup = cliargs.parse_int("--warmup", args.warmup, 0)
+    available = [m for m in REALTIME if m in MODES]
+    modes = available if not args.modes else [m.strip() for m in args.modes.split(",")]
+    for m in modes:
+        if m not in available:
+            raise cliargs.UserError(f"--modes {args.modes}: {m!r} is not one of {', '.join(available)}")
+    speeds = None
+    if args.speeds:
+        if "hybrid" not in available:
+            raise cliargs.UserError("--speeds: needs the hybrid mode")
+        speeds = [cliargs.parse_float("--speeds", x) for x in args.speeds.split(",")]
+    out = cliargs.check_output_file(args.json, "--json") if args.json else None
+    ctx = create_headless()
+    r = Renderer(ctx, s.scene, s.size)
+    try:
+        results = {m: time_mode(r, m, s, frames, warmup, Progress(f"bench {m}")) for m in modes}
+        reveal = reveal_summary(r, s, results)
+        table = speed_table(r, s, speeds, max(3, frames // 3)) if speeds else None
+    finally:
+        r.release()
+    device = f"{device_name(ctx)}; CPU {cpu_name()}"
+    report = {"device": device, "size": list(s.size), "scene": s.scene.name, "time": s.time,
+              "frames": frames, "modes": results, "reveal": reveal, "ratios": {}}
+    base = results.get("mcguire", {}).get("frame_ms")
+    for m in ("hybrid", "ue4"):
+        if base and m in results:
+            report["ratios"][f"{m}/mcguire"] = results[m]["frame_ms"] / base
+    if table is not None:
+        report["scaling"] = table
+    print(format_report(report))
+    if out is not None:
+        write_json_atomic(out, report)
+    return 0
+
+
+def format_report(rep: dict) -> str:
+    w, h = rep["size"]
+    lines = [f"{rep['scene']} {w}x{h} on {rep['device']}", "",
+             "| mode | frame ms (median) | p10-p90 | passes (median ms) |", "| --- | ---: | ---: | --- |"]
+    for m, r in rep["modes"].items():
+        passes = ", ".join(f"{n} {v:.1f}" for n, v in r["passes"].items())
+        lines.append(f"| {m} | {r['frame_ms']:.1f} | {r['frame']['p10']:.1f}-{r['frame']['p90']:.1f} | {passes} |")
+    for k, v in rep["ratios"].items():
+        lines.append(f"\n{k}: {v:.2f}x")
+    rv = rep.get("reveal")
+    if rv:
+        frac = rv["fraction_of_embree"]
+        lines.append(f"\nreveal: {rv['masked_pixels']} masked pixels, {rv['rays']} rays in "
+                     f"{rv['reveal_ms']:.1f} ms = {rv['rays_per_s'] / 1e6:.2f} M rays/s; bare Embree "
+                     f"on the same rays {rv['embree_rays_per_s'] / 1e6:.2f} M rays/s"
+                     + (f" ({100 * frac:.0f}%)" if frac else ""))
+    if rep.get("scaling"):
+        lines += ["", "| speed x | masked pixels | rays | reveal ms |", "| ---: | ---: | ---: | ---: |"]
+        lines += [f"| {r['speed']:g} | {r['masked_pixels']} | {r['rays']} | {r['reveal_ms']:.2f} |"
+                  for r in rep["scaling"]]
+    return "\n".join(lines)
