@@ -36,6 +36,8 @@ class ReferencePass(Pass):
 
     def execute(self, frame: Frame):
         n = frame.params["reference"].samples
+        if frame.scene.camera.shutter == 0:
+            n = 1    # N identical sub-frames: their mean is the frame itself, exactly
         fbo = frame.pool.framebuffer(("reference",))
         fbo.use()
         fbo.clear(0.0, 0.0, 0.0, 0.0)
