@@ -1,0 +1,120 @@
+"""The command line: a user's mistake is one line on stderr and exit status 2, with no
+traceback and no output file; good input gives deterministic files."""
+import json
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from viewer.cli import main
+
+from conftest import CONFORMANCE, ROOT
+
+BASIC = str(CONFORMANCE / "basic.toml")
+
+
+def write(tmp_path, name, text):
+    p = tmp_path / name
+    p.write_text(textwrap.dedent(text))
+    return str(p)
+
+
+GOOD = """
+    [camera]
+    position = [0.0, 0.0, 3.0]
+    look_at = [0.0, 0.0, 0.0]
+    fov_y = 45.0
+    [[objects]]
+    mesh = { box = [1.0, 1.0, 1.0] }
+"""
+
+
+def bad_cases(tmp_path):
+    out = str(tmp_path / "o.png")
+    return {
+        "unknown scene name": (["shot", "no_such_scene", "--out", out], "built-in scenes"),
+        "missing file": (["shot", str(tmp_path / "missing.toml"), "--out", out], "file not found"),
+        "TOML syntax error": (["shot", write(tmp_path, "syn.toml", "[camera\nx = 1\n"), "--out", out], "syn.toml"),
+        "unknown key": (["shot", write(tmp_path, "uk.toml", GOOD + "colour = 1\n"), "--out", out], "colour"),
+        "wrong type": (["shot", write(tmp_path, "wt.toml", GOOD.replace("fov_y = 45.0", 'fov_y = "wide"')), "--out", out], "fov_y"),
+        "wrong vector length": (["shot", write(tmp_path, "vl.toml", GOOD.replace("[0.0, 0.0, 3.0]", "[0.0, 3.0]")), "--out", out], "camera.position"),
+        "NaN": (["shot", write(tmp_path, "nan.toml", GOOD.replace("fov_y = 45.0", "fov_y = nan")), "--out", out], "fov_y"),
+        "bad --size": (["shot", BASIC, "--size", "12xab", "--out", out], "--size"),
+        "zero --size": (["shot", BASIC, "--size", "0x10", "--out", out], "--size"),
+        "size beyond GL limits": (["shot", BASIC, "--size", "100000x10", "--out", out], "GL limit"),
+        "unknown --set key": (["shot", BASIC, "--set", "mcguire.nope=3", "--out", out], "nope"),
+        "unknown --set group": (["shot", BASIC, "--set", "nope.x=3", "--out", out], "nope"),
+        "--set value out of range": (["shot", BASIC, "--set", "reference.samples=0", "--out", out], "at least"),
+        "--set wrong type": (["shot", BASIC, "--set", "reference.samples=many", "--out", out], "expected int"),
+        "unknown mode": (["shot", BASIC, "--mode", "fancy", "--out", out], "--mode"),
+        "zero samples": (["shot", BASIC, "--mode", "reference", "--samples", "0", "--out", out], "--samples"),
+        "NaN time": (["shot", BASIC, "--time", "nan", "--out", out], "--time"),
+        "output folder missing": (["shot", BASIC, "--out", str(tmp_path / "nodir" / "o.png")], "does not exist"),
+        "output is a folder": (["shot", BASIC, "--out", str(tmp_path)], "is a directory"),
+        "--params not JSON": (["shot", BASIC, "--params", write(tmp_path, "p.json", "{oops"), "--out", out], "not JSON"),
+        "unknown subcommand": (["paint", BASIC], "invalid choice"),
+        "missing --out": (["shot", BASIC], "--out"),
+    }
+
+
+def test_every_user_mistake_is_one_line_and_exit_2(tmp_path, capsys):
+    for name, (argv, needle) in bad_cases(tmp_path).items():
+        code = main(argv)
+        err = capsys.readouterr().err
+        assert code == 2, name
+        lines = err.strip().splitlines()
+        assert len(lines) == 1, (name, err)
+        assert lines[0].startswith("hmblur: error: "), (name, err)
+        assert needle in lines[0], (name, lines[0])
+        assert "Traceback" not in err
+        assert not (tmp_path / "o.png").exists(), name
+
+
+def test_unwritable_output_folder(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(os, "access", lambda path, mode: False)
+    assert main(["shot", BASIC, "--out", str(tmp_path / "o.png")]) == 2
+    assert "not writable" in capsys.readouterr().err
+
+
+def test_a_real_process_exits_2_without_traceback(tmp_path):
+    p = subprocess.run([sys.executable, "-m", "viewer", "shot", "no_such_scene", "--out",
+                        str(tmp_path / "x.png")], capture_output=True, text=True, cwd=ROOT)
+    assert p.returncode == 2
+    assert p.stderr.count("\n") == 1 and "Traceback" not in p.stderr
+
+
+def test_shot_is_deterministic_and_writes_a_sidecar(tmp_path, capsys):
+    a, b = tmp_path / "a.png", tmp_path / "b.png"
+    for out in (a, b):
+        assert main(["shot", BASIC, "--mode", "reference", "--samples", "8",
+                     "--size", "96x54", "--out", str(out)]) == 0
+    assert a.read_bytes() == b.read_bytes()
+    side = json.loads((tmp_path / "a.json").read_text())
+    assert side["mode"] == "reference" and side["size"] == [96, 54]
+    assert side["params"]["reference"]["samples"] == 8
+    img = np.asarray(Image.open(a))
+    assert img.shape == (54, 96, 3) and img.dtype == np.uint8
+    assert [f.name for f in tmp_path.iterdir() if f.name.startswith(".")] == []
+
+
+def test_params_sidecar_reproduces_the_image(tmp_path):
+    a, b = tmp_path / "a.png", tmp_path / "b.png"
+    assert main(["shot", BASIC, "--mode", "reference", "--samples", "4", "--size", "64x40",
+                 "--time", "0.01", "--out", str(a)]) == 0
+    assert main(["shot", BASIC, "--mode", "reference", "--params", str(tmp_path / "a.json"),
+                 "--out", str(b)]) == 0
+    assert a.read_bytes() == b.read_bytes()
+
+
+def test_buffers_are_dumped(tmp_path):
+    d = tmp_path / "bufs"
+    assert main(["shot", BASIC, "--size", "64x40", "--out", str(tmp_path / "o.png"),
+                 "--buffers", str(d)]) == 0
+    for name in ("color", "depth", "normal", "id", "velocity"):
+        assert (d / f"{name}.npy").exists() and (d / f"{name}.png").exists()
+    ids = np.load(d / "id.npy")
+    assert ids.shape == (40, 64) and ids.dtype == np.uint32 and set(np.unique(ids)) >= {0, 1}
