@@ -8,6 +8,8 @@ in vec3 v_normal_local;
 in vec2 v_uv;
 in vec3 v_world;
 in vec4 v_view;
+in vec4 v_view_open;
+in vec4 v_view_close;
 
 uniform mat3 u_normal_matrix;   // inverse transpose of M(t)'s upper 3x3
 uniform vec3 u_eye;
@@ -18,7 +20,7 @@ void main() {
     if (dot(n, u_eye - v_world) < 0.0) n = -n;
     vec3 color = shade(v_world, n, v_local, v_uv, u_eye);
 #if GBUFFER_LAYOUT == 0
-    vec2 velocity = exposure_displacement(v_local, v_view);
+    vec2 velocity = displacement_between(v_view_open, v_view_close, v_view);
 #else
     vec2 velocity = vec2(0.0);
 #endif

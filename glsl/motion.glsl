@@ -24,8 +24,16 @@ vec4 clip_to_near(vec4 q, vec4 q_now) {
     return mix(q_now, q, clamp(s, 0.0, 1.0) * 0.999);
 }
 
+// View-space positions at shutter open and close. They are affine in the mesh-space point,
+// so a vertex shader may compute them per vertex and let (perspective-correct)
+// interpolation deliver the exact per-fragment values.
+vec4 view_open(vec3 p_local) { return u_view_open * (u_model_open * vec4(p_local, 1.0)); }
+vec4 view_close(vec3 p_local) { return u_view_close * (u_model_close * vec4(p_local, 1.0)); }
+
+vec2 displacement_between(vec4 q_open, vec4 q_close, vec4 view_now) {
+    return to_window(clip_to_near(q_close, view_now)) - to_window(clip_to_near(q_open, view_now));
+}
+
 vec2 exposure_displacement(vec3 p_local, vec4 view_now) {
-    vec4 q0 = clip_to_near(u_view_open * (u_model_open * vec4(p_local, 1.0)), view_now);
-    vec4 q1 = clip_to_near(u_view_close * (u_model_close * vec4(p_local, 1.0)), view_now);
-    return to_window(q1) - to_window(q0);
+    return displacement_between(view_open(p_local), view_close(p_local), view_now);
 }

@@ -42,7 +42,8 @@ vec3 shade(vec3 p_world, vec3 n, vec3 p_local, vec2 uv, vec3 eye) {
         vec3 l = -u_light_dir[k];
         float ndl = max(0.0, dot(n, l));
         diffuse += ndl * u_light_color[k];
-        if (ndl > 0.0) {
+        // Skipped (exactly 0 anyway) where the material has no specular: pow is costly.
+        if (ndl > 0.0 && u_specular > 0.0) {
             float ndh = max(0.0, dot(n, normalize(l + v)));
             // pow(0, 0) is undefined in GLSL; the contract's value is 1.
             float s = (u_shininess == 0.0) ? 1.0 : pow(ndh, u_shininess);
