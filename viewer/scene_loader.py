@@ -19,6 +19,10 @@ import tomllib
 from pathlib import Path
 
 import numpy as np
+import trimesh
+from PIL import Image
+
+import scenes
 
 from .errors import SceneError
 from .scene import (CameraSpec, Light, Material, Mesh, RenderDefaults, Scene, SceneObject,
@@ -40,7 +44,6 @@ NUMBERING = "objects[k] and lights[k] count from 1 in file order"
 # ---------------------------------------------------------------- built-in scenes
 
 def builtin_dir() -> Path:
-    import scenes
     return Path(scenes.__file__).resolve().parent
 
 
@@ -358,7 +361,6 @@ class _Loader:
         return path
 
     def image(self, path: Path, key: str) -> np.ndarray:
-        from PIL import Image
         try:
             with Image.open(path) as im:
                 srgb = np.asarray(im.convert("RGB"), dtype=np.float64) / 255.0
@@ -371,7 +373,6 @@ class _Loader:
     # -- meshes
 
     def mesh(self, v, k: str) -> Mesh:
-        import trimesh
         if isinstance(v, str):
             path = self.file(v, k, "mesh")
             try:
@@ -450,7 +451,6 @@ class _Loader:
         return np.array(pts, dtype=np.float64)
 
     def mesh_arrays(self, tm, k: str, what: str) -> Mesh:
-        import trimesh
         if not isinstance(tm, trimesh.Trimesh) or len(tm.faces) == 0 or len(tm.vertices) == 0:
             self.fail(k, f"expected a mesh with triangles, {what} has none")
         try:
