@@ -15,6 +15,7 @@ from conftest import CONFORMANCE
 from glsl import DIR as GLSL_DIR
 from viewer.conventions import to_image
 from viewer.params import ParamSet
+from viewer.render.blur_common import max_radius_px
 from viewer.render.gbuffer import GBUFFER
 from viewer.render.mcguire import EARLY_OUT_PX, JITTER_STREAM, mcguire_passes
 from viewer.render.tiles import TileMaxPass
@@ -53,7 +54,6 @@ def download(frame, name):
 
 
 def k_of(frame):
-    from viewer.render.blur_common import max_radius_px
     return max_radius_px(frame)
 
 
@@ -389,12 +389,12 @@ def test_mode_beats_off_in_outer_blur_on_basic(ctx):
     assert outer.sum() > 50
     err = {k: float(((img - ref.image) ** 2)[outer].mean()) for k, img in
            (("off", off), ("mcguire", mc))}
-    assert err["mcguire"] < 0.6 * err["off"]
+    assert err["mcguire"] < 0.4 * err["off"]          # measured: 0.2
     m_off = image_metrics(off, ref.image, region)["outer"]["flip"]
     m_mc = image_metrics(mc, ref.image, region)["outer"]["flip"]
     assert m_mc < m_off
     static = region == 0
-    assert np.abs(mc - off)[static].mean() < 0.01          # static pixels are left alone
+    assert np.abs(mc - off)[static].mean() < 0.003         # static pixels are left alone
     for tex in ("mcguire_velocity", "mcguire_tilemax_x", "mcguire_tilemax",
                 "mcguire_neighbormax", "mcguire"):
         assert tex in names
