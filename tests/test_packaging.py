@@ -1,0 +1,29 @@
+"""The wheel carries the shaders, the built-in scenes and their assets, so an installed
+`hmblur` works outside a checkout."""
+import subprocess
+import sys
+import zipfile
+
+from conftest import ROOT
+
+
+def test_wheel_contains_code_shaders_and_scenes(tmp_path):
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation",
+                    "-q", "-w", str(tmp_path), str(ROOT)], check=True, capture_output=True)
+    wheel = next(tmp_path.glob("hybrid_mblur-*.whl"))
+    names = set(zipfile.ZipFile(wheel).namelist())
+    need = {"viewer/cli.py", "viewer/render/renderer.py", "viewer/render/gbuffer.py",
+            "raytrace/embree_scene.py", "glsl/gbuffer.frag", "glsl/shading.glsl",
+            "glsl/fullscreen.vert", "scenes/living_room.toml", "scenes/assets/painting.png",
+            "scenes/assets/quad_uv.obj"}
+    assert need <= names, need - names
+    for folder in ("glsl", "scenes"):
+        shipped = {n.split("/", 1)[1] for n in names if n.startswith(folder + "/")}
+        on_disk = {p.relative_to(ROOT / folder).as_posix()
+                   for p in (ROOT / folder).rglob("*")
+                   if p.is_file() and p.suffix in {".glsl", ".frag", ".vert", ".toml", ".png", ".obj"}}
+        assert on_disk <= shipped, on_disk - shipped
+    assert not any(n.startswith("tests/") for n in names)
+    entry = [n for n in names if n.endswith("entry_points.txt")]
+    text = zipfile.ZipFile(wheel).read(entry[0]).decode()
+    assert "hmblur = viewer.cli:main" in text
