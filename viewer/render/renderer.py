@@ -30,6 +30,7 @@ class RenderResult:
 class Renderer:
     def __init__(self, ctx: moderngl.Context, scene: Scene, size: tuple[int, int]):
         self.ctx, self.scene = ctx, scene
+        self._check_size(size)
         self.programs = ProgramCache(ctx)
         self.gpu = GpuScene(ctx, scene)
         self.pool = ResourcePool(ctx)
@@ -37,11 +38,15 @@ class Renderer:
         self._host_passes: dict = {}     # per-scene host state (e.g. the ray tracer)
         self.resize(size)
 
-    def resize(self, size: tuple[int, int]):
+    def _check_size(self, size):
         w, h = int(size[0]), int(size[1])
         limit = min(self.ctx.info["GL_MAX_TEXTURE_SIZE"], *self.ctx.info["GL_MAX_VIEWPORT_DIMS"])
         if not (1 <= w <= limit and 1 <= h <= limit):
             raise UserError(f"--size {w}x{h}: expected 1 to {limit} pixels per side (GL limit)")
+        return w, h
+
+    def resize(self, size: tuple[int, int]):
+        w, h = self._check_size(size)
         self.pool.resize((w, h))
         self.camera = Camera(self.scene.camera, w, h)
 
