@@ -118,3 +118,12 @@ def test_buffers_are_dumped(tmp_path):
         assert (d / f"{name}.npy").exists() and (d / f"{name}.png").exists()
     ids = np.load(d / "id.npy")
     assert ids.shape == (40, 64) and ids.dtype == np.uint32 and set(np.unique(ids)) >= {0, 1}
+
+
+def test_no_gl_driver_names_what_to_install(tmp_path):
+    env = dict(os.environ, __EGL_VENDOR_LIBRARY_FILENAMES=str(tmp_path / "none.json"))
+    p = subprocess.run([sys.executable, "-m", "viewer", "shot", BASIC, "--out",
+                        str(tmp_path / "x.png")], capture_output=True, text=True, cwd=ROOT, env=env)
+    assert p.returncode == 2
+    assert p.stderr.count("\n") == 1 and "apt-get install libegl1" in p.stderr
+    assert not (tmp_path / "x.png").exists()
