@@ -1,0 +1,140 @@
+#version 330 core
+// The hybrid mode's time-sampled composite (ALGORITHMS.md 4.3), the paper's "target pixel
+// at the end of its sampling range" generalised to a centred exposure. For n stratified
+// times u in the exposure (u in [-1/2, 1/2] of the shutter), find which surface lies on
+// this pixel: on each layer, map the pixel back to the frame time along that layer's own
+// motion (the fixed point of p = x - u D(p), started from a seed velocity and refined
+// u_iterations times); the surface found covers the pixel at time u if its own motion
+// carries it back within u_tolerance px of the pixel centre. Of the surfaces that cover,
+// the nearest wins. Seeds: the pixel's own displacement and the neighbourhood's largest
+// (front layer: the pixel's own object and anything passing over it), and each back
+// layer's displacement at the pixel (what the moving foreground uncovers). Where nothing
+// covers (data missing: unmasked inner blur, off-screen), the closest miss stands in,
+// preferring surfaces behind the pixel's own. The average over the times is the pixel.
+#include "noise.glsl"
+uniform sampler2D u_front_color;
+uniform sampler2D u_front;          // (D.xy, depth, 0), see hybrid_layers.frag
+uniform sampler2D u_back_color;
+uniform sampler2D u_back;           // (D.xy, depth, revealed)
+#if LAYERS >= 2
+uniform sampler2D u_back2_color;
+uniform sampler2D u_back2;
+#endif
+uniform sampler2D u_neighbormax;    // largest displacement over the 3x3 tiles
+uniform int u_tile;
+uniform float u_max_disp;           // 2k: the blur limit on a full displacement
+uniform int u_samples_min;
+uniform int u_samples_max;
+uniform float u_spacing;
+uniform float u_jitter;
+uniform float u_tolerance;
+uniform int u_iterations;
+out vec4 out_color;
+
+ivec2 g_size;
+vec2 g_centre;
+float g_own_depth;
+
+vec4 motion(int layer, ivec2 p) {
+    if (layer == 0) return texelFetch(u_front, p, 0);
+#if LAYERS >= 2
+    if (layer == 2) return texelFetch(u_back2, p, 0);
+#endif
+    return texelFetch(u_back, p, 0);
+}
+
+vec3 colour(int layer, ivec2 p) {
+    if (layer == 0) return texelFetch(u_front_color, p, 0).rgb;
+#if LAYERS >= 2
+    if (layer == 2) return texelFetch(u_back2_color, p, 0).rgb;
+#endif
+    return texelFetch(u_back_color, p, 0).rgb;
+}
+
+// The frame-time pixel q of `layer` whose surface lies on this pixel at time u; returns
+// how far (Chebyshev, px) its own motion carries it from the pixel centre (1e30: the
+// walk left the screen, no data).
+float walk(int layer, float u, vec2 seed, out ivec2 q, out vec4 m) {
+    vec2 p = g_centre - u * seed;
+    for (int it = 0; it < u_iterations; ++it) {
+        q = clamp(ivec2(floor(p)), ivec2(0), g_size - 1);
+        p = g_centre - u * motion(layer, q).xy;
+    }
+    ivec2 raw = ivec2(floor(p));
+    q = clamp(raw, ivec2(0), g_size - 1);
+    m = motion(layer, q);
+    if (raw != q) return 1e30;
+    vec2 land = vec2(q) + 0.5 + u * m.xy - g_centre;
+    return max(abs(land.x), abs(land.y));
+}
+
+// Per time sample: the nearest covering surface, and the best stand-in if none covers.
+float g_best_depth;
+vec3 g_best;
+bool g_covered;
+float g_miss;
+bool g_miss_behind;
+vec3 g_stand_in;
+
+void consider(int layer, float u, vec2 seed) {
+    ivec2 q;
+    vec4 m;
+    float r = walk(layer, u, seed, q, m);
+    if (r <= u_tolerance) {
+        if (m.z < g_best_depth) {
+            g_best_depth = m.z;
+            g_best = colour(layer, q);
+            g_covered = true;
+        }
+    } else if (!g_covered && r < 1e29) {
+        bool behind = m.z > g_own_depth;
+        if ((behind && !g_miss_behind) || (behind == g_miss_behind && r < g_miss)) {
+            g_miss_behind = behind;
+            g_miss = r;
+            g_stand_in = colour(layer, q);
+        }
+    }
+}
+
+void main() {
+    ivec2 x = ivec2(gl_FragCoord.xy);
+    g_size = textureSize(u_front, 0);
+    g_centre = vec2(x) + 0.5;
+    vec3 own = texelFetch(u_front_color, x, 0).rgb;
+    vec4 fx = texelFetch(u_front, x, 0);
+    vec4 bx = texelFetch(u_back, x, 0);
+    vec2 vn = texelFetch(u_neighbormax, x / u_tile, 0).xy;
+    float ln = length(vn);
+    if (ln > u_max_disp) vn *= u_max_disp / ln;
+    float reach = max(length(vn), max(length(fx.xy), length(bx.xy)));
+#if LAYERS >= 2
+    vec4 b2x = texelFetch(u_back2, x, 0);
+    reach = max(reach, length(b2x.xy));
+#endif
+    // Nothing within reach moves half a pixel either way: the sharp pixel is the answer.
+    if (reach <= 1.0) {
+        out_color = vec4(own, 1.0);
+        return;
+    }
+    g_own_depth = fx.z;
+    bool same_seed = all(lessThan(abs(vn - fx.xy), vec2(1e-3)));
+    int n = clamp(int(ceil(reach / u_spacing)), u_samples_min, u_samples_max);
+    float j = mix(0.5, hash01(x, JITTER_STREAM), u_jitter);
+    vec3 sum = vec3(0.0);
+    for (int k = 0; k < n; ++k) {
+        float u = (float(k) + j) / float(n) - 0.5;
+        g_best_depth = 3.0e38;
+        g_covered = false;
+        g_miss = 3.0e38;
+        g_miss_behind = false;
+        g_stand_in = own;
+        consider(0, u, fx.xy);
+        if (!same_seed) consider(0, u, vn);
+        consider(1, u, bx.xy);
+#if LAYERS >= 2
+        consider(2, u, b2x.xy);
+#endif
+        sum += g_covered ? g_best : g_stand_in;
+    }
+    out_color = vec4(sum / float(n), 1.0);
+}

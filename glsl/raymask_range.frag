@@ -1,0 +1,37 @@
+#version 330 core
+// Ray mask, step 3: the range check. A moving pixel samples along its displacement, both
+// ways, one pixel per step; if a sample is an edge pixel of its own object within reach
+// (half the larger of the pixel's displacement and that edge's relative displacement),
+// the pixel is masked. Survivors of the displacement test are masked too. The output is
+// the pixel's object id where masked (0 elsewhere): one read gives mask and own ids.
+#include "raymask_common.glsl"
+uniform usampler2D u_displacement_mask;
+uniform usampler2D u_edge;
+uniform usampler2D u_id;
+uniform sampler2D u_velocity;
+uniform sampler2D u_relative;
+uniform float u_min_speed;
+uniform float u_relative_reach;   // search length, in half displacements
+uniform float u_max_reach;        // the blur limit k, px per side
+out uint out_mask;
+
+void main() {
+    ivec2 x = ivec2(gl_FragCoord.xy);
+    ivec2 size = textureSize(u_id, 0);
+    uint own = texelFetch(u_id, x, 0).x;
+    vec2 d = texelFetch(u_velocity, x, 0).xy;
+    out_mask = 0u;
+    if (own == 0u || length(d) < u_min_speed) return;
+    if (texelFetch(u_displacement_mask, x, 0).x != 0u) { out_mask = own; return; }
+    float half_len = 0.5 * length(d);
+    vec2 dir = d / length(d);
+    int steps = int(ceil(min(u_max_reach, u_relative_reach * half_len)));
+    for (int i = 0; i <= steps; ++i) {
+        for (int s = -1; s <= 1; s += 2) {
+            ivec2 y = probe(x, float(s * i) * dir, size);
+            if (texelFetch(u_edge, y, 0).x == 0u || texelFetch(u_id, y, 0).x != own) continue;
+            float reach = max(half_len, 0.5 * length(texelFetch(u_relative, y, 0).xy));
+            if (float(i) <= min(reach, u_max_reach) + 0.5) { out_mask = own; return; }
+        }
+    }
+}

@@ -1,0 +1,32 @@
+"""Mode `hybrid`: Hybrid MBlur (Tan, Cui, Bhojan, SIGGRAPH 2020 poster; ALGORITHMS.md 4).
+
+Post-process blur cannot know the background a moving object hides, which its blur
+partly uncovers (inner blur). The hybrid mode finds those pixels, ray-traces the true
+background behind them, shades it like the raster layer, and resolves both layers:
+
+  gbuffer -> mask_displacement -> mask_edge -> ray_mask        (viewer/render/raymask.py)
+          -> reveal (CPU rays) -> reveal_shade (revealed_*)    (viewer/render/reveal_pass.py)
+          -> hybrid_layers -> hybrid tiles -> hybrid_time      (viewer/render/hybrid_composite.py)
+
+Parameters: the `hybrid` group (viewer/render/hybrid_params.py) and the shared `blur` limit.
+Stats: masked_pixels, rays, revealed_pixels, reveal_ms (host work) and its parts.
+"""
+from __future__ import annotations
+
+from .gbuffer import GBufferPass
+from .hybrid_composite import composite_passes
+from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
+from .modes import mode
+from .passes import Pipeline
+from .raymask import raymask_passes
+from .reveal_pass import reveal_passes
+
+
+def hybrid_passes() -> list:
+    """Everything after the G-buffer."""
+    return [*raymask_passes(), *reveal_passes(), *composite_passes()]
+
+
+@mode("hybrid", groups=("blur", "hybrid"))
+def hybrid_pipeline() -> Pipeline:
+    return Pipeline("hybrid", [GBufferPass(), *hybrid_passes()], output="hybrid")

@@ -1,0 +1,78 @@
+"""The hybrid mode's composite: both layers blurred and combined in one resolve.
+
+  hybrid_layers: packs the raster layer and the revealed layers (merged with the raster
+      where no ray was cast) into motion textures (displacement, depth, revealed flag) and
+      colours, the displacement clamped to the shared blur limit;
+  hybrid_tilemax_x / hybrid_tilemax / hybrid_neighbormax: the largest displacement around
+      each tile (viewer/render/tiles.py, McGuire's passes on the raster displacement);
+  hybrid: the time-sampled composite (glsl/hybrid_time.frag).
+"""
+from __future__ import annotations
+
+from .blur_common import max_radius_px
+from .frame import Frame
+from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
+from .passes import FullscreenPass
+from .pool import TexSpec
+from .reveal_pass import layer_names
+from .tiles import tile_passes
+
+MOTION = TexSpec(4, "f4")         # (D.x, D.y, depth, revealed)
+COLOUR = TexSpec(4, "f4")
+# Which noise stream of glsl/noise.glsl's hash01 jitters the time samples.
+JITTER_STREAM = 2
+
+
+class PackLayers(FullscreenPass):
+    name = "hybrid_layers"
+    fragment = "hybrid_layers.frag"
+    inputs = ("color", "depth", "velocity", *layer_names(0), *layer_names(1))
+    produces = ("hybrid_front", "hybrid_back", "hybrid_back_color", "hybrid_back2",
+                "hybrid_back2_color")
+
+    def outputs(self, frame: Frame):
+        return {n: (COLOUR if n.endswith("color") else MOTION) for n in self.produces}
+
+    def execute(self, frame: Frame):
+        textures = {"u_color": "color", "u_depth": "depth", "u_velocity": "velocity"}
+        for k, tag in ((0, "rev"), (1, "rev2")):
+            for n in layer_names(k):
+                kind = n.rsplit("_", 1)[1]
+                if kind != "id":
+                    textures[f"u_{tag}_{kind}"] = n
+        self.draw(frame, self.produces, textures,
+                  {"u_max_disp": 2.0 * max_radius_px(frame)})
+
+
+class TimeComposite(FullscreenPass):
+    name = "hybrid_time"
+    fragment = "hybrid_time.frag"
+    inputs = ("color", "hybrid_front", "hybrid_back", "hybrid_back_color", "hybrid_back2",
+              "hybrid_back2_color", "hybrid_neighbormax")
+    produces = ("hybrid",)
+
+    def defines(self, frame: Frame):
+        return {"LAYERS": int(frame.params["hybrid"].layers),
+                "JITTER_STREAM": f"{JITTER_STREAM}u"}
+
+    def outputs(self, frame: Frame):
+        return {"hybrid": TexSpec(4, "f4")}
+
+    def execute(self, frame: Frame):
+        p = frame.params["hybrid"]
+        k = max_radius_px(frame)
+        self.draw(frame, self.produces,
+                  {"u_front_color": "color", "u_front": "hybrid_front",
+                   "u_back_color": "hybrid_back_color", "u_back": "hybrid_back",
+                   "u_back2_color": "hybrid_back2_color", "u_back2": "hybrid_back2",
+                   "u_neighbormax": "hybrid_neighbormax"},
+                  {"u_tile": k, "u_max_disp": 2.0 * k,
+                   "u_samples_min": int(p.samples_min),
+                   "u_samples_max": int(max(p.samples_max, p.samples_min)),
+                   "u_spacing": float(p.sample_spacing), "u_jitter": float(p.jitter),
+                   "u_tolerance": float(p.tolerance), "u_iterations": int(p.iterations)})
+
+
+def composite_passes() -> list:
+    """Layer packing, the displacement tiles and the composite, after the reveal."""
+    return [PackLayers(), *tile_passes("velocity", "hybrid"), TimeComposite()]

@@ -1,0 +1,57 @@
+"""Parameters of the hybrid mode (ALGORITHMS.md 4), one `@group("hybrid")` shared by the ray
+mask, the reveal and the composite passes (each module imports it, so a ParamSet made after
+importing any of them has the group)."""
+from __future__ import annotations
+
+from ..params import group, param
+
+COMPOSITES = ("time",)
+
+
+@group("hybrid")
+class HybridParams:
+    # ---- ray mask (viewer/render/raymask.py)
+    min_speed: float = param(1.0, lo=0.0, hi=64.0,
+                             help="displacement over the exposure (px) below which a pixel "
+                                  "counts as still and is never masked")
+    depth_threshold: float = param(0.01, lo=0.0, hi=1.0,
+                                   help="displacement test: the displaced position must be "
+                                        "farther by this fraction of the pixel's depth")
+    edge_depth: float = param(0.05, lo=0.0, hi=10.0,
+                              help="Sobel threshold on log depth (a step of ~5% per pixel "
+                                   "at 0.05; the kernel is normalised to step units)")
+    edge_normal: float = param(0.3, lo=0.0, hi=4.0,
+                               help="Sobel threshold on the world normal (vector step units)")
+    relative_reach: float = param(2.0, lo=1.0, hi=8.0,
+                                  help="range check: search this many half displacements "
+                                       "along the velocity (> 1 finds the wider band that "
+                                       "opens when the background moves the other way)")
+    # ---- ray reveal (viewer/render/reveal_pass.py)
+    layers: int = param(1, choices=(1, 2), effect="realloc",
+                        help="revealed layers: 1 = the paper; 2 also reveals what lies "
+                             "behind a revealed moving object")
+    max_depth: int = param(8, lo=0, hi=64,
+                           help="restarts allowed to pass through the pixel's own static "
+                                "object (recursion depth of the reveal)")
+    threads: int = param(0, lo=0, hi=64,
+                         help="ray-tracing threads for large batches (0 = CPU count)")
+    # ---- composite (viewer/render/hybrid_composite.py)
+    composite: str = param("time", choices=COMPOSITES, effect="recompile",
+                           help="time: per-pixel time samples resolve visibility between "
+                                "the raster and revealed layers (ALGORITHMS.md 4.3)")
+    samples_min: int = param(8, lo=1, hi=256,
+                             help="time samples per pixel where anything moves (at least)")
+    samples_max: int = param(48, lo=1, hi=256,
+                             help="time samples per pixel (at most)")
+    sample_spacing: float = param(2.0, lo=0.25, hi=16.0,
+                                  help="pixels of motion per time sample: the count grows "
+                                       "with the neighbourhood's displacement")
+    jitter: float = param(1.0, lo=0.0, hi=1.0,
+                          help="per-pixel jitter of the stratified times: 0 = fixed times "
+                               "(banding), 1 = one random offset per pixel (noise)")
+    iterations: int = param(2, lo=0, hi=8,
+                            help="fixed-point refinements mapping a pixel back to the "
+                                 "frame time along a surface's own velocity")
+    tolerance: float = param(0.55, lo=0.5, hi=2.0,
+                             help="a surface covers the pixel at a time sample when it "
+                                  "lands within this many pixels (Chebyshev) of its centre")

@@ -1,0 +1,81 @@
+"""The hybrid mode's ray mask (ALGORITHMS.md 4.1-4.2): which pixels get a ray.
+
+Three fragment passes, after the paper, adapted to the contract's centred exposure:
+
+  mask_displacement (+ mask_relative): a moving pixel whose displaced position, looking
+      both ways along half its displacement (and half the relative displacement to the
+      background seen there), lands on a different, farther object;
+  mask_edge: the survivors where a Sobel kernel on log depth or normal exceeds a threshold
+      (the moving silhouettes);
+  ray_mask: every moving pixel with an edge pixel of its own object within reach along
+      its displacement; holds the pixel's object id where masked, 0 elsewhere.
+"""
+from __future__ import annotations
+
+from .blur_common import max_radius_px
+from .frame import Frame
+from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
+from .passes import FullscreenPass
+from .pool import TexSpec
+
+MASK = TexSpec(1, "u1")
+RAY_MASK = TexSpec(1, "u4")         # own object id where masked
+RELATIVE = TexSpec(2, "f4")
+
+
+class DisplacementTest(FullscreenPass):
+    name = "mask_displacement"
+    fragment = "raymask_displacement.frag"
+    inputs = ("depth", "id", "velocity")
+    produces = ("mask_displacement", "mask_relative")
+
+    def outputs(self, frame: Frame):
+        return {"mask_displacement": MASK, "mask_relative": RELATIVE}
+
+    def execute(self, frame: Frame):
+        p = frame.params["hybrid"]
+        self.draw(frame, self.produces,
+                  {"u_depth": "depth", "u_id": "id", "u_velocity": "velocity"},
+                  {"u_min_speed": float(p.min_speed),
+                   "u_depth_threshold": float(p.depth_threshold)})
+
+
+class EdgeTest(FullscreenPass):
+    name = "mask_edge"
+    fragment = "raymask_edge.frag"
+    inputs = ("mask_displacement", "depth", "normal")
+    produces = ("mask_edge",)
+
+    def outputs(self, frame: Frame):
+        return {"mask_edge": MASK}
+
+    def execute(self, frame: Frame):
+        p = frame.params["hybrid"]
+        self.draw(frame, self.produces,
+                  {"u_displacement_mask": "mask_displacement", "u_depth": "depth",
+                   "u_normal": "normal"},
+                  {"u_edge_depth": float(p.edge_depth), "u_edge_normal": float(p.edge_normal)})
+
+
+class RangeCheck(FullscreenPass):
+    name = "ray_mask"
+    fragment = "raymask_range.frag"
+    inputs = ("mask_displacement", "mask_edge", "mask_relative", "id", "velocity")
+    produces = ("ray_mask",)
+
+    def outputs(self, frame: Frame):
+        return {"ray_mask": RAY_MASK}
+
+    def execute(self, frame: Frame):
+        p = frame.params["hybrid"]
+        self.draw(frame, self.produces,
+                  {"u_displacement_mask": "mask_displacement", "u_edge": "mask_edge",
+                   "u_id": "id", "u_velocity": "velocity", "u_relative": "mask_relative"},
+                  {"u_min_speed": float(p.min_speed),
+                   "u_relative_reach": float(p.relative_reach),
+                   "u_max_reach": float(max_radius_px(frame))})
+
+
+def raymask_passes() -> list:
+    """The three mask passes, after a full G-buffer."""
+    return [DisplacementTest(), EdgeTest(), RangeCheck()]

@@ -1,0 +1,220 @@
+"""The hybrid mode's ray reveal (ALGORITHMS.md 4.2): trace the masked pixels on the CPU,
+shade what they reveal on the GPU exactly as the raster layer is shaded.
+
+  reveal (host): read `ray_mask` back (one R32UI read gives the masked pixels and their
+      own object ids), cast one ray per masked pixel through its centre from the camera at
+      the frame time with raytrace.RayScene (built once per scene, kept in the renderer's
+      host state), and pack the hits, grouped by object, into a vertex buffer;
+  reveal_shade (GPU): draw one point per revealed pixel into revealed_color / _depth / _id
+      / _velocity (and revealed2_* for a second layer), one draw per revealed object with
+      that object's GpuScene uniforms, so glsl/shading.glsl and glsl/motion.glsl give the
+      same colour, depth and displacement as the G-buffer would.
+"""
+from __future__ import annotations
+
+import time
+
+import moderngl
+import numpy as np
+
+from raytrace import RayScene
+
+from ..conventions import glsl_defines
+from .frame import Frame
+from .gpu_scene import MAX_LIGHTS, set_uniform
+from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
+from .passes import FullscreenPass, Pass
+from .pool import TexSpec
+
+LAYER_SPECS = {"color": TexSpec(4, "f4"), "depth": TexSpec(1, "f4"),
+               "id": TexSpec(1, "u4"), "velocity": TexSpec(2, "f4")}
+MAX_LAYERS = 2
+# Per revealed pixel: image (i, j), mesh-space position, mesh-space normal, uv.
+VERTEX_FORMAT = (("in_pixel", 2), ("in_local", 3), ("in_normal", 3), ("in_uv", 2))
+STATE_KEY = "hybrid_reveal"
+
+
+def layer_prefix(k: int) -> str:
+    """Texture prefix of revealed layer k (0-based): revealed_, revealed2_, ..."""
+    return "revealed_" if k == 0 else f"revealed{k + 1}_"
+
+
+def layer_names(k: int) -> tuple[str, ...]:
+    return tuple(layer_prefix(k) + n for n in LAYER_SPECS)
+
+
+class RevealState:
+    """Per-scene host state: the Embree scene (built once) and the GL objects the points
+    are drawn from (grown, never reallocated per frame)."""
+
+    def __init__(self, ctx: moderngl.Context, scene):
+        self.ctx, self.scene = ctx, scene
+        self.rays = RayScene(scene)
+        self.buffers: dict[int, moderngl.Buffer] = {}
+        self.vaos: dict[tuple[int, int], moderngl.VertexArray] = {}
+        self.batches: list = []        # per layer: (ranges, count) of the current frame
+
+    def upload(self, k: int, data: np.ndarray) -> moderngl.Buffer:
+        nbytes = max(data.nbytes, 4)
+        buf = self.buffers.get(k)
+        if buf is None or buf.size < nbytes:
+            for key in [key for key in self.vaos if key[1] == k]:
+                self.vaos.pop(key).release()
+            if buf is not None:
+                buf.release()
+            buf = self.buffers[k] = self.ctx.buffer(reserve=max(nbytes, 1 << 16))
+        if data.nbytes:
+            buf.write(data.tobytes())
+        return buf
+
+    def vao(self, prog: moderngl.Program, k: int) -> moderngl.VertexArray:
+        key = (prog.glo, k)
+        if key not in self.vaos:
+            fmt, names = [], []
+            for name, n in VERTEX_FORMAT:
+                if name in prog:
+                    fmt.append(f"{n}f")
+                    names.append(name)
+                else:
+                    fmt.append(f"{4 * n}x")        # dropped by the compiler: skip its bytes
+            self.vaos[key] = self.ctx.vertex_array(
+                prog, [(self.buffers[k], " ".join(fmt), *names)])
+        return self.vaos[key]
+
+    def release(self):
+        for v in self.vaos.values():
+            v.release()
+        for b in self.buffers.values():
+            b.release()
+        self.vaos.clear(), self.buffers.clear()
+
+
+def reveal_state(frame: Frame) -> RevealState:
+    state = frame.host.setdefault("state", {})
+    rs = state.get(STATE_KEY)
+    if rs is None or rs.scene is not frame.scene or rs.ctx is not frame.ctx:
+        if rs is not None:
+            rs.release()
+        rs = state[STATE_KEY] = RevealState(frame.ctx, frame.scene)
+    return rs
+
+
+def masked_pixels(ray_mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 2) image coordinates (i, j) of the masked pixels in row-major image order and
+    their own object ids, from the `ray_mask` read back in image orientation."""
+    flat = ray_mask.reshape(-1)
+    idx = np.flatnonzero(flat)
+    w = ray_mask.shape[1]
+    return np.stack([idx % w, idx // w], axis=1), flat[idx]
+
+
+def pack_layer(pixels: np.ndarray, layer) -> tuple[np.ndarray, list[tuple[int, int, int]]]:
+    """Vertex data of one revealed layer, grouped by object id (0 = the ray left the
+    scene), and the (object id, first, count) ranges to draw. Untraced rows are left out."""
+    rows = np.flatnonzero(layer.traced)
+    ids = layer.object_id[rows]
+    order = rows[np.argsort(ids, kind="stable")]
+    data = np.empty((len(order), 10), dtype=np.float32)
+    data[:, 0:2] = pixels[order]
+    data[:, 2:5] = layer.local_position[order]
+    data[:, 5:8] = layer.local_normal[order]
+    data[:, 8:10] = layer.uv[order]
+    sorted_ids = layer.object_id[order]
+    uniq, first, count = np.unique(sorted_ids, return_index=True, return_counts=True)
+    return data, [(int(u), int(f), int(c)) for u, f, c in zip(uniq, first, count)]
+
+
+class RevealTrace(Pass):
+    """Host side: mask read-back, ray casting, vertex packing and upload."""
+    name = "reveal"
+    inputs = ("ray_mask",)
+    produces = ("reveal_hits",)          # host-side: the vertex buffers in RevealState
+
+    def execute(self, frame: Frame):
+        p = frame.params["hybrid"]
+        t0 = time.perf_counter()
+        st = reveal_state(frame)
+        pixels, own = masked_pixels(frame.read("ray_mask"))
+        t1 = time.perf_counter()
+        st.batches = []
+        result = None
+        if len(pixels):
+            result = st.rays.reveal(frame.camera, frame.time, pixels, own, layers=p.layers,
+                                    max_depth=p.max_depth, threads=p.threads or None)
+        t2 = time.perf_counter()
+        for k in range(p.layers):
+            if result is None:
+                st.batches.append(([], 0))
+                continue
+            data, ranges = pack_layer(pixels, result.layers[k])
+            st.upload(k, data)
+            st.batches.append((ranges, len(data)))
+        t3 = time.perf_counter()
+        s = frame.stats
+        s["masked_pixels"] = int(len(pixels))
+        s["rays"] = int(result.rays) if result else 0
+        s["revealed_pixels"] = int(result.pixels_hit) if result else 0
+        s["restarts"] = int(result.restarts) if result else 0
+        s["unresolved"] = int(result.unresolved) if result else 0
+        s["reveal_readback_ms"] = (t1 - t0) * 1e3
+        s["reveal_trace_ms"] = (t2 - t1) * 1e3
+        s["reveal_upload_ms"] = (t3 - t2) * 1e3
+        s["reveal_ms"] = (t3 - t0) * 1e3
+
+
+class ClearLayer(FullscreenPass):
+    fragment = "reveal_clear.frag"
+
+
+class RevealShade(Pass):
+    """GPU side: the revealed layers' colour, depth, id and displacement at the masked
+    pixels, everything else cleared to 'nothing revealed' (alpha 0). Every layer up to
+    MAX_LAYERS is produced (the deeper ones stay cleared when fewer are traced), so the
+    pipeline's textures do not depend on the `hybrid.layers` setting."""
+    name = "reveal_shade"
+    inputs = ("reveal_hits",)
+    produces = tuple(n for k in range(MAX_LAYERS) for n in layer_names(k))
+
+    def __init__(self):
+        self.clear = ClearLayer()
+
+    def outputs(self, frame: Frame):
+        return {n: LAYER_SPECS[n.split("_", 1)[1]] for n in self.produces}
+
+    def execute(self, frame: Frame):
+        ctx, cam, gpu = frame.ctx, frame.camera, frame.gpu
+        st = reveal_state(frame)
+        t = frame.time
+        t_open, t_close = frame.exposure
+        prog = frame.programs.get("reveal_points.vert", "reveal_shade.frag",
+                                  {**glsl_defines(), "MAX_LIGHTS": MAX_LIGHTS})
+        for k in range(MAX_LAYERS):
+            names = layer_names(k)
+            self.clear.draw(frame, names, {})
+            ranges, count = st.batches[k] if k < len(st.batches) else ([], 0)
+            if not count:
+                continue
+            fbo = frame.pool.framebuffer(names)
+            fbo.use()
+            fbo.viewport = (0, 0) + fbo.size
+            ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE | moderngl.BLEND)
+            set_uniform(prog, "u_view", cam.view(t))
+            set_uniform(prog, "u_proj", cam.projection())
+            set_uniform(prog, "u_view_open", cam.view(t_open))
+            set_uniform(prog, "u_view_close", cam.view(t_close))
+            set_uniform(prog, "u_eye", cam.eye(t))
+            set_uniform(prog, "u_viewport", tuple(float(x) for x in frame.size))
+            set_uniform(prog, "u_near", float(cam.spec.near))
+            set_uniform(prog, "u_background", frame.scene.background)
+            gpu.bind_lights(prog)
+            vao = st.vao(prog, k)
+            objects = {o.id: o for o in frame.scene.objects}
+            for oid, first, n in ranges:
+                set_uniform(prog, "u_miss", oid == 0)
+                if oid:
+                    gpu.bind_object(prog, objects[oid], t, t_open, t_close)
+                vao.render(moderngl.POINTS, vertices=n, first=first)
+
+
+def reveal_passes() -> list:
+    return [RevealTrace(), RevealShade()]
