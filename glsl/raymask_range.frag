@@ -1,8 +1,8 @@
 #version 330 core
 // Ray mask, step 3: the range check. A moving pixel samples along its displacement, both
 // ways, one pixel per step; if a sample is an edge pixel of its own object within reach
-// (half the larger of the pixel's displacement and that edge's relative displacement),
-// the pixel is masked. Survivors of the displacement test are masked too. The output is
+// (half the larger of the pixel's displacement and that edge's relative displacement, in
+// whole steps), the pixel is masked. Survivors of the displacement test are masked too. The output is
 // the pixel's object id where masked (0 elsewhere): one read gives mask and own ids.
 #include "raymask_common.glsl"
 uniform usampler2D u_displacement_mask;
@@ -31,7 +31,7 @@ void main() {
             ivec2 y = probe(x, float(s * i) * dir, size);
             if (texelFetch(u_edge, y, 0).x == 0u || texelFetch(u_id, y, 0).x != own) continue;
             float reach = max(half_len, 0.5 * length(texelFetch(u_relative, y, 0).xy));
-            if (float(i) <= min(reach, u_max_reach) + 0.5) { out_mask = own; return; }
+            if (float(i) <= min(reach, u_max_reach)) { out_mask = own; return; }
         }
     }
 }

@@ -1,0 +1,221 @@
+"""A numpy statement of the hybrid mode's GPU passes (viewer/render/raymask.py and
+viewer/render/hybrid_composite.py), the oracle for the GLSL.
+
+Arrays are in GL orientation: row 0 is the BOTTOM row, index [y, x], displacements in GL
+window axes (x right, y up), as the fragment shaders see them. Tests flip with
+viewer.conventions.to_image when reading or writing frames. Depth is positive linear view
+depth; ids are uint (0 = background). Displacements are the full motion over the exposure.
+
+Positions that decide a discrete outcome (which pixel a probe reads) are computed in
+float32 with the shader's order of operations.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+F32 = np.float32
+
+
+def probe(x: int, y: int, offset, size) -> tuple[int, int]:
+    """The pixel nearest to pixel (x, y)'s centre + offset, clamped to the screen."""
+    w, h = size
+    px = int(np.floor(F32(x) + F32(0.5) + F32(offset[0])))
+    py = int(np.floor(F32(y) + F32(0.5) + F32(offset[1])))
+    return min(max(px, 0), w - 1), min(max(py, 0), h - 1)
+
+
+def _length(v) -> float:
+    v = np.asarray(v, dtype=F32)
+    return float(np.sqrt(F32(v[0]) * F32(v[0]) + F32(v[1]) * F32(v[1])))
+
+
+# ---- ray mask --------------------------------------------------------------------------------
+
+def displacement_test(depth, ids, disp, min_speed: float, threshold: float):
+    """Step 1: (mask uint8 (H,W), relative displacement (H,W,2))."""
+    h, w = ids.shape
+    disp = np.asarray(disp, dtype=F32)
+    mask = np.zeros((h, w), np.uint8)
+    rel = disp.copy()
+    for y in range(h):
+        for x in range(w):
+            d = disp[y, x]
+            own, z = ids[y, x], depth[y, x]
+            if own == 0 or _length(d) < min_speed:
+                continue
+
+            def uncovers(offset):
+                px, py = probe(x, y, offset, (w, h))
+                far = F32(depth[py, px]) > F32(z) * F32(1.0 + threshold)
+                return (ids[py, px] != own and far), disp[py, px]
+
+            found = False
+            for s in (-1, 1):
+                hit, vb = uncovers(F32(0.5 * s) * d)
+                if hit:
+                    mask[y, x] = 1
+                    if not found:
+                        rel[y, x] = d - vb
+                        found = True
+            if found:
+                for s in (-1, 1):
+                    if uncovers(F32(0.5 * s) * rel[y, x])[0]:
+                        mask[y, x] = 1
+    return mask, rel
+
+
+SOBEL_X = np.array([[-1, 0, 1], [-2, 0, 2], [-1, 0, 1]], dtype=np.float64)   # [dy+1, dx+1]
+
+
+def sobel(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Sobel gradients (divided by 4) of an (H,W) or (H,W,C) array, edges clamped."""
+    h, w = a.shape[:2]
+    pad = np.pad(a, [(1, 1), (1, 1)] + [(0, 0)] * (a.ndim - 2), mode="edge")
+    gx = np.zeros(a.shape)
+    gy = np.zeros(a.shape)
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            win = pad[1 + dy:1 + dy + h, 1 + dx:1 + dx + w]
+            gx = gx + SOBEL_X[dy + 1, dx + 1] * win
+            gy = gy + SOBEL_X[dx + 1, dy + 1] * win     # the transposed kernel
+    return 0.25 * gx, 0.25 * gy
+
+
+def edge_test(dmask, depth, normal, edge_depth: float, edge_normal: float) -> np.ndarray:
+    """Step 2: survivors of step 1 on a log-depth or normal Sobel edge. uint8 (H,W)."""
+    gx, gy = sobel(np.log(np.maximum(np.asarray(depth, np.float64), 1e-6)))
+    g_depth = np.hypot(gx, gy)
+    nx, ny = sobel(np.asarray(normal, np.float64)[..., :3])
+    g_normal = np.sqrt((nx * nx).sum(-1) + (ny * ny).sum(-1))
+    edge = (g_depth > edge_depth) | (g_normal > edge_normal)
+    return ((dmask != 0) & edge).astype(np.uint8)
+
+
+def range_check(dmask, edge, ids, disp, rel, min_speed: float, relative_reach: float,
+                max_reach: float) -> np.ndarray:
+    """Step 3: the ray mask, the own id where masked. uint32 (H,W)."""
+    h, w = ids.shape
+    disp = np.asarray(disp, dtype=F32)
+    out = np.zeros((h, w), np.uint32)
+    for y in range(h):
+        for x in range(w):
+            own, d = ids[y, x], disp[y, x]
+            ln = _length(d)
+            if own == 0 or ln < min_speed:
+                continue
+            if dmask[y, x]:
+                out[y, x] = own
+                continue
+            half = 0.5 * ln
+            direction = d / F32(ln)
+            steps = int(np.ceil(min(max_reach, relative_reach * half)))
+            done = False
+            for i in range(steps + 1):
+                for s in (-1, 1):
+                    px, py = probe(x, y, F32(s * i) * direction, (w, h))
+                    if not edge[py, px] or ids[py, px] != own:
+                        continue
+                    reach = max(half, 0.5 * _length(rel[py, px]))
+                    if i <= min(reach, max_reach):
+                        out[y, x] = own
+                        done = True
+                        break
+                if done:
+                    break
+    return out
+
+
+def ray_mask(depth, ids, disp, normal, *, min_speed=1.0, threshold=0.01, edge_depth=0.05,
+             edge_normal=0.3, relative_reach=2.0, max_reach=16.0):
+    """All three steps: (mask_displacement, mask_relative, mask_edge, ray_mask)."""
+    dm, rel = displacement_test(depth, ids, disp, min_speed, threshold)
+    edge = edge_test(dm, depth, normal, edge_depth, edge_normal)
+    return dm, rel, edge, range_check(dm, edge, ids, disp, rel, min_speed, relative_reach,
+                                      max_reach)
+
+
+# ---- composite ---------------------------------------------------------------------------------
+
+def clamp_length(d: np.ndarray, limit: float) -> np.ndarray:
+    d = np.asarray(d, dtype=np.float64)
+    ln = np.hypot(d[..., 0], d[..., 1])
+    scale = np.where(ln > limit, limit / np.where(ln > 0, ln, 1.0), 1.0)
+    return d * scale[..., None]
+
+
+def pack_layers(color, depth, disp, rev_color, rev_depth, rev_disp, max_disp):
+    """hybrid_layers for one revealed layer: front and back as (motion (H,W,4), colour)."""
+    front = np.concatenate([clamp_length(disp, max_disp), depth[..., None],
+                            np.zeros(depth.shape + (1,))], axis=-1)
+    revealed = rev_color[..., 3] > 0.5
+    back = front.copy()
+    back[revealed, :2] = clamp_length(rev_disp, max_disp)[revealed]
+    back[revealed, 2] = rev_depth[revealed]
+    back[..., 3] = revealed
+    back_color = np.where(revealed[..., None], rev_color[..., :3], color[..., :3])
+    return front, color[..., :3], back, back_color
+
+
+def time_composite(front, front_color, back, back_color, neighbormax, tile: int,
+                   max_disp: float, samples_min=8, samples_max=48, spacing=2.0,
+                   tolerance=0.55, iterations=2) -> np.ndarray:
+    """hybrid_time.frag with jitter 0 (times at stratum centres) and one revealed layer."""
+    h, w = front.shape[:2]
+    layers = [(front, front_color), (back, back_color)]
+    out = np.zeros((h, w, 3))
+    for y in range(h):
+        for x in range(w):
+            centre = np.array([x + 0.5, y + 0.5])
+            own = front_color[y, x]
+            vn = clamp_length(neighbormax[y // tile, x // tile], max_disp)
+            fx, bx = front[y, x], back[y, x]
+            reach = max(np.hypot(*vn), np.hypot(*fx[:2]), np.hypot(*bx[:2]))
+            if reach <= 1.0:
+                out[y, x] = own
+                continue
+            same_seed = bool(np.all(np.abs(vn - fx[:2]) < 1e-3))
+            n = int(np.clip(int(np.ceil(reach / spacing)), samples_min, samples_max))
+            total = np.zeros(3)
+            for k in range(n):
+                u = (k + 0.5) / n - 0.5
+                best_z, best, covered = np.inf, None, False
+                miss, miss_behind, stand_in = np.inf, False, own
+                seeds = [(0, fx[:2])] + ([] if same_seed else [(0, vn)]) + [(1, bx[:2])]
+                for layer, seed in seeds:
+                    motion, colour = layers[layer]
+                    p = centre - u * np.asarray(seed)
+                    for _ in range(iterations):
+                        q = np.clip(np.floor(p).astype(int), 0, [w - 1, h - 1])
+                        p = centre - u * motion[q[1], q[0], :2]
+                    raw = np.floor(p).astype(int)
+                    q = np.clip(raw, 0, [w - 1, h - 1])
+                    m = motion[q[1], q[0]]
+                    if np.any(raw != q):
+                        continue
+                    land = q + 0.5 + u * m[:2] - centre
+                    r = np.max(np.abs(land))
+                    if r <= tolerance:
+                        if m[2] < best_z:
+                            best_z, best, covered = m[2], colour[q[1], q[0]], True
+                    elif not covered:
+                        behind = m[2] > fx[2]
+                        if (behind and not miss_behind) or (behind == miss_behind and r < miss):
+                            miss, miss_behind, stand_in = r, behind, colour[q[1], q[0]]
+                total += best if covered else stand_in
+            out[y, x] = total / n
+    return out
+
+
+def box_shutter_bar(width: int, x0: int, x1: int, d: float, n: int, fg, bg) -> np.ndarray:
+    """Analytic: a bar covering pixel centres x0..x1-1 at the frame time, translating by d
+    px over the exposure over a static background; the mean of n stratified time samples
+    of each pixel centre's colour, per column (width, 3)."""
+    out = np.zeros((width, 3))
+    for x in range(width):
+        acc = np.zeros(3)
+        for k in range(n):
+            u = (k + 0.5) / n - 0.5
+            src = x + 0.5 - u * d            # the frame-time position at this pixel at u
+            acc += fg if x0 <= np.floor(src) < x1 else bg
+        out[x] = acc / n
+    return out

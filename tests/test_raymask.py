@@ -1,0 +1,203 @@
+"""The hybrid ray mask (viewer/render/raymask.py): each pass on tiny synthetic buffers
+against tests/numpy_hybrid.py, and the numpy statement itself against hand-computed bands.
+
+Arrays here are in GL orientation (row 0 at the bottom, displacement y up) like the numpy
+reference; `upload`/`download` flip to and from the frames' image orientation.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import numpy_hybrid as nh
+from viewer.conventions import BACKGROUND_DEPTH, to_image
+from viewer.params import ParamSet
+from viewer.render.blur_common import max_radius_px
+from viewer.render.gbuffer import GBUFFER
+from viewer.render.raymask import raymask_passes
+
+W, H = 40, 6
+BAR = (12, 24)                 # columns of the bar, [x0, x1)
+
+
+def params(**hy):
+    p = ParamSet()
+    p.set("blur.max_radius", 0.25)          # k = 10 px at W = 40
+    for key, value in hy.items():
+        p.set(f"hybrid.{key}", value)
+    return p
+
+
+def upload(frame, depth, ids, disp, normal):
+    for name, a in (("depth", depth), ("id", ids), ("velocity", disp), ("normal", normal)):
+        spec = GBUFFER[name]
+        frame.pool.texture(name, spec)
+        dtype = np.uint32 if spec.dtype == "u4" else np.float32
+        frame.write(name, to_image(np.asarray(a, dtype)))
+
+
+def run(frame):
+    for p in raymask_passes():
+        p.allocate(frame)
+        p.execute(frame)
+    return {n: to_image(frame.read(n))
+            for n in ("mask_displacement", "mask_relative", "mask_edge", "ray_mask")}
+
+
+def bar_scene(bar_disp=(9.2, 0.0), bg_disp=(0.0, 0.0), bar=BAR):
+    """A bar (id 2, depth 2) translating over a wall (id 1, depth 10), facing the camera."""
+    depth = np.full((H, W), 10.0)
+    ids = np.ones((H, W), np.uint32)
+    disp = np.tile(np.asarray(bg_disp, float), (H, W, 1))
+    normal = np.tile([0.0, 0.0, 1.0, 0.0], (H, W, 1))
+    depth[:, bar[0]:bar[1]] = 2.0
+    ids[:, bar[0]:bar[1]] = 2
+    disp[:, bar[0]:bar[1]] = bar_disp
+    return depth, ids, disp, normal
+
+
+def numpy_mask(frame, depth, ids, disp, normal):
+    p = frame.params["hybrid"]
+    return nh.ray_mask(depth, ids, disp, normal, min_speed=p.min_speed,
+                       threshold=p.depth_threshold, edge_depth=p.edge_depth,
+                       edge_normal=p.edge_normal, relative_reach=p.relative_reach,
+                       max_reach=max_radius_px(frame))
+
+
+def columns(mask_row) -> list[int]:
+    return [int(x) for x in np.flatnonzero(mask_row)]
+
+
+# ---- the numpy statement on hand-computed cases -------------------------------------------------
+
+def test_numpy_bar_over_static_wall_masks_half_the_displacement_from_each_edge():
+    # Pixel x of the bar is uncovered at some time iff x + 0.5 +- 4.6 leaves [12, 24):
+    # x <= 16 (at shutter open, trailing side) or x >= 19 (at close, leading side).
+    depth, ids, disp, normal = bar_scene()
+    dm, rel, edge, mask = nh.ray_mask(depth, ids, disp, normal, max_reach=10)
+    assert columns(dm[0]) == [12, 13, 14, 15, 16, 19, 20, 21, 22, 23]
+    assert columns(edge[0]) == [12, 23]                     # the silhouettes only
+    assert columns(mask[0]) == columns(dm[0])
+    assert set(np.unique(mask)) == {0, 2}                   # the own id where masked
+    np.testing.assert_allclose(rel[0, 12], [9.2, 0.0], rtol=1e-6)
+
+
+def test_numpy_background_moving_the_other_way_widens_the_band_to_the_relative_reach():
+    # Relative displacement 9.2 - (-4.6) = 13.8: the band is 6.9 px deep on each side.
+    # A 16-px bar [12, 28): within 6.9 steps of column 12 or 27 -> x <= 18 or x >= 21.
+    depth, ids, disp, normal = bar_scene(bg_disp=(-4.6, 0.0), bar=(12, 28))
+    dm, rel, edge, mask = nh.ray_mask(depth, ids, disp, normal, max_reach=10)
+    assert columns(dm[0]) == [12, 13, 14, 15, 16, 23, 24, 25, 26, 27]
+    np.testing.assert_allclose(rel[0, 12], [13.8, 0.0], rtol=1e-6)
+    assert columns(mask[0]) == list(range(12, 19)) + list(range(21, 28))
+    # Searching only ceil(4.6) = 5 steps (relative_reach 1) misses 18 and 21.
+    _, _, _, narrow = nh.ray_mask(depth, ids, disp, normal, max_reach=10, relative_reach=1.0)
+    assert columns(narrow[0]) == list(range(12, 18)) + list(range(22, 28))
+
+
+def test_numpy_sobel_of_a_unit_step_reads_one():
+    a = np.zeros((5, 6))
+    a[:, 3:] = 1.0
+    gx, gy = nh.sobel(a)
+    # Both sides of the step see (1 + 2 + 1) * 1 / 4; one pixel away, nothing.
+    assert gx[2, 2] == 1.0 and gx[2, 3] == 1.0 and gx[2, 1] == 0.0 and gx[2, 4] == 0.0
+    assert np.all(gy == 0.0)
+    gx_t, gy_t = nh.sobel(a.T)
+    assert np.all(gx_t == 0.0) and gy_t[2, 2] == 1.0
+
+
+# ---- GPU passes against numpy -------------------------------------------------------------------
+
+def test_bar_over_static_wall(synthetic_frame):
+    frame = synthetic_frame((W, H), params())
+    bufs = bar_scene()
+    upload(frame, *bufs)
+    got = run(frame)
+    dm, rel, edge, mask = numpy_mask(frame, *bufs)
+    np.testing.assert_array_equal(got["mask_displacement"], dm)
+    np.testing.assert_array_equal(got["mask_edge"], edge)
+    np.testing.assert_array_equal(got["ray_mask"], mask)
+    np.testing.assert_allclose(got["mask_relative"], rel, rtol=1e-6, atol=1e-6)
+    assert columns(got["ray_mask"][3]) == [12, 13, 14, 15, 16, 19, 20, 21, 22, 23]
+
+
+def test_camera_motion_uses_the_relative_displacement(synthetic_frame):
+    frame = synthetic_frame((W, H), params())
+    bufs = bar_scene(bg_disp=(-4.6, 0.0))
+    upload(frame, *bufs)
+    got = run(frame)
+    np.testing.assert_array_equal(got["ray_mask"], numpy_mask(frame, *bufs)[3])
+    assert columns(got["ray_mask"][2]) == list(range(12, 24))
+
+
+def test_vertical_motion_and_image_borders(synthetic_frame):
+    # A square moving down (GL y) at the bottom edge: probes past the border read the
+    # border row (off-screen content is not "behind"), so only the top band is masked.
+    w, h = 12, 16
+    frame = synthetic_frame((w, h), params())
+    depth = np.full((h, w), 6.0)
+    ids = np.ones((h, w), np.uint32)
+    disp = np.zeros((h, w, 2))
+    normal = np.tile([0.0, 0.0, 1.0, 0.0], (h, w, 1))
+    depth[0:7, 3:9], ids[0:7, 3:9], disp[0:7, 3:9] = 1.5, 3, (0.0, -5.2)
+    upload(frame, depth, ids, disp, normal)
+    got = run(frame)
+    ref = numpy_mask(frame, depth, ids, disp, normal)
+    for name, want in zip(("mask_displacement", "mask_relative", "mask_edge", "ray_mask"), ref):
+        if name == "mask_relative":
+            np.testing.assert_allclose(got[name], want, atol=1e-6)
+        else:
+            np.testing.assert_array_equal(got[name], want, err_msg=name)
+    # Rows y with y + 0.5 + 2.6 >= 7 (uncovered at shutter open): y >= 4; column 5 is
+    # interior, so its only uncovering is vertical.
+    assert [int(y) for y in np.flatnonzero(got["ray_mask"][:, 5])] == [4, 5, 6]
+
+
+def random_layers(rng, w, h):
+    """Three layers with distinct ids, depths and motions; sloped and creased normals."""
+    depth = 9.0 + rng.uniform(0, 0.5, (h, w))
+    ids = np.ones((h, w), np.uint32)
+    disp = np.tile([1.7, -0.6], (h, w, 1)) + rng.uniform(-0.2, 0.2, (h, w, 2))
+    normal = np.tile([0.0, 0.0, 1.0, 0.0], (h, w, 1))
+    depth[3:13, 4:18] = 3.0 + 0.02 * rng.uniform(size=(10, 14))
+    ids[3:13, 4:18] = 2
+    disp[3:13, 4:18] = [7.3, 2.9]
+    normal[3:13, 11:18] = [0.6, 0.0, 0.8, 0.0]              # a crease inside object 2
+    depth[6:10, 20:26] = 2.0
+    ids[6:10, 20:26] = 3
+    disp[6:10, 20:26] = [-3.1, 5.7]
+    depth[0, 0:4] = BACKGROUND_DEPTH                        # sky, with a camera motion
+    ids[0, 0:4] = 0
+    disp[0, 0:4] = [6.0, 0.0]
+    return depth, ids, disp, normal
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_random_layers_match_numpy(synthetic_frame, seed):
+    rng = np.random.default_rng(seed)
+    w, h = 30, 16
+    frame = synthetic_frame((w, h), params(edge_depth=0.04, edge_normal=0.25))
+    bufs = random_layers(rng, w, h)
+    upload(frame, *bufs)
+    got = run(frame)
+    dm, rel, edge, mask = numpy_mask(frame, *bufs)
+    np.testing.assert_array_equal(got["mask_displacement"], dm)
+    np.testing.assert_array_equal(got["mask_edge"], edge)
+    np.testing.assert_array_equal(got["ray_mask"], mask)
+    np.testing.assert_allclose(got["mask_relative"], rel, atol=1e-5)
+    assert np.count_nonzero(mask == 2) > 10 and np.count_nonzero(mask == 3) > 5
+    assert not np.any(mask[bufs[1] == 0])                   # the sky is never traced
+
+
+def test_static_frame_masks_nothing(synthetic_frame):
+    frame = synthetic_frame((W, H), params())
+    depth, ids, _, normal = bar_scene()
+    upload(frame, depth, ids, np.zeros((H, W, 2)), normal)
+    got = run(frame)
+    assert not got["mask_displacement"].any() and not got["ray_mask"].any()
+
+
+def test_slow_pixels_below_min_speed_are_not_masked(synthetic_frame):
+    frame = synthetic_frame((W, H), params(min_speed=10.0))
+    upload(frame, *bar_scene())                             # |D| = 9.2 < 10
+    assert not run(frame)["ray_mask"].any()
