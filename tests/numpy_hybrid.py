@@ -206,16 +206,18 @@ def time_composite(front, front_color, back, back_color, neighbormax, tile: int,
     return out
 
 
-def box_shutter_bar(width: int, x0: int, x1: int, d: float, n: int, fg, bg) -> np.ndarray:
-    """Analytic: a bar covering pixel centres x0..x1-1 at the frame time, translating by d
-    px over the exposure over a static background; the mean of n stratified time samples
-    of each pixel centre's colour, per column (width, 3)."""
-    out = np.zeros((width, 3))
-    for x in range(width):
+def box_shutter_bar(fg, bg, x0: int, x1: int, d: float, n: int) -> np.ndarray:
+    """Analytic: one row of a bar covering pixel centres x0..x1-1 at the frame time,
+    translating by d px over the exposure over a static background; the mean of n
+    stratified time samples of each pixel centre's colour. fg, bg: (W, 3) colours of the
+    bar's and the background's frame-time pixels; returns (W, 3)."""
+    fg, bg = np.asarray(fg, np.float64), np.asarray(bg, np.float64)
+    out = np.zeros(bg.shape)
+    for x in range(len(bg)):
         acc = np.zeros(3)
         for k in range(n):
             u = (k + 0.5) / n - 0.5
-            src = x + 0.5 - u * d            # the frame-time position at this pixel at u
-            acc += fg if x0 <= np.floor(src) < x1 else bg
+            src = int(np.floor(x + 0.5 - u * d))    # the bar pixel on x at time u, if any
+            acc += fg[src] if x0 <= src < x1 else bg[x]
         out[x] = acc / n
     return out

@@ -1,0 +1,329 @@
+"""The hybrid mode (viewer/render/hybrid.py): the ray reveal against a raster oracle (the
+scene rendered without the pixel's own object), same-coloured objects, deeper layers,
+transforms at t != 0, the composite against tests/numpy_hybrid.py and the analytic box
+shutter, determinism, an empty mask, and the whole mode against the reference.
+"""
+from __future__ import annotations
+
+import dataclasses
+import textwrap
+
+import numpy as np
+import pytest
+
+import numpy_hybrid as nh
+import numpy_mcguire as nm
+from conftest import CONFORMANCE
+from viewer.conventions import to_image
+from viewer.metrics import image_metrics
+from viewer.params import ParamSet
+from viewer.render.blur_common import max_radius_px
+from viewer.render.gbuffer import GBUFFER
+from viewer.render.hybrid_composite import composite_passes
+from viewer.render.modes import MODES
+from viewer.render.renderer import Renderer
+from viewer.render.reveal_pass import LAYER_SPECS, layer_names
+from viewer.scene_loader import load_scene
+
+SMALL = (160, 90)
+
+
+def params(**hy) -> ParamSet:
+    p = ParamSet()
+    for key, value in hy.items():
+        p.set(f"hybrid.{key}", value)
+    return p
+
+
+def render(ctx, scene, mode, t, p=None, size=SMALL, seed=0, timing=False):
+    """(RenderResult, every pool buffer) of one frame on a fresh renderer."""
+    r = Renderer(ctx, scene, size)
+    try:
+        res = r.render(mode, t, p or ParamSet(), seed=seed, timing=timing)
+        return res, r.buffers()
+    finally:
+        r.release()
+
+
+def without(scene, ids):
+    """The scene with objects `ids` parked far behind the camera, still: a raster render
+    of it shows what lies behind them (object ids of the others unchanged)."""
+    cam = scene.camera
+    parked = cam.position - 1000.0 * (cam.look_at - cam.position)
+    objects = [dataclasses.replace(o, position=parked, velocity=np.zeros(3),
+                                   angular_velocity=np.zeros(3)) if o.id in ids else o
+               for o in scene.objects]
+    return dataclasses.replace(scene, objects=objects)
+
+
+def assert_layer_matches(bufs, prefix, oracle, sel):
+    """The revealed layer at the selected pixels is the oracle's G-buffer there."""
+    assert sel.any()
+    np.testing.assert_array_equal(bufs[prefix + "id"][sel], oracle["id"][sel])
+    np.testing.assert_allclose(bufs[prefix + "depth"][sel], oracle["depth"][sel], rtol=2e-6)
+    np.testing.assert_allclose(bufs[prefix + "color"][sel][:, :3], oracle["color"][sel][:, :3],
+                               atol=1e-5)
+    np.testing.assert_allclose(bufs[prefix + "velocity"][sel], oracle["velocity"][sel],
+                               atol=1e-3)
+    assert np.all(bufs[prefix + "color"][sel][:, 3] == 1.0)
+
+
+# ---- the reveal against the raster oracle -------------------------------------------------------
+
+@pytest.mark.parametrize("name, t", [("basic", 0.0), ("basic", 0.013), ("vase_pan", 0.1)])
+def test_reveal_equals_raster_without_the_own_object(ctx, name, t):
+    """At t != 0 the rotating box and the moving camera check that the ray tracer and the
+    rasteriser place moving objects identically (depth and displacement agree too)."""
+    scene = load_scene(CONFORMANCE / f"{name}.toml")
+    res, bufs = render(ctx, scene, "hybrid", t)
+    mask = bufs["ray_mask"]
+    owners = [int(k) for k in np.unique(mask[mask > 0])]
+    assert len(owners) >= 2
+    for oid in owners:
+        _, oracle = render(ctx, without(scene, {oid}), "off", t)
+        assert_layer_matches(bufs, "revealed_", oracle, mask == oid)
+    # Unmasked pixels reveal nothing (alpha 0, id 0).
+    assert np.all(bufs["revealed_color"][mask == 0][:, 3] == 0.0)
+    assert not bufs["revealed_id"][mask == 0].any()
+    assert res.stats["masked_pixels"] == np.count_nonzero(mask)
+    assert res.stats["rays"] >= res.stats["masked_pixels"]
+
+
+SAME_COLOUR = """
+    name = "same_colour"
+    background = [0.02, 0.02, 0.03]
+    ambient = [0.2, 0.2, 0.2]
+    [camera]
+    position = [0.0, 0.0, 5.0]
+    look_at = [0.0, 0.0, 0.0]
+    fov_y = 40.0
+    shutter = 0.04
+    [[lights]]
+    direction = [-0.3, -0.4, -1.0]
+    [[objects]]
+    name = "wall"
+    mesh = {{ box = [8.0, 6.0, 0.1] }}
+    position = [0.0, 0.0, -2.0]
+    material = {{ albedo = [0.8, 0.8, 0.8], texture = {{ kind = "checker", size = 0.3, albedo2 = [0.2, 0.3, 0.5] }} }}
+    [[objects]]
+    name = "front"
+    mesh = {{ box = [0.9, 0.9, 0.2] }}
+    position = [0.0, 0.0, 1.0]
+    material = {{ albedo = [0.7, 0.2, 0.1] }}
+    velocity = [{front_speed}, 0.0, 0.0]
+    [[objects]]
+    name = "middle"
+    mesh = {{ box = [0.9, 0.9, 0.2] }}
+    position = [0.35, 0.15, 0.0]
+    rotation = [0.0, 0.0, 15.0]
+    material = {{ albedo = [0.7, 0.2, 0.1] }}
+    velocity = [-15.0, 0.0, 0.0]
+"""
+
+
+def same_colour_scene(tmp_path, front_speed=20.0):
+    path = tmp_path / "same_colour.toml"
+    path.write_text(textwrap.dedent(SAME_COLOUR.format(front_speed=front_speed)))
+    return load_scene(path)
+
+
+def test_two_overlapping_objects_of_the_same_colour_reveal_the_right_one(ctx, tmp_path):
+    scene = same_colour_scene(tmp_path)
+    res, bufs = render(ctx, scene, "hybrid", 0.0)
+    front = bufs["ray_mask"] == 2
+    _, oracle = render(ctx, without(scene, {2}), "off", 0.0)
+    assert_layer_matches(bufs, "revealed_", oracle, front)
+    # Behind the front box lie both the middle box (same colour) and the wall.
+    revealed = bufs["revealed_id"][front]
+    assert np.count_nonzero(revealed == 3) > 50 and np.count_nonzero(revealed == 1) > 50
+
+
+def test_second_layer_reveals_what_lies_behind_a_revealed_moving_object(ctx, tmp_path):
+    scene = same_colour_scene(tmp_path)
+    res, bufs = render(ctx, scene, "hybrid", 0.0, params(layers=2))
+    front = bufs["ray_mask"] == 2
+    behind_middle = front & (bufs["revealed_id"] == 3)
+    _, oracle = render(ctx, without(scene, {2, 3}), "off", 0.0)
+    assert_layer_matches(bufs, "revealed2_", oracle, behind_middle)
+    # Layer 2 is traced only behind revealed moving objects; elsewhere it is empty.
+    assert np.all(bufs["revealed2_color"][~behind_middle][:, 3] == 0.0)
+    assert res.stats["rays"] == res.stats["masked_pixels"] + np.count_nonzero(behind_middle)
+    # With one layer, the second stays cleared.
+    _, one = render(ctx, scene, "hybrid", 0.0, params(layers=1))
+    assert not one["revealed2_color"].any()
+
+
+# ---- the composite on synthetic buffers ---------------------------------------------------------
+
+W, H = 40, 4
+
+
+def upload(frame, name, a):
+    spec = GBUFFER.get(name) or LAYER_SPECS[name.split("_", 1)[1]]
+    frame.pool.texture(name, spec)
+    frame.write(name, to_image(np.asarray(a, np.uint32 if spec.dtype == "u4" else np.float32)))
+
+
+def bar_layers(rng, bar=(12, 24), d=(9.3, 0.0), reveal_cols=range(12, 24)):
+    """GL-orientation buffers: a textured bar translating over a static textured wall, and
+    the wall revealed behind the bar at `reveal_cols` (the exact hidden background)."""
+    wall = rng.uniform(0, 1, (H, W, 3))
+    bar_c = rng.uniform(0, 1, (H, W, 3))
+    colour = wall.copy()
+    colour[:, bar[0]:bar[1]] = bar_c[:, bar[0]:bar[1]]
+    depth = np.full((H, W), 10.0)
+    depth[:, bar[0]:bar[1]] = 2.0
+    disp = np.zeros((H, W, 2))
+    disp[:, bar[0]:bar[1]] = d
+    rev_c = np.zeros((H, W, 4))
+    rev_d = np.full((H, W), 1e9)
+    cols = list(reveal_cols)
+    rev_c[:, cols, :3] = wall[:, cols]
+    rev_c[:, cols, 3] = 1.0
+    rev_d[:, cols] = 10.0
+    return dict(colour=colour, depth=depth, disp=disp, rev_c=rev_c, rev_d=rev_d,
+                rev_v=np.zeros((H, W, 2)), wall=wall, bar=bar_c)
+
+
+def run_composite(frame, b):
+    ones = np.ones((H, W, 1))
+    upload(frame, "color", np.concatenate([b["colour"], ones], -1))
+    upload(frame, "depth", b["depth"])
+    upload(frame, "velocity", b["disp"])
+    for k, (c, dd, v) in enumerate([(b["rev_c"], b["rev_d"], b["rev_v"]),
+                                    (np.zeros((H, W, 4)), np.full((H, W), 1e9), np.zeros((H, W, 2)))]):
+        names = layer_names(k)
+        upload(frame, names[0], c)
+        upload(frame, names[1], dd)
+        upload(frame, names[2], np.zeros((H, W)))
+        upload(frame, names[3], v)
+    for p in composite_passes():
+        p.allocate(frame)
+        p.execute(frame)
+    return to_image(frame.read("hybrid"))[..., :3].astype(np.float64)
+
+
+def numpy_composite(frame, b):
+    p = frame.params["hybrid"]
+    k = max_radius_px(frame)
+    front, fc, back, bc = nh.pack_layers(b["colour"], b["depth"], b["disp"], b["rev_c"],
+                                         b["rev_d"], b["rev_v"], 2.0 * k)
+    tiles = nm.neighbormax(nm.tilemax_y(nm.tilemax_x(b["disp"].astype(np.float32), k), k))
+    return nh.time_composite(front, fc, back, bc, tiles, k, 2.0 * k, p.samples_min,
+                             p.samples_max, p.sample_spacing, p.tolerance, p.iterations)
+
+
+def composite_params(**kw):
+    p = params(**{"jitter": 0.0, "samples_min": 8, "samples_max": 8, **kw})
+    p.set("blur.max_radius", 0.25)          # k = 10 px
+    return p
+
+
+def test_numpy_composite_with_an_exact_background_is_the_box_shutter():
+    rng = np.random.default_rng(3)
+    b = bar_layers(rng)
+    front, fc, back, bc = nh.pack_layers(b["colour"], b["depth"], b["disp"], b["rev_c"],
+                                         b["rev_d"], b["rev_v"], 20.0)
+    tiles = nm.neighbormax(nm.tilemax_y(nm.tilemax_x(b["disp"].astype(np.float32), 10), 10))
+    got = nh.time_composite(front, fc, back, bc, tiles, 10, 20.0, 8, 8)
+    for y in range(H):
+        want = nh.box_shutter_bar(b["bar"][y], b["wall"][y], 12, 24, 9.3, 8)
+        np.testing.assert_allclose(got[y], want, atol=1e-12)
+
+
+def test_numpy_box_shutter_hand_values():
+    fg, bg = np.ones((8, 3)), np.zeros((8, 3))
+    # Bar [3, 5) moving 4 px, 4 samples at 4u = -1.5, -0.5, 0.5, 1.5: pixel x's centre
+    # maps back into pixel x + 2, x + 1, x, x - 1; covered when that is 3 or 4. A 2-px box
+    # spread over 4 px: a trapezoid with a plateau of 2/4, summing to the bar's width.
+    got = nh.box_shutter_bar(fg, bg, 3, 5, 4.0, 4)[:, 0]
+    np.testing.assert_allclose(got, [0, 0.25, 0.5, 0.5, 0.5, 0.25, 0, 0])
+
+
+def test_composite_matches_numpy_and_the_box_shutter(synthetic_frame):
+    rng = np.random.default_rng(4)
+    frame = synthetic_frame((W, H), composite_params())
+    b = bar_layers(rng)
+    got = run_composite(frame, b)
+    np.testing.assert_allclose(got, numpy_composite(frame, b), atol=2e-6)
+    for y in range(H):
+        np.testing.assert_allclose(got[y], nh.box_shutter_bar(b["bar"][y], b["wall"][y], 12, 24,
+                                                               9.3, 8), atol=2e-6)
+
+
+def test_composite_without_a_revealed_background_stands_in_from_outside(synthetic_frame):
+    # No ray cast: where the bar uncovers the pixel, the closest miss behind it stands in.
+    rng = np.random.default_rng(5)
+    frame = synthetic_frame((W, H), composite_params())
+    b = bar_layers(rng, reveal_cols=())
+    got = run_composite(frame, b)
+    np.testing.assert_allclose(got, numpy_composite(frame, b), atol=2e-6)
+    exact = np.stack([nh.box_shutter_bar(b["bar"][y], b["wall"][y], 12, 24, 9.3, 8)
+                      for y in range(H)])
+    assert np.abs(got - exact).max() > 0.05             # the hidden wall is missing
+
+
+def test_composite_with_a_moving_revealed_layer_matches_numpy(synthetic_frame):
+    rng = np.random.default_rng(6)
+    frame = synthetic_frame((W, H), composite_params(samples_max=16, samples_min=3))
+    b = bar_layers(rng, d=(-7.7, 1.3))
+    b["disp"][:, :12] = b["disp"][:, 24:] = (2.3, 0.4)            # the wall moves too
+    b["rev_v"][:, 12:24] = (2.3, 0.4)
+    got = run_composite(frame, b)
+    np.testing.assert_allclose(got, numpy_composite(frame, b), atol=2e-6)
+
+
+def test_jitter_is_deterministic_and_seeded(synthetic_frame):
+    rng = np.random.default_rng(7)
+    b = bar_layers(rng)
+    p = composite_params()
+    p.set("hybrid.jitter", 1.0)
+    a1 = run_composite(synthetic_frame((W, H), p, seed=1), b)
+    a2 = run_composite(synthetic_frame((W, H), p, seed=1), b)
+    a3 = run_composite(synthetic_frame((W, H), p, seed=2), b)
+    assert a1.tobytes() == a2.tobytes()
+    assert np.abs(a1 - a3).max() > 1e-3
+
+
+# ---- the whole mode -----------------------------------------------------------------------------
+
+def test_deterministic(ctx):
+    scene = load_scene(CONFORMANCE / "basic.toml")
+    a, ba = render(ctx, scene, "hybrid", 0.0, seed=5)
+    b, bb = render(ctx, scene, "hybrid", 0.0, seed=5)
+    assert a.image.tobytes() == b.image.tobytes()
+    for name in ("ray_mask", "revealed_color", "revealed_velocity", "hybrid"):
+        assert ba[name].tobytes() == bb[name].tobytes()
+    assert a.stats["rays"] == b.stats["rays"] > 0
+
+
+def test_static_scene_traces_nothing_and_equals_off(ctx):
+    scene = load_scene(CONFORMANCE / "basic.toml")
+    still = dataclasses.replace(scene, objects=[
+        dataclasses.replace(o, velocity=np.zeros(3), angular_velocity=np.zeros(3))
+        for o in scene.objects])
+    res, bufs = render(ctx, still, "hybrid", 0.0, timing=True)
+    off, _ = render(ctx, still, "off", 0.0)
+    assert res.stats["masked_pixels"] == 0 and res.stats["rays"] == 0
+    assert not bufs["ray_mask"].any() and not bufs["revealed_color"].any()
+    assert res.image.tobytes() == off.image.tobytes()
+    assert {"reveal", "reveal_shade", "hybrid_time"} <= set(res.pass_ms)
+    assert res.stats["reveal_ms"] >= 0.0
+
+
+def test_inner_blur_beats_the_post_process_modes_on_basic(ctx):
+    scene = load_scene(CONFORMANCE / "basic.toml")
+    p = ParamSet()
+    p.set("reference.samples", 32)
+    r = Renderer(ctx, scene, SMALL)
+    try:
+        ref = r.render("reference", 0.0, p, record_visibility=True)
+        region = ref.host["regions"]
+        flip = {m: image_metrics(r.render(m, 0.0, p).image, ref.image, region)
+                for m in ("hybrid", "mcguire", "ue4") if m in MODES}
+    finally:
+        r.release()
+    assert flip["hybrid"]["inner"]["pixels"] > 200
+    for other in set(flip) - {"hybrid"}:
+        assert flip["hybrid"]["inner"]["flip"] < 0.6 * flip[other]["inner"]["flip"], other
+        assert flip["hybrid"]["all"]["flip"] <= flip[other]["all"]["flip"], other
