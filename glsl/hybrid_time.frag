@@ -6,9 +6,10 @@
 // motion (the fixed point of p = x - u D(p), started from a seed velocity and refined
 // u_iterations times); the surface found covers the pixel at time u if its own motion
 // carries it back within u_tolerance px of the pixel centre. Of the surfaces that cover,
-// the nearest wins. Seeds: the pixel's own displacement and the neighbourhood's largest
-// (front layer: the pixel's own object and anything passing over it), and each back
-// layer's displacement at the pixel (what the moving foreground uncovers). Where nothing
+// the nearest wins. Seeds: on the front layer the pixel's own displacement (its own
+// object) and up to MAX_SEEDS distinct tile maxima of the 3x3 tiles around it, the
+// neighbourhood's largest first (whatever may pass over it); on each back layer its
+// displacement at the pixel (what the moving foreground uncovers). Where nothing
 // covers (data missing: unmasked inner blur, off-screen), the closest miss stands in,
 // preferring surfaces behind the pixel's own. The average over the times is the pixel.
 #include "noise.glsl"
@@ -21,6 +22,7 @@ uniform sampler2D u_back2_color;
 uniform sampler2D u_back2;
 #endif
 uniform sampler2D u_neighbormax;    // largest displacement over the 3x3 tiles
+uniform sampler2D u_tilemax;        // largest displacement per tile
 uniform int u_tile;
 uniform float u_max_disp;           // 2k: the blur limit on a full displacement
 uniform int u_samples_min;
@@ -52,20 +54,21 @@ vec3 colour(int layer, ivec2 p) {
 }
 
 // The frame-time pixel q of `layer` whose surface lies on this pixel at time u; returns
-// how far (Chebyshev, px) its own motion carries it from the pixel centre (1e30: the
-// walk left the screen, no data).
+// how far (Chebyshev, px) its own motion carries it from the pixel centre. The walk keeps
+// the pixel that lands closest; a pixel reached from off-screen counts as no data (1e30).
 float walk(int layer, float u, vec2 seed, out ivec2 q, out vec4 m) {
     vec2 p = g_centre - u * seed;
-    for (int it = 0; it < u_iterations; ++it) {
-        q = clamp(ivec2(floor(p)), ivec2(0), g_size - 1);
-        p = g_centre - u * motion(layer, q).xy;
+    float best = 3.0e38;
+    for (int it = 0; it <= u_iterations; ++it) {
+        ivec2 raw = ivec2(floor(p));
+        ivec2 qi = clamp(raw, ivec2(0), g_size - 1);
+        vec4 mi = motion(layer, qi);
+        vec2 land = vec2(qi) + 0.5 + u * mi.xy - g_centre;
+        float r = raw == qi ? max(abs(land.x), abs(land.y)) : 1e30;
+        if (r < best) { best = r; q = qi; m = mi; }
+        p = g_centre - u * mi.xy;
     }
-    ivec2 raw = ivec2(floor(p));
-    q = clamp(raw, ivec2(0), g_size - 1);
-    m = motion(layer, q);
-    if (raw != q) return 1e30;
-    vec2 land = vec2(q) + 0.5 + u * m.xy - g_centre;
-    return max(abs(land.x), abs(land.y));
+    return best;
 }
 
 // Per time sample: the nearest covering surface, and the best stand-in if none covers.
@@ -96,6 +99,25 @@ void consider(int layer, float u, vec2 seed) {
     }
 }
 
+vec2 clamp_length(vec2 d) {
+    float l = length(d);
+    return l > u_max_disp ? d * (u_max_disp / l) : d;
+}
+
+// Seeds closer than this (px, per axis) lead the walk to the same surface: one is enough.
+const float SEED_MERGE = 1.0;
+vec2 g_seeds[MAX_SEEDS];
+int g_num_seeds;
+
+void add_seed(vec2 v, vec2 own) {
+    if (g_num_seeds == MAX_SEEDS || length(v) <= 1.0) return;
+    if (all(lessThan(abs(v - own), vec2(SEED_MERGE)))) return;
+    for (int i = 0; i < g_num_seeds; ++i) {
+        if (all(lessThan(abs(v - g_seeds[i]), vec2(SEED_MERGE)))) return;
+    }
+    g_seeds[g_num_seeds++] = v;
+}
+
 void main() {
     ivec2 x = ivec2(gl_FragCoord.xy);
     g_size = textureSize(u_front, 0);
@@ -103,9 +125,8 @@ void main() {
     vec3 own = texelFetch(u_front_color, x, 0).rgb;
     vec4 fx = texelFetch(u_front, x, 0);
     vec4 bx = texelFetch(u_back, x, 0);
-    vec2 vn = texelFetch(u_neighbormax, x / u_tile, 0).xy;
-    float ln = length(vn);
-    if (ln > u_max_disp) vn *= u_max_disp / ln;
+    ivec2 tile = x / u_tile;
+    vec2 vn = clamp_length(texelFetch(u_neighbormax, tile, 0).xy);
     float reach = max(length(vn), max(length(fx.xy), length(bx.xy)));
 #if LAYERS >= 2
     vec4 b2x = texelFetch(u_back2, x, 0);
@@ -117,7 +138,17 @@ void main() {
         return;
     }
     g_own_depth = fx.z;
-    bool same_seed = all(lessThan(abs(vn - fx.xy), vec2(1e-3)));
+    g_num_seeds = 0;
+    add_seed(vn, fx.xy);
+    ivec2 tiles = textureSize(u_tilemax, 0);
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            ivec2 t = tile + ivec2(dx, dy);
+            if (all(greaterThanEqual(t, ivec2(0))) && all(lessThan(t, tiles))) {
+                add_seed(clamp_length(texelFetch(u_tilemax, t, 0).xy), fx.xy);
+            }
+        }
+    }
     int n = clamp(int(ceil(reach / u_spacing)), u_samples_min, u_samples_max);
     float j = mix(0.5, hash01(x, JITTER_STREAM), u_jitter);
     vec3 sum = vec3(0.0);
@@ -129,7 +160,7 @@ void main() {
         g_miss_behind = false;
         g_stand_in = own;
         consider(0, u, fx.xy);
-        if (!same_seed) consider(0, u, vn);
+        for (int i = 0; i < g_num_seeds; ++i) consider(0, u, g_seeds[i]);
         consider(1, u, bx.xy);
 #if LAYERS >= 2
         consider(2, u, b2x.xy);

@@ -156,9 +156,55 @@ def pack_layers(color, depth, disp, rev_color, rev_depth, rev_disp, max_disp):
     return front, color[..., :3], back, back_color
 
 
-def time_composite(front, front_color, back, back_color, neighbormax, tile: int,
+def walk(motion, centre, u, seed, iterations, tolerance):
+    """(residual, pixel, motion texel): the pixel whose surface lands nearest to the centre
+    at time u on the fixed-point walk p <- centre - u D(p), over all its steps."""
+    h, w = motion.shape[:2]
+    p = centre - u * np.asarray(seed)
+    best = (np.inf, None, None)
+    for _ in range(iterations + 1):
+        raw = np.floor(p).astype(int)
+        q = np.clip(raw, 0, [w - 1, h - 1])
+        m = motion[q[1], q[0]]
+        land = q + 0.5 + u * m[:2] - centre
+        r = np.max(np.abs(land)) if np.all(raw == q) else 1e30
+        if r < best[0]:
+            best = (r, q, m)
+        p = centre - u * m[:2]
+    return best
+
+
+SEED_MERGE = 1.0
+
+
+def front_seeds(vn, tilemax, tile_xy, own, max_seeds: int, max_disp: float) -> list:
+    """Distinct neighbourhood seeds: the largest first, then the 3x3 tile maxima in scan
+    order (bottom row first), skipping short ones and those within SEED_MERGE px (per axis)
+    of the own displacement or of a seed already taken."""
+    seeds = []
+
+    def add(v):
+        if len(seeds) == max_seeds or np.hypot(*v) <= 1.0:
+            return
+        if np.all(np.abs(v - own) < SEED_MERGE):
+            return
+        if any(np.all(np.abs(v - s) < SEED_MERGE) for s in seeds):
+            return
+        seeds.append(v)
+
+    add(vn)
+    th, tw = tilemax.shape[:2]
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            tx, ty = tile_xy[0] + dx, tile_xy[1] + dy
+            if 0 <= tx < tw and 0 <= ty < th:
+                add(clamp_length(tilemax[ty, tx], max_disp))
+    return seeds
+
+
+def time_composite(front, front_color, back, back_color, tilemax, neighbormax, tile: int,
                    max_disp: float, samples_min=8, samples_max=48, spacing=2.0,
-                   tolerance=0.55, iterations=2) -> np.ndarray:
+                   tolerance=0.65, iterations=3, max_seeds=3) -> np.ndarray:
     """hybrid_time.frag with jitter 0 (times at stratum centres) and one revealed layer."""
     h, w = front.shape[:2]
     layers = [(front, front_color), (back, back_color)]
@@ -173,27 +219,21 @@ def time_composite(front, front_color, back, back_color, neighbormax, tile: int,
             if reach <= 1.0:
                 out[y, x] = own
                 continue
-            same_seed = bool(np.all(np.abs(vn - fx[:2]) < 1e-3))
+            seeds = [(0, fx[:2])]
+            seeds += [(0, v) for v in front_seeds(vn, tilemax, (x // tile, y // tile), fx[:2],
+                                                  max_seeds, max_disp)]
+            seeds += [(1, bx[:2])]
             n = int(np.clip(int(np.ceil(reach / spacing)), samples_min, samples_max))
             total = np.zeros(3)
             for k in range(n):
                 u = (k + 0.5) / n - 0.5
                 best_z, best, covered = np.inf, None, False
                 miss, miss_behind, stand_in = np.inf, False, own
-                seeds = [(0, fx[:2])] + ([] if same_seed else [(0, vn)]) + [(1, bx[:2])]
                 for layer, seed in seeds:
                     motion, colour = layers[layer]
-                    p = centre - u * np.asarray(seed)
-                    for _ in range(iterations):
-                        q = np.clip(np.floor(p).astype(int), 0, [w - 1, h - 1])
-                        p = centre - u * motion[q[1], q[0], :2]
-                    raw = np.floor(p).astype(int)
-                    q = np.clip(raw, 0, [w - 1, h - 1])
-                    m = motion[q[1], q[0]]
-                    if np.any(raw != q):
+                    r, q, m = walk(motion, centre, u, seed, iterations, tolerance)
+                    if r >= 1e29:
                         continue
-                    land = q + 0.5 + u * m[:2] - centre
-                    r = np.max(np.abs(land))
                     if r <= tolerance:
                         if m[2] < best_z:
                             best_z, best, covered = m[2], colour[q[1], q[0]], True

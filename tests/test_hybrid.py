@@ -208,9 +208,10 @@ def numpy_composite(frame, b):
     k = max_radius_px(frame)
     front, fc, back, bc = nh.pack_layers(b["colour"], b["depth"], b["disp"], b["rev_c"],
                                          b["rev_d"], b["rev_v"], 2.0 * k)
-    tiles = nm.neighbormax(nm.tilemax_y(nm.tilemax_x(b["disp"].astype(np.float32), k), k))
-    return nh.time_composite(front, fc, back, bc, tiles, k, 2.0 * k, p.samples_min,
-                             p.samples_max, p.sample_spacing, p.tolerance, p.iterations)
+    tiles = nm.tilemax(b["disp"].astype(np.float32), k)
+    return nh.time_composite(front, fc, back, bc, tiles, nm.neighbormax(tiles), k, 2.0 * k,
+                             p.samples_min, p.samples_max, p.sample_spacing, p.tolerance,
+                             p.iterations, p.seeds)
 
 
 def composite_params(**kw):
@@ -224,8 +225,10 @@ def test_numpy_composite_with_an_exact_background_is_the_box_shutter():
     b = bar_layers(rng)
     front, fc, back, bc = nh.pack_layers(b["colour"], b["depth"], b["disp"], b["rev_c"],
                                          b["rev_d"], b["rev_v"], 20.0)
-    tiles = nm.neighbormax(nm.tilemax_y(nm.tilemax_x(b["disp"].astype(np.float32), 10), 10))
-    got = nh.time_composite(front, fc, back, bc, tiles, 10, 20.0, 8, 8)
+    tiles = nm.tilemax(b["disp"].astype(np.float32), 10)
+    # With the landing tolerance at half a pixel, coverage follows the pixel-centre rule.
+    got = nh.time_composite(front, fc, back, bc, tiles, nm.neighbormax(tiles), 10, 20.0, 8, 8,
+                            tolerance=0.5)
     for y in range(H):
         want = nh.box_shutter_bar(b["bar"][y], b["wall"][y], 12, 24, 9.3, 8)
         np.testing.assert_allclose(got[y], want, atol=1e-12)
@@ -242,13 +245,29 @@ def test_numpy_box_shutter_hand_values():
 
 def test_composite_matches_numpy_and_the_box_shutter(synthetic_frame):
     rng = np.random.default_rng(4)
-    frame = synthetic_frame((W, H), composite_params())
+    frame = synthetic_frame((W, H), composite_params(tolerance=0.5))
     b = bar_layers(rng)
     got = run_composite(frame, b)
     np.testing.assert_allclose(got, numpy_composite(frame, b), atol=2e-6)
     for y in range(H):
         np.testing.assert_allclose(got[y], nh.box_shutter_bar(b["bar"][y], b["wall"][y], 12, 24,
                                                                9.3, 8), atol=2e-6)
+
+
+def test_default_tolerance_widens_translating_silhouettes_by_at_most_its_excess(synthetic_frame):
+    # A landing tolerance above half a pixel (for curved motion) lets a silhouette pixel
+    # cover a time sample whose source lies up to 0.15 px outside it: on a translating
+    # bar only the two silhouette columns change, by at most one sample in eight.
+    rng = np.random.default_rng(8)
+    frame = synthetic_frame((W, H), composite_params())
+    b = bar_layers(rng)
+    got = run_composite(frame, b)
+    np.testing.assert_allclose(got, numpy_composite(frame, b), atol=2e-6)
+    exact = np.stack([nh.box_shutter_bar(b["bar"][y], b["wall"][y], 12, 24, 9.3, 8)
+                      for y in range(H)])
+    diff = np.abs(got - exact).max(axis=(0, 2))
+    assert set(np.flatnonzero(diff > 1e-6)) <= {12, 23}
+    assert diff.max() <= 1.0 / 8 + 1e-6
 
 
 def test_composite_without_a_revealed_background_stands_in_from_outside(synthetic_frame):

@@ -48,11 +48,12 @@ class TimeComposite(FullscreenPass):
     name = "hybrid_time"
     fragment = "hybrid_time.frag"
     inputs = ("color", "hybrid_front", "hybrid_back", "hybrid_back_color", "hybrid_back2",
-              "hybrid_back2_color", "hybrid_neighbormax")
+              "hybrid_back2_color", "hybrid_tilemax", "hybrid_neighbormax")
     produces = ("hybrid",)
 
     def defines(self, frame: Frame):
-        return {"LAYERS": int(frame.params["hybrid"].layers),
+        p = frame.params["hybrid"]
+        return {"LAYERS": int(p.layers), "MAX_SEEDS": int(p.seeds),
                 "JITTER_STREAM": f"{JITTER_STREAM}u"}
 
     def outputs(self, frame: Frame):
@@ -65,7 +66,7 @@ class TimeComposite(FullscreenPass):
                   {"u_front_color": "color", "u_front": "hybrid_front",
                    "u_back_color": "hybrid_back_color", "u_back": "hybrid_back",
                    "u_back2_color": "hybrid_back2_color", "u_back2": "hybrid_back2",
-                   "u_neighbormax": "hybrid_neighbormax"},
+                   "u_tilemax": "hybrid_tilemax", "u_neighbormax": "hybrid_neighbormax"},
                   {"u_tile": k, "u_max_disp": 2.0 * k,
                    "u_samples_min": int(p.samples_min),
                    "u_samples_max": int(max(p.samples_max, p.samples_min)),

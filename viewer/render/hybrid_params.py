@@ -49,9 +49,12 @@ class HybridParams:
     jitter: float = param(1.0, lo=0.0, hi=1.0,
                           help="per-pixel jitter of the stratified times: 0 = fixed times "
                                "(banding), 1 = one random offset per pixel (noise)")
-    iterations: int = param(2, lo=0, hi=8,
+    seeds: int = param(3, lo=1, hi=9, effect="recompile",
+                       help="distinct tile maxima around a pixel whose surfaces are looked "
+                            "for at each time sample (what may pass over it)")
+    iterations: int = param(3, lo=0, hi=8,
                             help="fixed-point refinements mapping a pixel back to the "
                                  "frame time along a surface's own velocity")
-    tolerance: float = param(0.55, lo=0.5, hi=2.0,
+    tolerance: float = param(0.65, lo=0.5, hi=2.0,
                              help="a surface covers the pixel at a time sample when it "
                                   "lands within this many pixels (Chebyshev) of its centre")
