@@ -67,6 +67,7 @@ float walk(int layer, float u, vec2 seed, out ivec2 q, out vec4 m) {
         float r = raw == qi ? max(abs(land.x), abs(land.y)) : 1e30;
         if (r < best) { best = r; q = qi; m = mi; }
         p = g_centre - u * mi.xy;
+        if (ivec2(floor(p)) == raw) break;     // a fixed point: the next steps repeat it
     }
     return best;
 }

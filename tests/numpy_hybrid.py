@@ -171,6 +171,8 @@ def walk(motion, centre, u, seed, iterations, tolerance):
         if r < best[0]:
             best = (r, q, m)
         p = centre - u * m[:2]
+        if np.all(np.floor(p).astype(int) == raw):
+            break
     return best
 
 
