@@ -66,10 +66,19 @@ class SceneObject:
 
     def matrix(self, t: float) -> np.ndarray:
         """M(t) = T(position + velocity t) @ Rot(angular_velocity t) @ R0 @ S."""
-        return (tf.translate(self.position + self.velocity * t)
-                @ tf.homogeneous(rotation_at(self.angular_velocity, t))
-                @ tf.homogeneous(tf.euler_xyz_degrees(self.rotation))
-                @ tf.scale(self.scale))
+        m = tf.translate(self.position + self.velocity * t) @ self._rest()
+        if np.any(self.angular_velocity != 0):
+            m[:3, :3] = rotation_at(self.angular_velocity, t) @ m[:3, :3]
+        return m
+
+    def _rest(self) -> np.ndarray:
+        """R0 @ S, cached against the values it was made from (the fields may be edited)."""
+        key = (tuple(self.rotation), tuple(self.scale))
+        cached = getattr(self, "_rest_cache", None)
+        if cached is None or cached[0] != key:
+            cached = (key, tf.homogeneous(tf.euler_xyz_degrees(self.rotation)) @ tf.scale(self.scale))
+            self._rest_cache = cached
+        return cached[1].copy()
 
 
 @dataclass

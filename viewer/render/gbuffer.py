@@ -66,7 +66,7 @@ class GBufferPass(Pass):
         set_uniform(prog, "u_viewport", tuple(float(x) for x in frame.size))
         set_uniform(prog, "u_near", float(cam.spec.near))
         gpu.bind_lights(prog)
-        for obj in frame.scene.objects:
+        for obj in gpu.front_to_back(cam.eye(t), t):
             gpu.bind_object(prog, obj, t, t_open, t_close)
             gpu.vao(prog, obj).render(moderngl.TRIANGLES)
         ctx.disable(moderngl.DEPTH_TEST)

@@ -62,6 +62,17 @@ class GpuScene:
                 t.repeat_x = t.repeat_y = True
                 self.images[o.id] = t
         self._vaos: dict[tuple[int, int], moderngl.VertexArray] = {}
+        # Local bounding-box centres, for the draw order.
+        self._centres = {o.id: (o.mesh.vertices.min(0) + o.mesh.vertices.max(0)) / 2
+                         if len(o.mesh.vertices) else np.zeros(3) for o in scene.objects}
+
+    def front_to_back(self, eye: np.ndarray, t: float) -> list[SceneObject]:
+        """Objects nearest first, so the depth test rejects hidden fragments before they are
+        shaded (software GL shades every fragment that passes). Ties keep file order."""
+        def distance(o):
+            c = o.matrix(t) @ np.append(self._centres[o.id], 1.0)
+            return float(np.linalg.norm(c[:3] - eye))
+        return sorted(self.scene.objects, key=lambda o: (distance(o), o.id))
 
     def vao(self, prog: moderngl.Program, obj: SceneObject) -> moderngl.VertexArray:
         key = (prog.glo, obj.id)
