@@ -14,9 +14,9 @@
 // preferring surfaces behind the pixel's own. The average over the times is the pixel.
 #include "noise.glsl"
 uniform sampler2D u_front_color;
-uniform sampler2D u_front;          // (D.xy, depth, 0), see hybrid_layers.frag
+uniform sampler2D u_front;          // (D.xy, depth, id), see hybrid_layers.frag
 uniform sampler2D u_back_color;
-uniform sampler2D u_back;           // (D.xy, depth, revealed)
+uniform sampler2D u_back;           // (D.xy, depth, 1 + id where revealed, else 0)
 #if LAYERS >= 2
 uniform sampler2D u_back2_color;
 uniform sampler2D u_back2;

@@ -143,15 +143,20 @@ def clamp_length(d: np.ndarray, limit: float) -> np.ndarray:
     return d * scale[..., None]
 
 
-def pack_layers(color, depth, disp, rev_color, rev_depth, rev_disp, max_disp):
-    """hybrid_layers for one revealed layer: front and back as (motion (H,W,4), colour)."""
+def pack_layers(color, depth, disp, rev_color, rev_depth, rev_disp, max_disp, ids=None,
+                rev_ids=None):
+    """hybrid_layers for one revealed layer: front and back as (motion (H,W,4), colour);
+    the front motion's 4th channel is the object id, the back's 1 + the revealed id where
+    revealed, else 0."""
+    ids = np.zeros(depth.shape) if ids is None else ids
     front = np.concatenate([clamp_length(disp, max_disp), depth[..., None],
-                            np.zeros(depth.shape + (1,))], axis=-1)
+                            np.asarray(ids, np.float64)[..., None]], axis=-1)
     revealed = rev_color[..., 3] > 0.5
     back = front.copy()
     back[revealed, :2] = clamp_length(rev_disp, max_disp)[revealed]
     back[revealed, 2] = rev_depth[revealed]
-    back[..., 3] = revealed
+    rev_ids = np.zeros(depth.shape) if rev_ids is None else np.asarray(rev_ids, np.float64)
+    back[..., 3] = np.where(revealed, 1.0 + rev_ids, 0.0)
     back_color = np.where(revealed[..., None], rev_color[..., :3], color[..., :3])
     return front, color[..., :3], back, back_color
 
@@ -245,6 +250,100 @@ def time_composite(front, front_color, back, back_color, tilemax, neighbormax, t
                             miss, miss_behind, stand_in = r, behind, colour[q[1], q[0]]
                 total += best if covered else stand_in
             out[y, x] = total / n
+    return out
+
+
+def bucket_composite(front, front_color, back, back_color, neighbormax, tile: int,
+                     max_disp: float, samples_min=8, samples_max=48, spacing=2.0) -> np.ndarray:
+    """hybrid_bucket.frag with jitter 0 (taps at the centres of their pieces)."""
+    h, w = front.shape[:2]
+    NEAR, OWN, BETWEEN, BACK = range(4)
+    out = np.zeros((h, w, 3))
+
+    def taps_for(half):
+        return int(np.clip(int(np.ceil(2.0 * half / spacing)), samples_min, samples_max))
+
+    def line(x, y, d, half):
+        """(a, b, s, pixel) of each tap of the line through (x, y) along d."""
+        n = taps_for(half)
+        direction = d / np.hypot(*d)
+        hh = half / n
+        for i in range(n):
+            a = -half + 2.0 * hh * i
+            b = a + 2.0 * hh
+            s = a + hh
+            p = np.floor(np.array([x + 0.5, y + 0.5]) + s * direction).astype(int)
+            p = np.clip(p, 0, [w - 1, h - 1])
+            yield a, b, s, (p[1], p[0])
+
+    def coverage(a, b, s, length):
+        if abs(s) > 0.5 * length + 0.5:
+            return 0.0
+        if length < 1e-3:
+            return 1.0 if a <= 0.0 < b else 0.0
+        return max(min(b, 0.5 * length) - max(a, -0.5 * length), 0.0) / length
+
+    for y in range(h):
+        for x in range(w):
+            own_colour = front_color[y, x]
+            fx, bx = front[y, x], back[y, x]
+            vn = clamp_length(neighbormax[y // tile, x // tile], max_disp)
+            if max(np.hypot(*vn), np.hypot(*fx[:2]), np.hypot(*bx[:2])) <= 1.0:
+                out[y, x] = own_colour
+                continue
+            sums = np.zeros((4, 3))
+            weights = np.zeros(4)
+            far = []
+            revealed = bx[3] > 0.5
+            own_id, own_depth = fx[3], fx[2]
+            back_depth = bx[2] if revealed else np.inf
+            back_id = bx[3] - 1.0 if revealed else -1.0
+            own_line = bool(np.any(np.abs(fx[:2] - vn) >= 1.0))
+
+            def add(k, c, wt):
+                sums[k] += wt * c
+                weights[k] += wt
+
+            rn = 0.5 * np.hypot(*vn)
+            if rn > 0.5:
+                for a, b, s, p in line(x, y, vn, rn):
+                    m, c = front[p], front_color[p]
+                    wt = coverage(a, b, s, np.hypot(*m[:2]))
+                    if m[3] == own_id:
+                        if not own_line:
+                            add(OWN, c, wt)
+                    elif m[2] < own_depth:
+                        add(NEAR, c, wt)
+                    elif m[3] != back_id and m[2] < back_depth:
+                        add(BETWEEN, c, wt)
+                        far.append(c)
+            ro = 0.5 * np.hypot(*fx[:2])
+            if own_line and ro > 0.5:
+                for a, b, s, p in line(x, y, fx[:2], ro):
+                    m, c = front[p], front_color[p]
+                    if m[3] == own_id:
+                        add(OWN, c, coverage(a, b, s, np.hypot(*m[:2])))
+                    elif m[2] >= own_depth:
+                        far.append(c)
+            elif own_line:
+                add(OWN, own_colour, 1.0)
+            fill = np.mean(far, axis=0) if far else own_colour
+            if revealed:
+                fill = back_color[y, x]
+                rb = 0.5 * np.hypot(*bx[:2])
+                if rb > 0.5:
+                    for a, b, s, p in line(x, y, bx[:2], rb):
+                        m = back[p]
+                        if m[2] >= back_depth * 0.999:
+                            add(BACK, back_color[p], coverage(a, b, s, np.hypot(*m[:2])))
+                else:
+                    add(BACK, fill, 1.0)
+            c = fill
+            for k in (BACK, BETWEEN, OWN, NEAR):
+                alpha = min(1.0, weights[k])
+                mean = sums[k] / weights[k] if weights[k] > 0 else np.zeros(3)
+                c = alpha * mean + (1.0 - alpha) * c
+            out[y, x] = c
     return out
 
 

@@ -181,22 +181,24 @@ def bar_layers(rng, bar=(12, 24), d=(9.3, 0.0), reveal_cols=range(12, 24)):
     rev_c[:, cols, :3] = wall[:, cols]
     rev_c[:, cols, 3] = 1.0
     rev_d[:, cols] = 10.0
-    return dict(colour=colour, depth=depth, disp=disp, rev_c=rev_c, rev_d=rev_d,
-                rev_v=np.zeros((H, W, 2)), wall=wall, bar=bar_c)
+    ids = np.ones((H, W), np.uint32)
+    ids[:, bar[0]:bar[1]] = 2
+    rev_ids = np.zeros((H, W), np.uint32)
+    rev_ids[:, cols] = 1
+    return dict(colour=colour, depth=depth, disp=disp, ids=ids, rev_c=rev_c, rev_d=rev_d,
+                rev_ids=rev_ids, rev_v=np.zeros((H, W, 2)), wall=wall, bar=bar_c)
 
 
 def run_composite(frame, b):
     ones = np.ones((H, W, 1))
     upload(frame, "color", np.concatenate([b["colour"], ones], -1))
     upload(frame, "depth", b["depth"])
+    upload(frame, "id", b["ids"])
     upload(frame, "velocity", b["disp"])
-    for k, (c, dd, v) in enumerate([(b["rev_c"], b["rev_d"], b["rev_v"]),
-                                    (np.zeros((H, W, 4)), np.full((H, W), 1e9), np.zeros((H, W, 2)))]):
-        names = layer_names(k)
-        upload(frame, names[0], c)
-        upload(frame, names[1], dd)
-        upload(frame, names[2], np.zeros((H, W)))
-        upload(frame, names[3], v)
+    empty = (np.zeros((H, W, 4)), np.full((H, W), 1e9), np.zeros((H, W)), np.zeros((H, W, 2)))
+    for k, layer in enumerate([(b["rev_c"], b["rev_d"], b["rev_ids"], b["rev_v"]), empty]):
+        for name, a in zip(layer_names(k), layer):
+            upload(frame, name, a)
     for p in composite_passes():
         p.allocate(frame)
         p.execute(frame)
@@ -207,8 +209,11 @@ def numpy_composite(frame, b):
     p = frame.params["hybrid"]
     k = max_radius_px(frame)
     front, fc, back, bc = nh.pack_layers(b["colour"], b["depth"], b["disp"], b["rev_c"],
-                                         b["rev_d"], b["rev_v"], 2.0 * k)
+                                         b["rev_d"], b["rev_v"], 2.0 * k, b["ids"], b["rev_ids"])
     tiles = nm.tilemax(b["disp"].astype(np.float32), k)
+    if p.composite == "bucket":
+        return nh.bucket_composite(front, fc, back, bc, nm.neighbormax(tiles), k, 2.0 * k,
+                                   p.samples_min, p.samples_max, p.sample_spacing)
     return nh.time_composite(front, fc, back, bc, tiles, nm.neighbormax(tiles), k, 2.0 * k,
                              p.samples_min, p.samples_max, p.sample_spacing, p.tolerance,
                              p.iterations, p.seeds)
@@ -292,6 +297,42 @@ def test_composite_with_a_moving_revealed_layer_matches_numpy(synthetic_frame):
     np.testing.assert_allclose(got, numpy_composite(frame, b), atol=2e-6)
 
 
+def test_numpy_bucket_composite_with_an_exact_background_is_the_box_shutter():
+    # Displacement 9 and 9 taps: one-pixel pieces centred on the pixels within 4 px, each
+    # worth 1/9 of the exposure, as are the 9 stratified times of the box shutter.
+    rng = np.random.default_rng(9)
+    b = bar_layers(rng, d=(9.0, 0.0))
+    front, fc, back, bc = nh.pack_layers(b["colour"], b["depth"], b["disp"], b["rev_c"],
+                                         b["rev_d"], b["rev_v"], 20.0, b["ids"], b["rev_ids"])
+    tiles = nm.tilemax(b["disp"].astype(np.float32), 10)
+    got = nh.bucket_composite(front, fc, back, bc, nm.neighbormax(tiles), 10, 20.0, 9, 9, 1.0)
+    for y in range(H):
+        want = nh.box_shutter_bar(b["bar"][y], b["wall"][y], 12, 24, 9.0, 9)
+        np.testing.assert_allclose(got[y], want, atol=1e-12)
+
+
+@pytest.mark.parametrize("case", ["exact", "no_reveal", "moving_wall"])
+def test_bucket_composite_matches_numpy(synthetic_frame, case):
+    rng = np.random.default_rng(10)
+    p = composite_params(composite="bucket", samples_min=3, samples_max=12)
+    frame = synthetic_frame((W, H), p)
+    b = bar_layers(rng, d=(9.0, 0.0) if case == "exact" else (-7.7, 1.3),
+                   reveal_cols=() if case == "no_reveal" else range(12, 24))
+    if case == "moving_wall":
+        b["disp"][:, :12] = b["disp"][:, 24:] = (2.3, 0.4)
+        b["rev_v"][:, 12:24] = (2.3, 0.4)
+    got = run_composite(frame, b)
+    np.testing.assert_allclose(got, numpy_composite(frame, b), atol=2e-6)
+    if case == "exact":
+        p.set("hybrid.sample_spacing", 1.0)
+        p.set("hybrid.samples_min", 9)
+        p.set("hybrid.samples_max", 9)
+        got = run_composite(synthetic_frame((W, H), p), b)
+        for y in range(H):
+            np.testing.assert_allclose(
+                got[y], nh.box_shutter_bar(b["bar"][y], b["wall"][y], 12, 24, 9.0, 9), atol=2e-6)
+
+
 def test_jitter_is_deterministic_and_seeded(synthetic_frame):
     rng = np.random.default_rng(7)
     b = bar_layers(rng)
@@ -326,7 +367,7 @@ def test_static_scene_traces_nothing_and_equals_off(ctx):
     assert res.stats["masked_pixels"] == 0 and res.stats["rays"] == 0
     assert not bufs["ray_mask"].any() and not bufs["revealed_color"].any()
     assert res.image.tobytes() == off.image.tobytes()
-    assert {"reveal", "reveal_shade", "hybrid_time"} <= set(res.pass_ms)
+    assert {"reveal", "reveal_shade", "hybrid_composite"} <= set(res.pass_ms)
     assert res.stats["reveal_ms"] >= 0.0
 
 

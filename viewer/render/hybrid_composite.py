@@ -5,7 +5,8 @@
       colours, the displacement clamped to the shared blur limit;
   hybrid_tilemax_x / hybrid_tilemax / hybrid_neighbormax: the largest displacement around
       each tile (viewer/render/tiles.py, McGuire's passes on the raster displacement);
-  hybrid: the time-sampled composite (glsl/hybrid_time.frag).
+  hybrid_composite -> hybrid: the time-sampled composite (glsl/hybrid_time.frag), or the
+      bucketed gather (glsl/hybrid_bucket.frag) for comparison.
 """
 from __future__ import annotations
 
@@ -17,16 +18,17 @@ from .pool import TexSpec
 from .reveal_pass import layer_names
 from .tiles import tile_passes
 
-MOTION = TexSpec(4, "f4")         # (D.x, D.y, depth, revealed)
+MOTION = TexSpec(4, "f4")         # (D.x, D.y, depth, w): front w = id, back w = 1 + id if revealed
 COLOUR = TexSpec(4, "f4")
-# Which noise stream of glsl/noise.glsl's hash01 jitters the time samples.
+# Which noise stream of glsl/noise.glsl's hash01 jitters the time samples or taps.
 JITTER_STREAM = 2
+FRAGMENTS = {"time": "hybrid_time.frag", "bucket": "hybrid_bucket.frag"}
 
 
 class PackLayers(FullscreenPass):
     name = "hybrid_layers"
     fragment = "hybrid_layers.frag"
-    inputs = ("color", "depth", "velocity", *layer_names(0), *layer_names(1))
+    inputs = ("color", "depth", "id", "velocity", *layer_names(0), *layer_names(1))
     produces = ("hybrid_front", "hybrid_back", "hybrid_back_color", "hybrid_back2",
                 "hybrid_back2_color")
 
@@ -34,22 +36,26 @@ class PackLayers(FullscreenPass):
         return {n: (COLOUR if n.endswith("color") else MOTION) for n in self.produces}
 
     def execute(self, frame: Frame):
-        textures = {"u_color": "color", "u_depth": "depth", "u_velocity": "velocity"}
+        textures = {"u_color": "color", "u_depth": "depth", "u_id": "id",
+                    "u_velocity": "velocity"}
         for k, tag in ((0, "rev"), (1, "rev2")):
             for n in layer_names(k):
-                kind = n.rsplit("_", 1)[1]
-                if kind != "id":
-                    textures[f"u_{tag}_{kind}"] = n
+                textures[f"u_{tag}_{n.rsplit('_', 1)[1]}"] = n
         self.draw(frame, self.produces, textures,
                   {"u_max_disp": 2.0 * max_radius_px(frame)})
 
 
-class TimeComposite(FullscreenPass):
-    name = "hybrid_time"
-    fragment = "hybrid_time.frag"
+class Composite(FullscreenPass):
+    """The composite the `hybrid.composite` setting picks: "time" (glsl/hybrid_time.frag)
+    or "bucket" (glsl/hybrid_bucket.frag)."""
+    name = "hybrid_composite"
     inputs = ("color", "hybrid_front", "hybrid_back", "hybrid_back_color", "hybrid_back2",
               "hybrid_back2_color", "hybrid_tilemax", "hybrid_neighbormax")
     produces = ("hybrid",)
+
+    def program(self, frame: Frame):
+        self.fragment = FRAGMENTS[frame.params["hybrid"].composite]
+        return super().program(frame)
 
     def defines(self, frame: Frame):
         p = frame.params["hybrid"]
@@ -76,4 +82,4 @@ class TimeComposite(FullscreenPass):
 
 def composite_passes() -> list:
     """Layer packing, the displacement tiles and the composite, after the reveal."""
-    return [PackLayers(), *tile_passes("velocity", "hybrid"), TimeComposite()]
+    return [PackLayers(), *tile_passes("velocity", "hybrid"), Composite()]

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from ..params import group, param
 
-COMPOSITES = ("time",)
+COMPOSITES = ("time", "bucket")
 
 
 @group("hybrid")
@@ -38,17 +38,20 @@ class HybridParams:
     # ---- composite (viewer/render/hybrid_composite.py)
     composite: str = param("time", choices=COMPOSITES, effect="recompile",
                            help="time: per-pixel time samples resolve visibility between "
-                                "the raster and revealed layers (ALGORITHMS.md 4.3)")
+                                "the raster and revealed layers; bucket: fragments "
+                                "gathered along lines, sorted by object and depth, "
+                                "combined front to back (both ALGORITHMS.md 4.3)")
     samples_min: int = param(8, lo=1, hi=256,
-                             help="time samples per pixel where anything moves (at least)")
+                             help="time samples per pixel (bucket: taps per line) where "
+                                  "anything moves, at least")
     samples_max: int = param(48, lo=1, hi=256,
-                             help="time samples per pixel (at most)")
+                             help="time samples per pixel (bucket: taps per line), at most")
     sample_spacing: float = param(2.0, lo=0.25, hi=16.0,
-                                  help="pixels of motion per time sample: the count grows "
-                                       "with the neighbourhood's displacement")
+                                  help="pixels of motion per time sample or tap: the count "
+                                       "grows with the displacement")
     jitter: float = param(1.0, lo=0.0, hi=1.0,
-                          help="per-pixel jitter of the stratified times: 0 = fixed times "
-                               "(banding), 1 = one random offset per pixel (noise)")
+                          help="per-pixel jitter of the stratified times or taps: 0 = "
+                               "fixed (banding), 1 = one random offset per pixel (noise)")
     seeds: int = param(3, lo=1, hi=9, effect="recompile",
                        help="distinct tile maxima around a pixel whose surfaces are looked "
                             "for at each time sample (what may pass over it)")

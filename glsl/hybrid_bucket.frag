@@ -1,0 +1,170 @@
+#version 330 core
+// The hybrid mode's bucketed composite (ALGORITHMS.md 4.3), a gather: fragments found along
+// sampling lines through the pixel are sorted into buckets, each weighted by the exact
+// share of the exposure during which its piece of surface covers the pixel, and the
+// buckets are combined front to back with "over":
+//   0 nearer other objects, 1 the pixel's own object, 2 other objects between it and the
+//   revealed surface, 3 the revealed surface (and what lies behind it).
+// A line of n taps through the pixel, of half-length R, is cut into n equal pieces; tap i
+// stands for the piece [a, b] of signed distances from the pixel and fetches its fragment
+// at a jittered point inside it. A fragment moving |D| px over the exposure covers the
+// pixel while the pixel lies within its box-shaped spread: a fraction
+// overlap([a, b], [-|D|/2, |D|/2]) / |D| of the exposure. So a surface filling the line
+// sums to exactly 1 whatever the jitter. Lines: the neighbourhood's largest displacement
+// (others passing over; the own object too where it moves that way), the pixel's own
+// displacement (its own object), and the revealed layer's displacement (the background
+// blurred along its own motion). A bucket's coverage is min(1, sum of weights); the
+// revealed colour fills what the background bucket leaves (centre fill); fragments of the
+// revealed object seen beside the pixel's own object belong to line 3 only. Without a
+// revealed background, the farther fragments' plain mean fills instead (the mirrored
+// background of post-process filters).
+#include "noise.glsl"
+uniform sampler2D u_front_color;
+uniform sampler2D u_front;          // (D.xy, depth, id), see hybrid_layers.frag
+uniform sampler2D u_back_color;
+uniform sampler2D u_back;           // (D.xy, depth, 1 + id where revealed, else 0)
+uniform sampler2D u_neighbormax;
+uniform int u_tile;
+uniform float u_max_disp;
+uniform int u_samples_min;
+uniform int u_samples_max;
+uniform float u_spacing;
+uniform float u_jitter;
+out vec4 out_color;
+
+const int NEAR = 0, OWN = 1, BETWEEN = 2, BACK = 3;
+vec3 g_sum[4];
+float g_weight[4];
+vec3 g_far_sum;           // unweighted farther fragments: the fill without a reveal
+float g_far_count;
+
+ivec2 g_size;
+float g_jitter;
+
+vec2 clamp_length(vec2 d) {
+    float l = length(d);
+    return l > u_max_disp ? d * (u_max_disp / l) : d;
+}
+
+// The share of the exposure during which a surface piece at signed distances [a, b] from
+// the pixel, moving `len` px, covers it; a still piece covers it iff it contains it. The
+// fragment fetched for the piece, at distance s, must itself reach the pixel (to within
+// half a pixel): a slow fragment stands only for itself, not for a longer piece.
+float g_s;
+float coverage(float a, float b, float len) {
+    if (abs(g_s) > 0.5 * len + 0.5) return 0.0;
+    if (len < 1e-3) return (a <= 0.0 && 0.0 < b) ? 1.0 : 0.0;
+    return max(min(b, 0.5 * len) - max(a, -0.5 * len), 0.0) / len;
+}
+
+int taps_for(float half_len) {
+    return clamp(int(ceil(2.0 * half_len / u_spacing)), u_samples_min, u_samples_max);
+}
+
+// Tap i of n on the line x + s dir, s in [-R, R]: its piece [a, b], its jittered point
+// s (in g_s) and the pixel there.
+ivec2 tap(ivec2 x, vec2 dir, float R, int i, int n, out float a, out float b) {
+    float h = R / float(n);
+    a = -R + 2.0 * h * float(i);
+    b = a + 2.0 * h;
+    g_s = a + 2.0 * h * g_jitter;
+    return clamp(ivec2(floor(vec2(x) + 0.5 + g_s * dir)), ivec2(0), g_size - 1);
+}
+
+void add(int bucket, vec3 c, float w) {
+    g_sum[bucket] += w * c;
+    g_weight[bucket] += w;
+}
+
+vec3 over(int bucket, vec3 behind) {
+    float alpha = min(1.0, g_weight[bucket]);
+    vec3 c = g_weight[bucket] > 0.0 ? g_sum[bucket] / g_weight[bucket] : vec3(0.0);
+    return alpha * c + (1.0 - alpha) * behind;
+}
+
+void main() {
+    ivec2 x = ivec2(gl_FragCoord.xy);
+    g_size = textureSize(u_front, 0);
+    vec3 own_colour = texelFetch(u_front_color, x, 0).rgb;
+    vec4 fx = texelFetch(u_front, x, 0);
+    vec4 bx = texelFetch(u_back, x, 0);
+    vec2 vn = clamp_length(texelFetch(u_neighbormax, x / u_tile, 0).xy);
+    if (max(length(vn), max(length(fx.xy), length(bx.xy))) <= 1.0) {
+        out_color = vec4(own_colour, 1.0);
+        return;
+    }
+    g_jitter = mix(0.5, hash01(x, JITTER_STREAM), u_jitter);
+    for (int k = 0; k < 4; ++k) { g_sum[k] = vec3(0.0); g_weight[k] = 0.0; }
+    g_far_sum = vec3(0.0);
+    g_far_count = 0.0;
+    bool revealed = bx.w > 0.5;
+    float own_id = fx.w, own_depth = fx.z;
+    float back_depth = revealed ? bx.z : 3.0e38;
+    float back_id = revealed ? bx.w - 1.0 : -1.0;
+    // The own object has its own line unless it moves like the neighbourhood.
+    bool own_line = any(greaterThanEqual(abs(fx.xy - vn), vec2(1.0)));
+    float a, b;
+
+    // Line 1: the neighbourhood's largest displacement: what passes over the pixel.
+    float rn = 0.5 * length(vn);
+    if (rn > 0.5) {
+        vec2 dir = vn / length(vn);
+        int n = taps_for(rn);
+        for (int i = 0; i < n; ++i) {
+            ivec2 y = tap(x, dir, rn, i, n, a, b);
+            vec4 m = texelFetch(u_front, y, 0);
+            if (m.w == own_id) {
+                if (!own_line) add(OWN, texelFetch(u_front_color, y, 0).rgb, coverage(a, b, length(m.xy)));
+                continue;
+            }
+            vec3 c = texelFetch(u_front_color, y, 0).rgb;
+            float w = coverage(a, b, length(m.xy));
+            if (m.z < own_depth) add(NEAR, c, w);
+            else if (m.w != back_id && m.z < back_depth) {    // the revealed one: line 3
+                add(BETWEEN, c, w);
+                g_far_sum += c;
+                g_far_count += 1.0;
+            }
+        }
+    }
+    // Line 2: the pixel's own displacement: its own object's coverage and colour.
+    float ro = 0.5 * length(fx.xy);
+    if (own_line && ro > 0.5) {
+        vec2 dir = fx.xy / length(fx.xy);
+        int n = taps_for(ro);
+        for (int i = 0; i < n; ++i) {
+            ivec2 y = tap(x, dir, ro, i, n, a, b);
+            vec4 m = texelFetch(u_front, y, 0);
+            if (m.w == own_id) add(OWN, texelFetch(u_front_color, y, 0).rgb, coverage(a, b, length(m.xy)));
+            else if (m.z >= own_depth) {
+                g_far_sum += texelFetch(u_front_color, y, 0).rgb;
+                g_far_count += 1.0;
+            }
+        }
+    } else if (own_line) {
+        add(OWN, own_colour, 1.0);            // the own object (nearly) still
+    }
+    // Line 3: the revealed layer blurred along its own motion (merged with the raster
+    // where nothing was revealed, so the line may run out of the mask).
+    vec3 fill = g_far_count > 0.0 ? g_far_sum / g_far_count : own_colour;
+    if (revealed) {
+        fill = texelFetch(u_back_color, x, 0).rgb;
+        float rb = 0.5 * length(bx.xy);
+        if (rb > 0.5) {
+            vec2 dir = bx.xy / length(bx.xy);
+            int n = taps_for(rb);
+            for (int i = 0; i < n; ++i) {
+                ivec2 y = tap(x, dir, rb, i, n, a, b);
+                vec4 m = texelFetch(u_back, y, 0);
+                if (m.z >= back_depth * 0.999) add(BACK, texelFetch(u_back_color, y, 0).rgb, coverage(a, b, length(m.xy)));
+            }
+        } else {
+            add(BACK, fill, 1.0);
+        }
+    }
+    vec3 c = over(BACK, fill);
+    c = over(BETWEEN, c);
+    c = over(OWN, c);
+    c = over(NEAR, c);
+    out_color = vec4(c, 1.0);
+}
