@@ -153,6 +153,13 @@ def test_second_layer_reveals_what_lies_behind_a_revealed_moving_object(ctx, tmp
     assert not one["revealed2_color"].any()
 
 
+def test_trace_off_leaves_the_revealed_layer_empty(ctx):
+    scene = load_scene(CONFORMANCE / "basic.toml")
+    res, bufs = render(ctx, scene, "hybrid", 0.0, params(trace=False))
+    assert res.stats["masked_pixels"] == np.count_nonzero(bufs["ray_mask"]) > 0
+    assert res.stats["rays"] == 0 and not bufs["revealed_color"].any()
+
+
 # ---- the composite on synthetic buffers ---------------------------------------------------------
 
 W, H = 40, 4

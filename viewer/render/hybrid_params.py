@@ -27,6 +27,8 @@ class HybridParams:
                                        "along the velocity (> 1 finds the wider band that "
                                        "opens when the background moves the other way)")
     # ---- ray reveal (viewer/render/reveal_pass.py)
+    trace: bool = param(True, help="cast the masked pixels' rays; off leaves the revealed "
+                                   "layer empty (the composite alone, for comparison)")
     layers: int = param(1, choices=(1, 2), effect="realloc",
                         help="revealed layers: 1 = the paper; 2 also reveals what lies "
                              "behind a revealed moving object")

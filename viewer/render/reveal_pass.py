@@ -138,7 +138,7 @@ class RevealTrace(Pass):
         t1 = time.perf_counter()
         st.batches = []
         result = None
-        if len(pixels):
+        if len(pixels) and p.trace:
             result = st.rays.reveal(frame.camera, frame.time, pixels, own, layers=p.layers,
                                     max_depth=p.max_depth, threads=p.threads or None)
         t2 = time.perf_counter()
