@@ -23,6 +23,7 @@ uniform sampler2D u_back2;
 #endif
 uniform sampler2D u_neighbormax;    // largest displacement over the 3x3 tiles
 uniform sampler2D u_tilemax;        // largest displacement per tile
+uniform sampler2D u_mask_tiles;     // raymask_tiles.frag MODE 1: y = 1 if a tile has rays
 uniform int u_tile;
 uniform float u_max_disp;           // 2k: the blur limit on a full displacement
 uniform int u_samples_min;
@@ -139,6 +140,9 @@ void main() {
         return;
     }
     g_own_depth = fx.z;
+    // Where no ray was cast within reach, the back layer is the raster and its walk would
+    // repeat the own one exactly: skip it.
+    bool back_walk = bx.w > 0.5;
     g_num_seeds = 0;
     add_seed(vn, fx.xy);
     ivec2 tiles = textureSize(u_tilemax, 0);
@@ -147,6 +151,7 @@ void main() {
             ivec2 t = tile + ivec2(dx, dy);
             if (all(greaterThanEqual(t, ivec2(0))) && all(lessThan(t, tiles))) {
                 add_seed(clamp_length(texelFetch(u_tilemax, t, 0).xy), fx.xy);
+                back_walk = back_walk || texelFetch(u_mask_tiles, t, 0).y > 0.0;
             }
         }
     }
@@ -162,9 +167,9 @@ void main() {
         g_stand_in = own;
         consider(0, u, fx.xy);
         for (int i = 0; i < g_num_seeds; ++i) consider(0, u, g_seeds[i]);
-        consider(1, u, bx.xy);
+        if (back_walk) consider(1, u, bx.xy);
 #if LAYERS >= 2
-        consider(2, u, b2x.xy);
+        if (back_walk) consider(2, u, b2x.xy);
 #endif
         sum += g_covered ? g_best : g_stand_in;
     }

@@ -4,12 +4,17 @@
 // (half the larger of the pixel's displacement and that edge's relative displacement, in
 // whole steps), the pixel is masked. Survivors of the displacement test are masked too. The output is
 // the pixel's object id where masked (0 elsewhere): one read gives mask and own ids.
+// The 3x3 edge tiles around the pixel bound the search (nothing in reach: no search; else
+// no farther than the largest reach there): the result is the same, the cost far lower
+// where everything moves (camera motion) but few edges survive.
 #include "raymask_common.glsl"
 uniform usampler2D u_displacement_mask;
 uniform usampler2D u_edge;
 uniform usampler2D u_id;
 uniform sampler2D u_velocity;
 uniform sampler2D u_relative;
+uniform sampler2D u_edge_tiles;   // raymask_tiles.frag, MODE 0
+uniform int u_tile;
 uniform float u_min_speed;
 uniform float u_relative_reach;   // search length, in half displacements
 uniform float u_max_reach;        // the blur limit k, px per side
@@ -23,9 +28,12 @@ void main() {
     out_mask = 0u;
     if (own == 0u || length(d) < u_min_speed) return;
     if (texelFetch(u_displacement_mask, x, 0).x != 0u) { out_mask = own; return; }
+    vec2 near = neighbourhood(u_edge_tiles, x, u_tile);
+    if (near.y == 0.0) return;
     float half_len = 0.5 * length(d);
     vec2 dir = d / length(d);
-    int steps = int(ceil(min(u_max_reach, u_relative_reach * half_len)));
+    int steps = int(ceil(min(min(u_max_reach, u_relative_reach * half_len),
+                             max(half_len, near.x))));
     for (int i = 0; i <= steps; ++i) {
         for (int s = -1; s <= 1; s += 2) {
             ivec2 y = probe(x, float(s * i) * dir, size);

@@ -21,6 +21,7 @@ from viewer.render.blur_common import max_radius_px
 from viewer.render.gbuffer import GBUFFER
 from viewer.render.hybrid_composite import composite_passes
 from viewer.render.modes import MODES
+from viewer.render.raymask import RAY_MASK, RELATIVE, MaskTiles
 from viewer.render.renderer import Renderer
 from viewer.render.reveal_pass import LAYER_SPECS, layer_names
 from viewer.scene_loader import load_scene
@@ -206,7 +207,12 @@ def run_composite(frame, b):
     for k, layer in enumerate([(b["rev_c"], b["rev_d"], b["rev_ids"], b["rev_v"]), empty]):
         for name, a in zip(layer_names(k), layer):
             upload(frame, name, a)
-    for p in composite_passes():
+    # The mask the revealed pixels came from, summarised per tile for the composite.
+    frame.pool.texture("ray_mask", RAY_MASK)
+    frame.write("ray_mask", to_image(np.where(b["rev_c"][..., 3] > 0, b["ids"], 0).astype(np.uint32)))
+    frame.pool.texture("mask_relative", RELATIVE)
+    frame.write("mask_relative", np.zeros((H, W, 2), np.float32))
+    for p in [MaskTiles("ray_mask", "mask"), *composite_passes()]:
         p.allocate(frame)
         p.execute(frame)
     return to_image(frame.read("hybrid"))[..., :3].astype(np.float64)

@@ -50,7 +50,7 @@ class Composite(FullscreenPass):
     or "bucket" (glsl/hybrid_bucket.frag)."""
     name = "hybrid_composite"
     inputs = ("color", "hybrid_front", "hybrid_back", "hybrid_back_color", "hybrid_back2",
-              "hybrid_back2_color", "hybrid_tilemax", "hybrid_neighbormax")
+              "hybrid_back2_color", "hybrid_tilemax", "hybrid_neighbormax", "ray_mask_tiles")
     produces = ("hybrid",)
 
     def program(self, frame: Frame):
@@ -72,7 +72,8 @@ class Composite(FullscreenPass):
                   {"u_front_color": "color", "u_front": "hybrid_front",
                    "u_back_color": "hybrid_back_color", "u_back": "hybrid_back",
                    "u_back2_color": "hybrid_back2_color", "u_back2": "hybrid_back2",
-                   "u_tilemax": "hybrid_tilemax", "u_neighbormax": "hybrid_neighbormax"},
+                   "u_tilemax": "hybrid_tilemax", "u_neighbormax": "hybrid_neighbormax",
+                   "u_mask_tiles": "ray_mask_tiles"},
                   {"u_tile": k, "u_max_disp": 2.0 * k,
                    "u_samples_min": int(p.samples_min),
                    "u_samples_max": int(max(p.samples_max, p.samples_min)),

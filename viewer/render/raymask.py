@@ -9,6 +9,9 @@ Three fragment passes, after the paper, adapted to the contract's centred exposu
       (the moving silhouettes);
   ray_mask: every moving pixel with an edge pixel of its own object within reach along
       its displacement; holds the pixel's object id where masked, 0 elsewhere.
+
+mask_edge_tiles and ray_mask_tiles summarise the edges and the mask per k x k tile (k the
+blur limit), so the range check and the composite skip pixels with nothing in reach.
 """
 from __future__ import annotations
 
@@ -57,10 +60,33 @@ class EdgeTest(FullscreenPass):
                   {"u_edge_depth": float(p.edge_depth), "u_edge_normal": float(p.edge_normal)})
 
 
+class MaskTiles(FullscreenPass):
+    """Per-tile summary of `source`: mode "edges" (largest reach, any edge) or "mask"
+    (anything masked); see glsl/raymask_tiles.frag."""
+    fragment = "raymask_tiles.frag"
+
+    def __init__(self, source: str, mode: str):
+        self.source, self.mode = source, mode
+        self.name = source + "_tiles"
+        self.inputs = (source, "mask_relative")
+        self.produces = (self.name,)
+
+    def defines(self, frame: Frame):
+        return {"MODE": 0 if self.mode == "edges" else 1}
+
+    def outputs(self, frame: Frame):
+        return {self.name: TexSpec(2, "f4", tile=max_radius_px(frame))}
+
+    def execute(self, frame: Frame):
+        self.draw(frame, self.produces, {"u_mask": self.source, "u_relative": "mask_relative"},
+                  {"u_tile": max_radius_px(frame)})
+
+
 class RangeCheck(FullscreenPass):
     name = "ray_mask"
     fragment = "raymask_range.frag"
-    inputs = ("mask_displacement", "mask_edge", "mask_relative", "id", "velocity")
+    inputs = ("mask_displacement", "mask_edge", "mask_edge_tiles", "mask_relative", "id",
+              "velocity")
     produces = ("ray_mask",)
 
     def outputs(self, frame: Frame):
@@ -70,12 +96,14 @@ class RangeCheck(FullscreenPass):
         p = frame.params["hybrid"]
         self.draw(frame, self.produces,
                   {"u_displacement_mask": "mask_displacement", "u_edge": "mask_edge",
-                   "u_id": "id", "u_velocity": "velocity", "u_relative": "mask_relative"},
-                  {"u_min_speed": float(p.min_speed),
+                   "u_id": "id", "u_velocity": "velocity", "u_relative": "mask_relative",
+                   "u_edge_tiles": "mask_edge_tiles"},
+                  {"u_min_speed": float(p.min_speed), "u_tile": max_radius_px(frame),
                    "u_relative_reach": float(p.relative_reach),
                    "u_max_reach": float(max_radius_px(frame))})
 
 
 def raymask_passes() -> list:
-    """The three mask passes, after a full G-buffer."""
-    return [DisplacementTest(), EdgeTest(), RangeCheck()]
+    """The three mask passes and their tile summaries, after a full G-buffer."""
+    return [DisplacementTest(), EdgeTest(), MaskTiles("mask_edge", "edges"), RangeCheck(),
+            MaskTiles("ray_mask", "mask")]
