@@ -83,6 +83,8 @@ def test_reveal_equals_raster_without_the_own_object(ctx, name, t):
     for oid in owners:
         _, oracle = render(ctx, without(scene, {oid}), "off", t)
         assert_layer_matches(bufs, "revealed_", oracle, mask == oid)
+    # The tile-bounded read found exactly the masked pixels (one revealed point each).
+    assert res.stats["masked_pixels"] == np.count_nonzero(bufs["revealed_color"][..., 3])
     # Unmasked pixels reveal nothing (alpha 0, id 0).
     assert np.all(bufs["revealed_color"][mask == 0][:, 3] == 0.0)
     assert not bufs["revealed_id"][mask == 0].any()

@@ -1,8 +1,8 @@
 """The hybrid mode's ray reveal (ALGORITHMS.md 4.2): trace the masked pixels on the CPU,
 shade what they reveal on the GPU exactly as the raster layer is shaded.
 
-  reveal (host): read `ray_mask` back (one R32UI read gives the masked pixels and their
-      own object ids), cast one ray per masked pixel through its centre from the camera at
+  reveal (host): read `ray_mask` back within the bounding box of its non-empty tiles (one
+      R32UI read gives the masked pixels and their own object ids), cast one ray per masked pixel through its centre from the camera at
       the frame time with raytrace.RayScene (built once per scene, kept in the renderer's
       host state), and pack the hits, grouped by object, into a vertex buffer;
   reveal_shade (GPU): draw one point per revealed pixel into revealed_color / _depth / _id
@@ -19,7 +19,8 @@ import numpy as np
 
 from raytrace import RayScene
 
-from ..conventions import glsl_defines
+from ..conventions import glsl_defines, to_image
+from .blur_common import max_radius_px
 from .frame import Frame
 from .gpu_scene import MAX_LIGHTS, set_uniform
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
@@ -99,13 +100,34 @@ def reveal_state(frame: Frame) -> RevealState:
     return rs
 
 
-def masked_pixels(ray_mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def masked_pixels(ray_mask: np.ndarray, origin=(0, 0)) -> tuple[np.ndarray, np.ndarray]:
     """(n, 2) image coordinates (i, j) of the masked pixels in row-major image order and
-    their own object ids, from the `ray_mask` read back in image orientation."""
+    their own object ids, from (a window of) `ray_mask` in image orientation whose top-left
+    pixel is image pixel `origin`."""
     flat = ray_mask.reshape(-1)
     idx = np.flatnonzero(flat)
     w = ray_mask.shape[1]
-    return np.stack([idx % w, idx // w], axis=1), flat[idx]
+    return np.stack([idx % w + origin[0], idx // w + origin[1]], axis=1), flat[idx]
+
+
+def read_masked_pixels(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
+    """The masked pixels and own ids, reading back only the bounding box of the tiles that
+    hold any (`ray_mask_tiles`, a few hundred texels), not the whole id-sized mask."""
+    tiles = frame.read("ray_mask_tiles")[..., 1]           # image orientation
+    rows, cols = np.nonzero(tiles)
+    if not len(rows):
+        return np.zeros((0, 2), np.int64), np.zeros(0, np.uint32)
+    k = max_radius_px(frame)                                # the tile size
+    w, h = frame.size
+    i0, i1 = cols.min() * k, min((cols.max() + 1) * k, w)
+    # Tiles count from the GL origin (bottom-left): image row r of tiles covers GL rows
+    # [(T - 1 - r) k, (T - r) k), cut at the top of the screen.
+    t = tiles.shape[0]
+    y0, y1 = (t - 1 - rows.max()) * k, min((t - rows.min()) * k, h)
+    fbo = frame.pool.framebuffer(("ray_mask",))
+    data = fbo.read(viewport=(i0, y0, i1 - i0, y1 - y0), components=1, dtype="u4")
+    window = to_image(np.frombuffer(data, np.uint32).reshape(y1 - y0, i1 - i0))
+    return masked_pixels(window, origin=(i0, h - y1))
 
 
 def pack_layer(pixels: np.ndarray, layer) -> tuple[np.ndarray, list[tuple[int, int, int]]]:
@@ -127,14 +149,14 @@ def pack_layer(pixels: np.ndarray, layer) -> tuple[np.ndarray, list[tuple[int, i
 class RevealTrace(Pass):
     """Host side: mask read-back, ray casting, vertex packing and upload."""
     name = "reveal"
-    inputs = ("ray_mask",)
+    inputs = ("ray_mask", "ray_mask_tiles")
     produces = ("reveal_hits",)          # host-side: the vertex buffers in RevealState
 
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
         t0 = time.perf_counter()
         st = reveal_state(frame)
-        pixels, own = masked_pixels(frame.read("ray_mask"))
+        pixels, own = read_masked_pixels(frame)
         t1 = time.perf_counter()
         st.batches = []
         result = None
