@@ -3,9 +3,10 @@
 // at the end of its sampling range" generalised to a centred exposure. For n stratified
 // times u in the exposure (u in [-1/2, 1/2] of the shutter), find which surface lies on
 // this pixel: on each layer, map the pixel back to the frame time along that layer's own
-// motion (the fixed point of p = x - u D(p), started from a seed velocity and refined
-// u_iterations times); the surface found covers the pixel at time u if its own motion
-// carries it back within u_tolerance px of the pixel centre. Of the surfaces that cover,
+// motion (the fixed point of p = x - u D(p), started from a seed velocity and refined up
+// to u_iterations times, keeping the pixel that lands closest); the surface found covers
+// the pixel at time u if its own motion carries it within u_tolerance px of the pixel
+// centre. Of the surfaces that cover,
 // the nearest wins. Seeds: on the front layer the pixel's own displacement (its own
 // object) and up to MAX_SEEDS distinct tile maxima of the 3x3 tiles around it, the
 // neighbourhood's largest first (whatever may pass over it); on each back layer its

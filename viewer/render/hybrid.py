@@ -4,9 +4,12 @@ Post-process blur cannot know the background a moving object hides, which its bl
 partly uncovers (inner blur). The hybrid mode finds those pixels, ray-traces the true
 background behind them, shades it like the raster layer, and resolves both layers:
 
-  gbuffer -> mask_displacement -> mask_edge -> ray_mask        (viewer/render/raymask.py)
-          -> reveal (CPU rays) -> reveal_shade (revealed_*)    (viewer/render/reveal_pass.py)
-          -> hybrid_layers -> hybrid tiles -> hybrid_time      (viewer/render/hybrid_composite.py)
+  gbuffer -> mask_displacement -> mask_edge (+ tiles) -> ray_mask (+ tiles)
+                                                            (viewer/render/raymask.py)
+          -> reveal (CPU rays) -> reveal_shade (revealed_*, revealed2_*)
+                                                            (viewer/render/reveal_pass.py)
+          -> hybrid_layers -> hybrid tiles -> hybrid_composite (time-sampled or bucketed)
+                                                            (viewer/render/hybrid_composite.py)
 
 Parameters: the `hybrid` group (viewer/render/hybrid_params.py) and the shared `blur` limit.
 Stats: masked_pixels, rays, revealed_pixels, reveal_ms (host work) and its parts.
