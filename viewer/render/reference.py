@@ -60,6 +60,32 @@ class ReferencePass(Pass):
             frame.host["regions"] = regions.result()
         frame.stats["samples"] = n
 
+    # Progressive accumulation (the viewer): the same sub-frames, weights and blending order
+    # as execute() without regions, spread over several calls, so the finished mean is the
+    # same image. start() clears the running sum; accumulate() adds sub-frames k0 .. k0+n-1.
+    def total(self, frame: Frame) -> int:
+        return frame.params["reference"].samples
+
+    def start(self, frame: Frame):
+        self.allocate(frame)
+        self.sub_color.allocate(frame)
+        fbo = frame.pool.framebuffer(("reference",))
+        fbo.use()
+        fbo.clear(0.0, 0.0, 0.0, 0.0)
+
+    def accumulate(self, frame: Frame, first: int, count: int) -> int:
+        """Add sub-frames first .. first+count-1 of N (each weighted 1/N); returns how many
+        of the N are in the sum afterwards."""
+        n = self.total(frame)
+        self.sub_color.allocate(frame)
+        last = min(n, first + max(0, count))
+        for tk in frame.scene.sample_times(frame.time, n)[first:last]:
+            self.sub_color.execute(frame, time=float(tk))
+            self.acc.draw(frame, ("reference",), {"u_src": "sub_color"},
+                          {"u_weight": 1.0 / n}, blend=True)
+        frame.stats["samples"] = last
+        return last
+
 
 @mode("reference", groups=("reference",))
 def reference_pipeline() -> Pipeline:
