@@ -1,0 +1,103 @@
+#version 330 core
+// UE4-style gather (Jimenez 2014; ALGORITHMS.md 3.2 c, 3.4). Taps come in pairs at
+// X + o+/K vmax and X - o-/K vmax with opposite jitter; each tap is weighted by a depth
+// compare (background taps use the centre's spread, foreground taps their own) and a box
+// spread compare with a one-step edge; the mirror rule exchanges weights within a pair; the
+// result is normalised by the tap count with the centre colour filling the rest.
+#include "noise.glsl"
+uniform sampler2D u_color;      // linear colour
+uniform sampler2D u_flat;       // (v.x, v.y, depth, |v|), px and m
+uniform sampler2D u_tiles;      // dilated (vmin.xy, vmax.xy), px
+uniform int u_tile;
+uniform int u_taps;             // K, taps per side
+uniform float u_depth_scale;    // per metre
+uniform float u_tile_jitter;    // tiles
+uniform float u_tap_jitter;     // fraction of a step
+uniform bool u_fast_path;
+uniform float u_fast_ratio;
+uniform bool u_mirror;
+out vec4 out_color;
+
+ivec2 g_size;
+
+// Window-space point p (pixel centres at +0.5), clamped to the centres of the edge pixels.
+vec2 clamp_tap(vec2 p) {
+    return clamp(p, vec2(0.5), vec2(g_size) - 0.5);
+}
+
+// Bilinear colour from the four texels around p, weighted here (see viewer/render/ue4.py).
+vec3 bilinear(vec2 p) {
+    vec2 q = p - 0.5;
+    ivec2 i0 = ivec2(floor(q));
+    vec2 f = q - vec2(i0);
+    ivec2 i1 = min(i0 + 1, g_size - 1);
+    vec3 c00 = texelFetch(u_color, i0, 0).rgb;
+    vec3 c10 = texelFetch(u_color, ivec2(i1.x, i0.y), 0).rgb;
+    vec3 c01 = texelFetch(u_color, ivec2(i0.x, i1.y), 0).rgb;
+    vec3 c11 = texelFetch(u_color, i1, 0).rgb;
+    return mix(mix(c00, c10, f.x), mix(c01, c11, f.x), f.y);
+}
+
+// Weight of one tap at `o` steps from the centre: background (farther) taps count where
+// the centre's own blur reaches them, foreground taps where their blur reaches the centre.
+float tap_weight(vec4 centre, vec4 tap, float o, float px_to_step) {
+    float dz = tap.z - centre.z;
+    vec2 depth_cmp = clamp(0.5 + vec2(u_depth_scale, -u_depth_scale) * dz, 0.0, 1.0);
+    vec2 spread = clamp(px_to_step * vec2(centre.w, tap.w) - max(o - 1.0, 0.0), 0.0, 1.0);
+    return dot(depth_cmp, spread);
+}
+
+void main() {
+    g_size = textureSize(u_color, 0);
+    vec2 X = gl_FragCoord.xy;
+    ivec2 xi = ivec2(X);
+    vec3 centre_color = texelFetch(u_color, xi, 0).rgb;
+
+    vec2 jitter = vec2(ign(X, 1.0), ign(X, 2.0)) - 0.5;
+    ivec2 grid = textureSize(u_tiles, 0);
+    ivec2 t = clamp(ivec2(floor(X / float(u_tile) + 2.0 * u_tile_jitter * jitter)),
+                    ivec2(0), grid - 1);
+    vec4 tile = texelFetch(u_tiles, t, 0);
+    vec2 vmin = tile.xy, vmax = tile.zw;
+    float lmax2 = dot(vmax, vmax);
+    if (lmax2 < 0.25) {                         // nothing here moves by half a pixel
+        out_color = vec4(centre_color, 1.0);
+        return;
+    }
+
+    float K = float(u_taps);
+    float j = u_tap_jitter * (ign(X, 0.0) - 0.5);
+    if (u_fast_path && dot(vmin, vmin) > u_fast_ratio * lmax2) {
+        vec3 sum = vec3(0.0);                   // uniform motion: a plain box average
+        for (int i = 0; i < u_taps; ++i) {
+            float op = float(i) + 0.5 + j, om = float(i) + 0.5 - j;
+            sum += bilinear(clamp_tap(X + (op / K) * vmax));
+            sum += bilinear(clamp_tap(X - (om / K) * vmax));
+        }
+        out_color = vec4(sum / (2.0 * K), 1.0);
+        return;
+    }
+
+    vec4 centre = texelFetch(u_flat, xi, 0);
+    float px_to_step = K / sqrt(lmax2);
+    vec3 acc = vec3(0.0);
+    float wsum = 0.0;
+    for (int i = 0; i < u_taps; ++i) {
+        float op = float(i) + 0.5 + j, om = float(i) + 0.5 - j;
+        vec2 p0 = clamp_tap(X + (op / K) * vmax);
+        vec2 p1 = clamp_tap(X - (om / K) * vmax);
+        vec4 f0 = texelFetch(u_flat, ivec2(p0), 0);
+        vec4 f1 = texelFetch(u_flat, ivec2(p1), 0);
+        float w0 = tap_weight(centre, f0, op, px_to_step);
+        float w1 = tap_weight(centre, f1, om, px_to_step);
+        if (u_mirror) {
+            // the farther tap takes the nearer tap's weight when the nearer one is faster
+            bool far0 = f0.z > f1.z, fast1 = f1.w > f0.w;
+            if (far0 && fast1) w0 = w1;
+            if (!far0 && !fast1) w1 = w0;
+        }
+        acc += w0 * bilinear(p0) + w1 * bilinear(p1);
+        wsum += w0 + w1;
+    }
+    out_color = vec4(acc / (2.0 * K) + (1.0 - wsum / (2.0 * K)) * centre_color, 1.0);
+}

@@ -1,0 +1,131 @@
+"""Mode `ue4`: UE4-style post-process motion blur after Jimenez 2014 (ALGORITHMS.md 3.2, 3.5).
+
+G-buffer -> flatten (half vector v = D/2 clamped to the shared blur limit, packed with depth)
+-> per-tile min and max velocity -> dilation by swept tile quads -> gather with paired,
+oppositely jittered taps and centre-fill normalisation. Every stage writes a named pool
+texture, so `--buffers` shows all of them.
+
+Colour taps are bilinear, as in UE (which samples with SampleLevel), but the four texels are
+fetched and weighted in the shader: the G-buffer's colour texture is nearest-filtered and
+belongs to another pass, and explicit weights give the same numbers on every driver (a
+hardware sampler may quantise its weights), which the tests compare against numpy.
+Velocity and depth at a tap come from the texel that contains it (UE's point sampling).
+"""
+from __future__ import annotations
+
+import math
+
+from ..params import group, param
+from .blur_common import max_radius_px
+from .frame import Frame
+from .gbuffer import GBufferPass
+from .modes import mode
+from .passes import FullscreenPass, Pipeline
+from .pool import TexSpec
+
+
+@group("ue4")
+class UE4Params:
+    tile: int = param(16, lo=2, hi=64, effect="realloc",
+                      help="tile size in pixels for the min/max velocity tiles")
+    taps: int = param(8, lo=1, hi=32,
+                      help="gather taps per side (2 x taps in all; UE's quality 4 = 8)")
+    depth_scale: float = param(100.0, lo=0.01, hi=1.0e6,
+                               help="depth compare slope per metre: a tap within 0.5/depth_scale m "
+                                    "of the centre counts half as fore-, half as background "
+                                    "(UE: 1 per cm)")
+    tile_jitter: float = param(0.25, lo=0.0, hi=0.5,
+                               help="largest tile-lookup jitter per axis, in tiles")
+    tap_jitter: float = param(1.0, lo=0.0, hi=1.0,
+                              help="per-pixel jitter of the tap pattern, as a fraction of one step "
+                                   "(1 = UE; 0 = taps at step centres, banding instead of noise)")
+    fast_path: bool = param(True, help="plain average where the neighbourhood moves uniformly")
+    fast_ratio: float = param(0.4, lo=0.0, hi=1.0,
+                              help="fast path when |vmin|^2 > fast_ratio * |vmax|^2")
+    mirror: bool = param(True, help="exchange weights within a tap pair (ALGORITHMS.md 3.4)")
+
+
+FLAT = TexSpec(4, "f4")           # (v.x, v.y, depth, |v|), v the clamped half vector in px
+
+
+def tile_spec(frame: Frame) -> TexSpec:
+    return TexSpec(4, "f4", tile=frame.params["ue4"].tile)     # (vmin.xy, vmax.xy) in px
+
+
+def dilation_reach(max_px: float, tile: int) -> int:
+    """Tiles per side the dilation gathers over: a swept quad reaches |v_t| + e along its
+    direction and e across it, e <= 0.99 * sqrt(2), so no covered tile lies farther than
+    ceil(|v_t|) + 1 tiles on either axis, with |v_t| <= max_px / tile."""
+    return int(math.ceil(max_px / tile)) + 1
+
+
+class Flatten(FullscreenPass):
+    name = "ue4_flatten"
+    fragment = "ue4_flatten.frag"
+    inputs = ("velocity", "depth")
+    produces = ("ue4_flat",)
+
+    def outputs(self, frame):
+        return {"ue4_flat": FLAT}
+
+    def execute(self, frame):
+        self.draw(frame, self.produces, {"u_velocity": "velocity", "u_depth": "depth"},
+                  {"u_max_px": float(max_radius_px(frame))})
+
+
+class TileMinMax(FullscreenPass):
+    name = "ue4_tiles"
+    fragment = "ue4_tiles.frag"
+    inputs = ("ue4_flat",)
+    produces = ("ue4_tiles",)
+
+    def outputs(self, frame):
+        return {"ue4_tiles": tile_spec(frame)}
+
+    def execute(self, frame):
+        self.draw(frame, self.produces, {"u_flat": "ue4_flat"},
+                  {"u_tile": frame.params["ue4"].tile})
+
+
+class Dilate(FullscreenPass):
+    name = "ue4_dilate"
+    fragment = "ue4_dilate.frag"
+    inputs = ("ue4_tiles",)
+    produces = ("ue4_dilated",)
+
+    def outputs(self, frame):
+        return {"ue4_dilated": tile_spec(frame)}
+
+    def execute(self, frame):
+        tile = frame.params["ue4"].tile
+        self.draw(frame, self.produces, {"u_tiles": "ue4_tiles"},
+                  {"u_tile": float(tile), "u_reach": dilation_reach(max_radius_px(frame), tile)})
+
+
+class Gather(FullscreenPass):
+    name = "ue4_gather"
+    fragment = "ue4_gather.frag"
+    inputs = ("color", "ue4_flat", "ue4_dilated")
+    produces = ("ue4",)
+
+    def outputs(self, frame):
+        return {"ue4": TexSpec(4, "f4")}
+
+    def execute(self, frame):
+        p = frame.params["ue4"]
+        self.draw(frame, self.produces,
+                  {"u_color": "color", "u_flat": "ue4_flat", "u_tiles": "ue4_dilated"},
+                  {"u_tile": p.tile, "u_taps": p.taps, "u_depth_scale": p.depth_scale,
+                   "u_tile_jitter": p.tile_jitter, "u_tap_jitter": p.tap_jitter,
+                   "u_fast_path": bool(p.fast_path), "u_fast_ratio": p.fast_ratio,
+                   "u_mirror": bool(p.mirror)})
+
+
+def ue4_passes() -> list:
+    """The post passes after the G-buffer (the hybrid mode may reuse them)."""
+    return [Flatten(), TileMinMax(), Dilate(), Gather()]
+
+
+@mode("ue4", groups=("blur", "ue4"))
+def ue4_pipeline() -> Pipeline:
+    return Pipeline("ue4", [GBufferPass(), *ue4_passes()], output="ue4")
