@@ -27,4 +27,5 @@ def _off() -> Pipeline:
 # Each mode module registers itself with @mode on import (add new ones here).
 from . import reference  # noqa: E402,F401
 from . import mcguire  # noqa: E402,F401
+from . import ue4  # noqa: E402,F401
 from . import hybrid  # noqa: E402,F401
