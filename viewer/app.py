@@ -1,0 +1,335 @@
+"""The interactive viewer: a GLFW window over the same render core as the CLI.
+
+Each frame: poll input (and due script actions) -> imgui new frame -> input imgui did not
+want goes to the camera and keys -> render the mode into the pool (progressively for an
+accumulating mode) -> draw the chosen buffer into the window through the debug view ->
+panel and overlay -> swap. A failure while loading a scene or rendering (a shader error,
+say) is shown in the panel and the window stays open.
+"""
+from __future__ import annotations
+
+import sys
+import time as _time
+from dataclasses import dataclass
+from pathlib import Path
+
+import glfw  # noqa: F401  (before imgui_bundle, see viewer/ui/window.py)
+from imgui_bundle import imgui
+
+from .cliargs import Setup, parse_float, parse_int, parse_size
+from .errors import UserError
+from .glcontext import device_name
+from .imageio import write_json_atomic, write_png_atomic
+from .render.debug_view import KINDS, DebugView
+from .render.modes import MODES
+from .render.renderer import Renderer
+from .scene_loader import load_scene
+from .ui import capture
+from .ui.camera_control import CameraControl
+from .ui.input import InputRouter
+from .ui.overlay import FrameTimes, draw_overlay
+from .ui.panel import draw_panel
+from .ui.progressive import Progressive, accumulating_pass
+from .ui.script import Action, Timeline
+from .ui.state import FIXED_STEP, ViewState
+from .ui.timing import PassClock
+from .ui.window import Window
+
+RSS_MARK_FRAME = 50
+
+
+@dataclass
+class RunOptions:
+    frames: int | None = None            # exit after this many frames
+    screenshot: Path | None = None       # the window's contents at the last frame
+    stats_json: Path | None = None
+    shot_dir: Path = Path(".")
+    script: list[Action] = ()
+
+
+def rss_kb() -> int:
+    """Resident set size of this process (Linux), in KiB; 0 where unknown."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1])
+    except OSError:
+        pass
+    return 0
+
+
+class App:
+    def __init__(self, setup: Setup, scene_arg: str, mode: str, options: RunOptions):
+        self.options = options
+        self.state = ViewState(scene_arg, setup.scene, mode, setup.time, setup.params, setup.seed,
+                               scene_text=scene_arg)
+        self.camera = CameraControl(setup.scene.camera)
+        self.router = InputRouter(lambda: self.camera, lambda: self.window.size[1])
+        self.router.actions.update({
+            glfw.KEY_F12: self.screenshot, glfw.KEY_P: self.screenshot,
+            glfw.KEY_SPACE: self.toggle_play, glfw.KEY_R: self.camera_reset,
+            glfw.KEY_F: self.toggle_fly, glfw.KEY_H: self.toggle_panel,
+            glfw.KEY_ESCAPE: lambda: self.window.close(),
+        })
+        self.window = Window(setup.size, f"hmblur view - {setup.scene.name}", self.router)
+        self.ctx = self.window.ctx
+        self.device = device_name(self.ctx)
+        self.renderer = Renderer(self.ctx, setup.scene, self.window.framebuffer_size)
+        self.debug = DebugView(self.renderer.programs)
+        self.clock = PassClock(self.ctx)
+        self.progressive = Progressive()
+        self.timeline = Timeline(options.script)
+        self.times = FrameTimes()
+        self.pass_ms: dict = {}
+        self.stats: dict = {}
+        self.shown_name = self.shown_kind = ""
+        self.panel_rect = self.overlay_rect = (0.0, 0.0, 0.0, 0.0)
+        self.rss: list[tuple[int, int]] = []
+        self.frame_index = 0
+
+    # -- actions (panel, keys, script)
+    def set_mode(self, mode: str):
+        if mode not in MODES:
+            self.state.report(f"mode {mode}: expected one of {', '.join(MODES)}")
+            return
+        self.state.mode = mode
+
+    def set_view(self, name: str):
+        self.state.buffer = "" if name in ("", "output") else name
+
+    def toggle_play(self):
+        self.state.playing = not self.state.playing
+
+    def toggle_fly(self):
+        self.router.fly_look = not self.router.fly_look
+
+    def toggle_panel(self):
+        self.state.show_panel = not self.state.show_panel
+
+    def camera_reset(self):
+        self.camera.reset()
+
+    def is_progressive(self) -> bool:
+        try:
+            return accumulating_pass(self.renderer.pipeline(self.state.mode)) is not None
+        except Exception:  # a mode that fails to build is reported when rendered
+            return False
+
+    def output_name(self) -> str:
+        try:
+            return self.renderer.output_name(self.state.mode)
+        except Exception:
+            return "?"
+
+    def open_scene(self, source: str):
+        """Load another scene; on failure keep the current one and show why."""
+        source = source.strip()
+        try:
+            scene = load_scene(source)
+            renderer = Renderer(self.ctx, scene, self.renderer.size)
+        except Exception as exc:             # a bad file, a scene the GPU cannot hold
+            self.state.report(f"open {source!r}: {exc}")
+            return
+        self.renderer.release()
+        self.renderer, self.debug = renderer, DebugView(renderer.programs)
+        s = self.state
+        s.scene, s.scene_arg, s.scene_text, s.time = scene, source, source, scene.render.time
+        s.buffer, s.error = "", ""
+        self.camera = CameraControl(scene.camera)
+        self.progressive.reset()
+        glfw.set_window_title(self.window.handle, f"hmblur view - {scene.name}")
+
+    def setup(self) -> Setup:
+        s = self.state
+        return Setup(s.scene, self.renderer.size, s.time, s.params, s.seed)
+
+    def screenshot(self):
+        s = self.state
+        folder = self.options.shot_dir
+        path = capture.next_path(folder, f"{s.scene.name}_{s.mode}")
+        try:
+            capture.save_shot(path, self.renderer, s.mode, self.setup(), s.scene_arg,
+                              {"params": s.params.to_dict(), "buffer": s.buffer or "output"})
+        except Exception as exc:
+            s.report(f"screenshot {path}: {exc}")
+            return
+        s.shots.append(str(path))
+        print(f"{path}: {s.mode} {self.renderer.size[0]}x{self.renderer.size[1]} t={s.time:g}")
+
+    def perform(self, a: Action):
+        """One script action (viewer/ui/script.py)."""
+        s, args = self.state, a.args
+        try:
+            if a.name == "mode":
+                self.set_mode(args[0])
+            elif a.name == "set":
+                s.params.apply([args[0]])
+            elif a.name == "key":
+                key = getattr(glfw, f"KEY_{args[0].upper()}", None)
+                if key is None:
+                    a.fail("a GLFW key name (P, F12, SPACE, W, ...)")
+                self.window.key_event(key, glfw.PRESS)
+                self.timeline.at(self.frame_index + 1, lambda: self.window.key_event(key, glfw.RELEASE))
+            elif a.name == "resize":
+                self.window.set_size(parse_size(args[0]))
+            elif a.name in ("orbit", "pan"):
+                button = glfw.MOUSE_BUTTON_LEFT if a.name == "orbit" else glfw.MOUSE_BUTTON_RIGHT
+                x0, y0 = self.scene_centre()
+                dx, dy = parse_float("dx", args[0]), parse_float("dy", args[1])
+                self.drag(button, x0, y0, x0 + dx, y0 + dy)
+            elif a.name == "drag":
+                buttons = {"left": glfw.MOUSE_BUTTON_LEFT, "right": glfw.MOUSE_BUTTON_RIGHT,
+                           "middle": glfw.MOUSE_BUTTON_MIDDLE}
+                if args[0] not in buttons:
+                    a.fail("button left, right or middle")
+                self.drag(buttons[args[0]], *(parse_float("coordinate", v) for v in args[1:]))
+            elif a.name == "zoom":
+                notches = parse_float("zoom", args[0])
+                x0, y0 = self.scene_centre()
+                self.window.mouse_move(x0, y0)
+                self.timeline.at(self.frame_index + 1, lambda: self.window.mouse_scroll(0.0, notches))
+            elif a.name == "view":
+                self.set_view(args[0])
+            elif a.name == "visual":
+                if args[0] not in ("auto",) + KINDS:
+                    a.fail("auto or one of " + ", ".join(KINDS))
+                s.view.kind = args[0]
+            elif a.name == "time":
+                s.time = parse_float("time", args[0])
+            elif a.name in ("play", "pause"):
+                s.playing = a.name == "play"
+            elif a.name == "speed":
+                s.speed = parse_float("speed", args[0])
+            elif a.name == "shutter":
+                s.scene.camera.shutter = max(0.0, parse_float("shutter", args[0]))
+            elif a.name == "seed":
+                s.seed = parse_int("seed", args[0], 0)
+            elif a.name == "open":
+                self.open_scene(args[0])
+            elif a.name == "reset":
+                self.camera.reset()
+            elif a.name in ("fly", "panel"):
+                if args[0] not in ("on", "off"):
+                    a.fail("on or off")
+                if a.name == "fly":
+                    self.router.fly_look = args[0] == "on"
+                else:
+                    s.show_panel = args[0] == "on"
+            elif a.name == "subframes":
+                s.sub_frames = parse_int("subframes", args[0], 1)
+            elif a.name == "quit":
+                self.window.close()
+        except UserError as exc:
+            s.report(f"script {a.where}: {exc}")
+
+    def scene_centre(self) -> tuple[float, float]:
+        """The middle of the part of the window the panel does not cover."""
+        w, h = self.window.size
+        left = self.panel_rect[2] if self.state.show_panel else 0.0
+        return ((left + w) / 2.0, h / 2.0)
+
+    def drag(self, button: int, x0: float, y0: float, x1: float, y1: float):
+        """A mouse drag spread over four frames, as a hand would make it."""
+        w = self.window
+        n = self.frame_index
+        w.mouse_move(x0, y0)
+        self.timeline.at(n + 1, lambda: w.mouse_button(button, True))
+        self.timeline.at(n + 2, lambda: w.mouse_move(x1, y1))
+        self.timeline.at(n + 3, lambda: w.mouse_button(button, False))
+
+    # -- the frame
+    def advance(self, seconds: float):
+        if self.state.playing:
+            self.state.time += seconds * self.state.speed
+
+    def render_scene(self):
+        s = self.state
+        size = self.window.framebuffer_size
+        if size[0] < 1 or size[1] < 1:              # minimised
+            return
+        if size != self.renderer.size:
+            self.renderer.resize(size)              # the pool reallocates on next use
+        screen = self.ctx.screen
+        try:
+            if self.is_progressive():
+                frame = self.progressive.step(self.clock, self.renderer, s.mode, s.time, s.params,
+                                              s.seed, s.image_key(size), s.sub_frames)
+            else:
+                frame = self.clock.render(self.renderer, s.mode, s.time, s.params, s.seed)
+            self.pass_ms, self.stats = dict(frame.pass_ms), dict(frame.stats)
+            output = self.renderer.output_name(s.mode)
+            name = s.buffer if s.buffer in self.renderer.pool.names() else output
+            s.view.gain = self.progressive.gain if (name == output and self.is_progressive()) else 1.0
+            screen.use()
+            screen.viewport = (0, 0) + size
+            screen.clear(0.1, 0.1, 0.1, 1.0)
+            self.shown_kind = self.debug.draw(screen, self.renderer.pool, name, s.view, (0, 0) + size)
+            self.shown_name = name
+        except Exception as exc:      # a shader error, a failing pass: show it, keep going
+            if f"{exc}" not in " ".join(s.errors):
+                print(f"hmblur view: {exc.__class__.__name__}: {exc}", file=sys.stderr)
+            s.report(f"render {s.mode}: {exc}")
+            self.progressive.reset()
+            screen.use()
+            screen.viewport = (0, 0) + size
+            screen.clear(0.25, 0.05, 0.05, 1.0)
+
+    def run(self) -> int:
+        opts = self.options
+        fixed = opts.frames is not None              # scripted runs step time by a fixed amount
+        last = _time.perf_counter()
+        grab = None
+        while not self.window.should_close():
+            if opts.frames is not None and self.frame_index >= opts.frames:
+                break
+            self.window.poll()
+            for item in self.timeline.due(self.frame_index):
+                item() if callable(item) else self.perform(item)
+            now = _time.perf_counter()
+            seconds = FIXED_STEP if fixed else now - last
+            if self.frame_index:
+                self.times.add((now - last) * 1e3)
+            last = now
+            self.window.begin_gui()
+            io = imgui.get_io()
+            self.router.dispatch(io.want_capture_mouse, io.want_capture_keyboard, seconds)
+            self.advance(seconds)
+            self.render_scene()
+            if self.state.show_panel:
+                self.panel_rect = draw_panel(self)
+            self.overlay_rect = draw_overlay(self.times, self.pass_ms, self.stats, self.clock.method,
+                                             self.ctx.info["GL_RENDERER"], self.window.size[0])
+            self.window.end_gui()
+            self.frame_index += 1
+            if opts.screenshot is not None and self.frame_index == opts.frames:
+                grab = capture.grab_window(self.ctx, self.window.framebuffer_size)
+            if self.frame_index == RSS_MARK_FRAME or self.frame_index % 25 == 0:
+                self.rss.append((self.frame_index, rss_kb()))
+            self.window.swap()
+        self.rss.append((self.frame_index, rss_kb()))
+        if grab is not None:
+            write_png_atomic(opts.screenshot, grab)
+        if opts.stats_json is not None:
+            write_json_atomic(opts.stats_json, self.summary())
+        return 0
+
+    def summary(self) -> dict:
+        s = self.state
+        return {
+            "frames": self.frame_index, "mode": s.mode, "scene": s.scene_arg,
+            "size": list(self.renderer.size), "window": list(self.window.size),
+            "fps": self.times.fps, "frame_ms": self.times.recent().tolist(),
+            "timing": self.clock.method, "device": self.device,
+            "pass_ms": self.pass_ms, "stats": self.stats,
+            "rss_kb": self.rss, "errors": s.errors, "screenshots": s.shots,
+            "panel_rect": list(self.panel_rect) if s.show_panel else None,
+            "overlay_rect": list(self.overlay_rect),
+            "camera": {k: list(map(float, v)) for k, v in
+                       (("position", s.scene.camera.position), ("look_at", s.scene.camera.look_at))},
+            "shown": {"buffer": self.shown_name, "visual": self.shown_kind},
+            "progressive": {"done": self.progressive.done, "total": self.progressive.total},
+        }
+
+    def release(self):
+        self.renderer.release()
+        self.window.release()

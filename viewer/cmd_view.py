@@ -1,0 +1,46 @@
+"""`hmblur view`: the interactive viewer (a GLFW window with an imgui panel), also runnable
+for a fixed number of frames with a script, for tests and screenshots."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from . import cliargs
+from .render.modes import MODES
+
+
+def register(sub):
+    p = sub.add_parser("view", help="interactive viewer window")
+    cliargs.add_scene_args(p)
+    p.add_argument("--mode", default="off", help=f"one of: {', '.join(MODES)}")
+    p.add_argument("--frames", type=str, default=None,
+                   help="run this many frames, then exit (no person needed)")
+    p.add_argument("--screenshot", default=None, metavar="PNG",
+                   help="with --frames: save the window (panel and overlay included) at the end")
+    p.add_argument("--script", default=None, metavar="FILE",
+                   help="scripted UI actions by frame number (text or JSON; see viewer/ui/script.py)")
+    p.add_argument("--stats-json", default=None, metavar="FILE",
+                   help="write fps, per-pass ms, memory (RSS) samples and errors at exit")
+    p.add_argument("--shot-dir", default=".", metavar="DIR",
+                   help="folder for screenshots taken with F12 / P (default: current folder)")
+    p.set_defaults(run=run)
+
+
+def run(args) -> int:
+    s = cliargs.setup(args)
+    if args.mode not in MODES:
+        raise cliargs.UserError(f"--mode {args.mode}: expected one of {', '.join(MODES)}")
+    frames = cliargs.parse_int("--frames", args.frames, 1) if args.frames is not None else None
+    if args.screenshot is not None and frames is None:
+        raise cliargs.UserError("--screenshot needs --frames N (the window is saved at frame N)")
+    screenshot = cliargs.check_output_file(args.screenshot, "--screenshot") if args.screenshot else None
+    stats = cliargs.check_output_file(args.stats_json, "--stats-json") if args.stats_json else None
+    shot_dir = cliargs.check_output_dir(args.shot_dir, "--shot-dir", create=False)
+    from .ui.script import load_script
+    script = load_script(args.script) if args.script else []
+    # Imported here so that `hmblur shot` and `--help` never load glfw or imgui.
+    from .app import App, RunOptions
+    app = App(s, args.scene, args.mode, RunOptions(frames, screenshot, stats, Path(shot_dir), script))
+    try:
+        return app.run()
+    finally:
+        app.release()

@@ -1,0 +1,44 @@
+"""Screenshots: the rendered image with the `hmblur shot` sidecar (so `hmblur shot SCENE
+--params FILE.json --mode M` reproduces it), and the window's own pixels (panel included)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import moderngl
+import numpy as np
+
+from ..cliargs import Setup
+from ..cmd_shot import sidecar
+from ..conventions import to_image
+from ..imageio import linear_to_srgb8, write_json_atomic, write_png_atomic
+from ..render.renderer import Renderer
+
+
+def next_path(folder: Path, stem: str) -> Path:
+    """folder/stem_NNN.png with the first number not taken."""
+    k = 0
+    while (folder / f"{stem}_{k:03d}.png").exists():
+        k += 1
+    return folder / f"{stem}_{k:03d}.png"
+
+
+def save_shot(path: Path, renderer: Renderer, mode: str, s: Setup, scene_arg: str,
+              extra: dict | None = None) -> Path:
+    """Render `mode` as `hmblur shot` does (full quality, one call: a reference is all its
+    sub-frames, whatever the progressive view has reached) and write PNG + sidecar."""
+    result = renderer.render(mode, s.time, s.params, seed=s.seed)
+    write_png_atomic(path, linear_to_srgb8(result.image))
+    side = sidecar(s, mode, result, renderer.ctx, scene_arg)
+    if extra:
+        side["viewer"] = extra
+    write_json_atomic(path.with_suffix(".json"), side)
+    return path
+
+
+def grab_window(ctx: moderngl.Context, size: tuple[int, int]) -> np.ndarray:
+    """The default framebuffer's back buffer as uint8 RGB, top row first (call before the
+    swap). Reading the screen leaves a GL error behind on some drivers: cleared here."""
+    w, h = size
+    data = ctx.screen.read(viewport=(0, 0, w, h), components=3, alignment=1)
+    _ = ctx.error
+    return to_image(np.frombuffer(data, np.uint8).reshape(h, w, 3))

@@ -1,0 +1,165 @@
+"""The control panel: scene, mode, the current mode's parameters (generated from the
+dataclasses), buffer view, animation, camera, screenshot, errors. Built from MODES,
+MODE_GROUPS and the pool's names, so new modes and buffers appear without changes here."""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from imgui_bundle import imgui
+
+from ..render.debug_view import KINDS
+from ..render.modes import MODE_GROUPS, MODES
+from ..scene_loader import builtin_scene_names
+from .param_widgets import group_widgets
+
+if TYPE_CHECKING:
+    from ..app import App
+
+WIDTH = 320
+ERROR_COLOUR = imgui.ImVec4(1.0, 0.45, 0.4, 1.0)
+SHUTTER_MAX = 0.25
+VISUALS = ("auto",) + KINDS
+
+
+def draw_panel(app: "App") -> tuple[float, float, float, float]:
+    """Draw the panel along the window's left edge; returns its rectangle (x, y, w, h)."""
+    s = app.state
+    _, height = app.window.size
+    imgui.set_next_window_pos(imgui.ImVec2(0, 0), imgui.Cond_.always)
+    imgui.set_next_window_size(imgui.ImVec2(WIDTH, height), imgui.Cond_.always)
+    imgui.set_next_window_bg_alpha(0.85)
+    flags = imgui.WindowFlags_.no_move | imgui.WindowFlags_.no_resize | imgui.WindowFlags_.no_saved_settings
+    imgui.begin("hmblur view", None, flags)
+    imgui.push_item_width(-120)
+    _errors(app)
+    _scene(app)
+    _mode(app)
+    if imgui.collapsing_header("Parameters", imgui.TreeNodeFlags_.default_open):
+        groups = MODE_GROUPS.get(s.mode, ())
+        if not groups:
+            imgui.text_disabled(f"mode {s.mode} has no parameters")
+        for g in groups:
+            imgui.separator_text(g)
+            for err in group_widgets(s.params, g):
+                s.report(err)
+    if imgui.collapsing_header("Buffer view", imgui.TreeNodeFlags_.default_open):
+        _buffers(app)
+    if imgui.collapsing_header("Animation", imgui.TreeNodeFlags_.default_open):
+        _animation(app)
+    if imgui.collapsing_header("Camera", imgui.TreeNodeFlags_.default_open):
+        _camera(app)
+    imgui.separator()
+    if imgui.button("Screenshot (F12 / P)"):
+        app.screenshot()
+    if s.shots:
+        imgui.text_wrapped(f"saved {s.shots[-1]}")
+    imgui.pop_item_width()
+    pos, size = imgui.get_window_pos(), imgui.get_window_size()
+    imgui.end()
+    return (pos.x, pos.y, size.x, size.y)
+
+
+def _errors(app):
+    s = app.state
+    if not s.error:
+        return
+    imgui.push_style_color(imgui.Col_.text, ERROR_COLOUR)
+    imgui.text_wrapped(s.error)
+    imgui.pop_style_color()
+    if imgui.small_button("dismiss"):
+        s.error = ""
+    imgui.separator()
+
+
+def _scene(app):
+    s = app.state
+    imgui.text(f"scene: {s.scene.name}")
+    _, s.scene_text = imgui.input_text("##scene", s.scene_text)
+    imgui.same_line()
+    if imgui.button("Open"):
+        app.open_scene(s.scene_text)
+    names = builtin_scene_names()
+    if names:
+        current = names.index(s.scene_arg) if s.scene_arg in names else -1
+        changed, idx = imgui.combo("built-in", current, names)
+        if changed and idx != current:
+            app.open_scene(names[idx])
+
+
+def _mode(app):
+    s = app.state
+    modes = list(MODES)
+    changed, idx = imgui.combo("mode", modes.index(s.mode) if s.mode in modes else 0, modes)
+    if changed:
+        app.set_mode(modes[idx])
+    if app.is_progressive():
+        p = app.progressive
+        frac = p.done / p.total if p.total else 0.0
+        imgui.progress_bar(frac, imgui.ImVec2(-1, 0), f"{p.done} / {p.total} sub-frames")
+        changed, n = imgui.slider_int("sub-frames/frame", s.sub_frames, 1, 32)
+        if changed:
+            s.sub_frames = n
+        imgui.set_item_tooltip("sub-frames added per displayed frame; the sum restarts "
+                               "whenever anything changes")
+
+
+def _buffers(app):
+    s = app.state
+    output = app.output_name()
+    names = [""] + [n for n in app.renderer.pool.names()]
+    labels = [f"output ({output})"] + names[1:]
+    current = names.index(s.buffer) if s.buffer in names else 0
+    changed, idx = imgui.combo("buffer", current, labels)
+    if changed:
+        app.set_view(names[idx])
+    changed, k = imgui.combo("visual", VISUALS.index(s.view.kind), list(VISUALS))
+    if changed:
+        s.view.kind = VISUALS[k]
+    if app.shown_kind:
+        imgui.text_disabled(f"showing {app.shown_name} as {app.shown_kind}")
+
+
+def _animation(app):
+    s = app.state
+    if imgui.button("Pause" if s.playing else "Play"):
+        s.playing = not s.playing
+    imgui.same_line()
+    if imgui.button("|<"):
+        s.time = s.scene.render.time
+    imgui.same_line()
+    if imgui.button("-1"):
+        s.time -= 1.0 / 60.0
+    imgui.same_line()
+    if imgui.button("+1"):
+        s.time += 1.0 / 60.0
+    imgui.set_item_tooltip("step one 60 Hz frame")
+    # Assign only on a change: imgui hands back float32, and merely drawing the panel must
+    # not round the time a screenshot's sidecar records.
+    changed, t = imgui.drag_float("time (s)", s.time, 0.002, 0.0, 0.0, "%.4f")
+    if changed:
+        s.time = float(t)
+    changed, speed = imgui.slider_float("speed", s.speed, -2.0, 2.0, "%.2f")
+    if changed:
+        s.speed = float(speed)
+    cam = s.scene.camera
+    changed, shutter = imgui.slider_float("shutter (s)", float(cam.shutter), 0.0, SHUTTER_MAX, "%.4f")
+    if changed:
+        cam.shutter = max(0.0, float(shutter))
+    changed, seed = imgui.input_int("seed", s.seed)
+    if changed:
+        s.seed = max(0, int(seed))
+
+
+def _camera(app):
+    s = app.state
+    changed, fly = imgui.checkbox("fly look (F)", app.router.fly_look)
+    if changed:
+        app.router.fly_look = fly
+    imgui.same_line()
+    if imgui.button("Reset view (R)"):
+        app.camera.reset()
+    cam = s.scene.camera
+    imgui.text_disabled("eye  " + " ".join(f"{x:.2f}" for x in cam.position))
+    imgui.text_disabled("look " + " ".join(f"{x:.2f}" for x in cam.look_at))
+    imgui.text_wrapped("left drag: orbit (fly look: turn); right/middle drag: pan; wheel: "
+                       "zoom; WASD QE: fly; space: play; H: panel; Esc: quit")

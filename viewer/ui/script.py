@@ -1,0 +1,154 @@
+"""Scripted UI actions for running the viewer without a person (`hmblur view --script`).
+
+Two spellings of the same thing. Text, one action per line, `#` starts a comment:
+
+    10 mode reference
+    20 set blur.max_radius=0.1
+    30 key P
+    40 resize 400x300
+    50 orbit 40 -10          # left drag by (dx, dy) pixels from the scene's centre
+    60 view depth
+
+JSON, a list of objects with the frame and one action:
+
+    [{"frame": 10, "mode": "reference"}, {"frame": 40, "resize": [400, 300]}]
+
+Actions run at the start of their frame, before input is dispatched. Mouse and key actions
+become input events that go through imgui first, like a person's would.
+"""
+from __future__ import annotations
+
+import json
+import re
+import shlex
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import UserError
+
+# name: (number of arguments, what they are)
+ACTIONS = {
+    "mode": (1, "a mode name"),
+    "set": (1, "group.field=value"),
+    "key": (1, "a key name (P, F12, SPACE, W, ...)"),
+    "resize": (1, "WxH"),
+    "orbit": (2, "dx dy (pixels, left drag from the scene's centre)"),
+    "pan": (2, "dx dy (pixels, right drag from the scene's centre)"),
+    "drag": (5, "button x0 y0 x1 y1 (button: left, right or middle; window pixels)"),
+    "zoom": (1, "wheel notches (positive: closer)"),
+    "view": (1, "a buffer name, or 'output'"),
+    "visual": (1, "auto, colour, depth, normal, id, velocity, tiles or scalar"),
+    "time": (1, "seconds"),
+    "play": (0, "nothing"),
+    "pause": (0, "nothing"),
+    "speed": (1, "a factor"),
+    "shutter": (1, "seconds"),
+    "seed": (1, "an integer"),
+    "open": (1, "a scene path or built-in name"),
+    "reset": (0, "nothing"),
+    "fly": (1, "on or off"),
+    "panel": (1, "on or off"),
+    "subframes": (1, "sub-frames per displayed frame (progressive modes)"),
+    "quit": (0, "nothing"),
+}
+
+
+@dataclass(frozen=True)
+class Action:
+    frame: int
+    name: str
+    args: tuple[str, ...]
+    where: str                         # file:line or file[index], for error messages
+
+    def fail(self, expected: str):
+        raise UserError(f"--script {self.where}: {self.name}: expected {expected}")
+
+
+def _check(action: Action) -> Action:
+    if action.name not in ACTIONS:
+        raise UserError(f"--script {action.where}: unknown action {action.name!r} "
+                        f"(known: {', '.join(ACTIONS)})")
+    n, what = ACTIONS[action.name]
+    if len(action.args) != n:
+        action.fail(f"{n} argument(s): {what}")
+    return action
+
+
+def _frame(value, where: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise UserError(f"--script {where}: expected a frame number >= 0, got {value!r}")
+    return value
+
+
+def parse_text(text: str, source: str) -> list[Action]:
+    out = []
+    for lineno, line in enumerate(text.splitlines(), start=1):
+        words = shlex.split(line, comments=True)
+        if not words:
+            continue
+        where = f"{source}:{lineno}"
+        frame = int(words[0]) if re.fullmatch(r"\d+", words[0]) else words[0]
+        if len(words) < 2:
+            raise UserError(f"--script {where}: expected FRAME ACTION [ARGS...]")
+        out.append(_check(Action(_frame(frame, where), words[1], tuple(words[2:]), where)))
+    return out
+
+
+def parse_json(data, source: str) -> list[Action]:
+    if not isinstance(data, list):
+        raise UserError(f"--script {source}: expected a JSON list of actions")
+    out = []
+    for i, item in enumerate(data):
+        where = f"{source}[{i}]"
+        if not isinstance(item, dict) or "frame" not in item or len(item) != 2:
+            raise UserError(f"--script {where}: expected {{\"frame\": N, \"ACTION\": ARGS}}")
+        frame = _frame(item["frame"], where)
+        (name, value), = [(k, v) for k, v in item.items() if k != "frame"]
+        if value is None or value == []:
+            args = ()
+        elif isinstance(value, list):
+            args = tuple(str(v) for v in value)
+        else:
+            args = (str(value),)
+        if name == "resize" and len(args) == 2:
+            args = (f"{args[0]}x{args[1]}",)
+        out.append(_check(Action(frame, name, args, where)))
+    return out
+
+
+def load_script(path: str) -> list[Action]:
+    p = Path(path)
+    try:
+        text = p.read_text()
+    except FileNotFoundError:
+        raise UserError(f"--script {path}: file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise UserError(f"--script {path}: cannot read ({exc.__class__.__name__})") from None
+    if text.lstrip().startswith("["):
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise UserError(f"--script {path}: not JSON ({exc.msg} at line {exc.lineno})") from None
+        actions = parse_json(data, p.name)
+    else:
+        actions = parse_text(text, p.name)
+    return sorted(actions, key=lambda a: a.frame)     # stable: same-frame order kept
+
+
+class Timeline:
+    """Script actions and the input events they expand to, by frame."""
+
+    def __init__(self, actions: list[Action] = ()):
+        self._due: dict[int, list] = {}
+        for a in actions:
+            self.at(a.frame, a)
+
+    def at(self, frame: int, item):
+        self._due.setdefault(frame, []).append(item)
+
+    def due(self, frame: int) -> list:
+        return self._due.pop(frame, [])
+
+    @property
+    def last_frame(self) -> int:
+        return max(self._due, default=-1)

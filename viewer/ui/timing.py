@@ -1,0 +1,68 @@
+"""Per-pass timing for the overlay, and rendering a mode with it.
+
+Software GL (llvmpipe, softpipe, SwiftShader) answers GL timer queries with the time the
+commands were submitted, not run, so there the passes are timed on the CPU clock with
+ctx.finish() around each (frame.PassTimer). Where the driver is a real GPU, GL_TIME_ELAPSED
+queries time the passes without stalling the CPU between them.
+"""
+from __future__ import annotations
+
+from contextlib import contextmanager
+
+import moderngl
+
+from ..params import ParamSet
+from ..render.frame import Frame, PassTimer
+from ..render.renderer import Renderer
+
+SOFTWARE_RENDERERS = ("llvmpipe", "softpipe", "swiftshader", "software rasterizer", "swrast")
+
+
+def gpu_timers_truthful(ctx: moderngl.Context) -> bool:
+    renderer = str(ctx.info.get("GL_RENDERER", "")).lower()
+    return not any(name in renderer for name in SOFTWARE_RENDERERS)
+
+
+def describe(method: str) -> str:
+    """One line for the overlay: how the pass times were measured."""
+    return {"cpu": "CPU clock + ctx.finish()", "gpu": "GPU timer queries"}[method]
+
+
+class PassClock:
+    def __init__(self, ctx: moderngl.Context, method: str | None = None):
+        self.ctx = ctx
+        self.method = method or ("gpu" if gpu_timers_truthful(ctx) else "cpu")
+        self._queries: dict[str, moderngl.Query] = {}
+
+    def frame(self, renderer: Renderer, t: float, params: ParamSet, seed: int) -> Frame:
+        return renderer.frame(t, params, seed, timing=self.method == "cpu")
+
+    @contextmanager
+    def measure(self, frame: Frame, name: str):
+        """Time the work inside into frame.pass_ms[name] (added up if repeated)."""
+        if self.method == "cpu":
+            with PassTimer(frame, name):
+                yield
+            return
+        q = self._queries.get(name)
+        if q is None:
+            q = self._queries[name] = self.ctx.query(time=True)
+        with q:
+            yield
+        frame.pass_ms[name] = frame.pass_ms.get(name, 0.0) + q.elapsed / 1e6
+
+    def render(self, renderer: Renderer, mode: str, t: float, params: ParamSet, seed: int) -> Frame:
+        """Run every pass of `mode` (the image stays on the GPU, in the pool)."""
+        frame = self.frame(renderer, t, params, seed)
+        frame.host["record_visibility"] = False
+        try:
+            for p in renderer.pipeline(mode).passes:   # Pipeline.run, with our clock
+                p.allocate(frame)
+                with self.measure(frame, p.name):
+                    p.execute(frame)
+        finally:
+            frame.host.pop("state", None)
+        return frame
+
+    # Queries are kept, one per pass name, for the context's lifetime: moderngl 5 has no
+    # Query.release(), and reusing them keeps the count bounded.
