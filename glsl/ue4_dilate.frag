@@ -6,6 +6,8 @@
 uniform sampler2D u_tiles;      // (vmin.xy, vmax.xy), px
 uniform float u_tile;           // tile size, px
 uniform int u_reach;            // window half-size in tiles (covers the blur limit)
+uniform bool u_guard;           // also take the min over every tile a tap can read
+uniform float u_tile_jitter;    // the gather's tile-lookup jitter, tiles
 out vec4 out_tiles;
 
 void main() {
@@ -34,6 +36,21 @@ void main() {
             float n2 = dot(t.xy, t.xy);
             if (n2 < lmin) { lmin = n2; vmin = t.xy; }
             if (l2 > lmax) { lmax = l2; vmax = t.zw; }
+        }
+    }
+    if (u_guard) {
+        // A tile slower than half a pixel covers only itself, so a uniformly moving tile
+        // beside a screen-static one keeps a large min and would take the fast path,
+        // averaging the static pixels its taps reach. Pixels that look this tile up lie
+        // within tile_jitter tiles of it and read up to |vmax| px farther.
+        int r = int(ceil(length(vmax) / u_tile + u_tile_jitter));
+        ivec2 glo = max(m - r, ivec2(0)), ghi = min(m + r, grid - 1);
+        for (int y = glo.y; y <= ghi.y; ++y) {
+            for (int x = glo.x; x <= ghi.x; ++x) {
+                vec2 tmin = texelFetch(u_tiles, ivec2(x, y), 0).xy;
+                float n2 = dot(tmin, tmin);
+                if (n2 < lmin) { lmin = n2; vmin = tmin; }
+            }
         }
     }
     out_tiles = vec4(vmin, vmax);

@@ -16,6 +16,7 @@ uniform float u_tap_jitter;     // fraction of a step
 uniform bool u_fast_path;
 uniform float u_fast_ratio;
 uniform bool u_mirror;
+uniform bool u_bilinear;        // colour taps filtered (UE) or from the texel holding them
 out vec4 out_color;
 
 ivec2 g_size;
@@ -25,8 +26,10 @@ vec2 clamp_tap(vec2 p) {
     return clamp(p, vec2(0.5), vec2(g_size) - 0.5);
 }
 
-// Bilinear colour from the four texels around p, weighted here (see viewer/render/ue4.py).
-vec3 bilinear(vec2 p) {
+// Colour at tap p: bilinear from the four texels around it, weighted here (see
+// viewer/render/ue4.py), or the texel that holds it, whose depth and velocity the weights use.
+vec3 tap_color(vec2 p) {
+    if (!u_bilinear) return texelFetch(u_color, ivec2(p), 0).rgb;
     vec2 q = p - 0.5;
     ivec2 i0 = ivec2(floor(q));
     vec2 f = q - vec2(i0);
@@ -71,8 +74,8 @@ void main() {
         vec3 sum = vec3(0.0);                   // uniform motion: a plain box average
         for (int i = 0; i < u_taps; ++i) {
             float op = float(i) + 0.5 + j, om = float(i) + 0.5 - j;
-            sum += bilinear(clamp_tap(X + (op / K) * vmax));
-            sum += bilinear(clamp_tap(X - (om / K) * vmax));
+            sum += tap_color(clamp_tap(X + (op / K) * vmax));
+            sum += tap_color(clamp_tap(X - (om / K) * vmax));
         }
         out_color = vec4(sum / (2.0 * K), 1.0);
         return;
@@ -96,7 +99,7 @@ void main() {
             if (far0 && fast1) w0 = w1;
             if (!far0 && !fast1) w1 = w0;
         }
-        acc += w0 * bilinear(p0) + w1 * bilinear(p1);
+        acc += w0 * tap_color(p0) + w1 * tap_color(p1);
         wsum += w0 + w1;
     }
     out_color = vec4(acc / (2.0 * K) + (1.0 - wsum / (2.0 * K)) * centre_color, 1.0);

@@ -5,11 +5,13 @@ G-buffer -> flatten (half vector v = D/2 clamped to the shared blur limit, packe
 oppositely jittered taps and centre-fill normalisation. Every stage writes a named pool
 texture, so `--buffers` shows all of them.
 
-Colour taps are bilinear, as in UE (which samples with SampleLevel), but the four texels are
-fetched and weighted in the shader: the G-buffer's colour texture is nearest-filtered and
-belongs to another pass, and explicit weights give the same numbers on every driver (a
-hardware sampler may quantise its weights), which the tests compare against numpy.
-Velocity and depth at a tap come from the texel that contains it (UE's point sampling).
+Colour taps are bilinear by default, as in UE (which samples with SampleLevel), but the four
+texels are fetched and weighted in the shader: the G-buffer's colour texture is
+nearest-filtered and belongs to another pass, and explicit weights give the same numbers on
+every driver (a hardware sampler may quantise its weights), which the tests compare against
+numpy. Velocity and depth at a tap come from the texel that contains it (UE's point
+sampling), so a tap within half a pixel of a silhouette mixes in the colour of the other
+side under the weight of its own; `ue4.bilinear=false` takes that texel's colour instead.
 """
 from __future__ import annotations
 
@@ -43,6 +45,12 @@ class UE4Params:
     fast_ratio: float = param(0.4, lo=0.0, hi=1.0,
                               help="fast path when |vmin|^2 > fast_ratio * |vmax|^2")
     mirror: bool = param(True, help="exchange weights within a tap pair (ALGORITHMS.md 3.4)")
+    bilinear: bool = param(True, help="bilinear colour taps (UE); off: the colour of the texel "
+                                      "whose depth and velocity weigh the tap")
+    fast_path_guard: bool = param(False,
+                                  help="the dilated min also covers every tile the taps can "
+                                       "read, so a moving neighbourhood beside a screen-static "
+                                       "object takes the full path (UE: covering tiles only)")
 
 
 FLAT = TexSpec(4, "f4")           # (v.x, v.y, depth, |v|), v the clamped half vector in px
@@ -97,9 +105,10 @@ class Dilate(FullscreenPass):
         return {"ue4_dilated": tile_spec(frame)}
 
     def execute(self, frame):
-        tile = frame.params["ue4"].tile
+        p = frame.params["ue4"]
         self.draw(frame, self.produces, {"u_tiles": "ue4_tiles"},
-                  {"u_tile": float(tile), "u_reach": dilation_reach(max_radius_px(frame), tile)})
+                  {"u_tile": float(p.tile), "u_reach": dilation_reach(max_radius_px(frame), p.tile),
+                   "u_guard": bool(p.fast_path_guard), "u_tile_jitter": p.tile_jitter})
 
 
 class Gather(FullscreenPass):
@@ -118,7 +127,7 @@ class Gather(FullscreenPass):
                   {"u_tile": p.tile, "u_taps": p.taps, "u_depth_scale": p.depth_scale,
                    "u_tile_jitter": p.tile_jitter, "u_tap_jitter": p.tap_jitter,
                    "u_fast_path": bool(p.fast_path), "u_fast_ratio": p.fast_ratio,
-                   "u_mirror": bool(p.mirror)})
+                   "u_mirror": bool(p.mirror), "u_bilinear": bool(p.bilinear)})
 
 
 def ue4_passes() -> list:
