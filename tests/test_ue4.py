@@ -174,10 +174,14 @@ def test_tile_min_max_partial_border_tiles(synthetic_frame):
     flat[..., :2] = RNG.normal(0, 5, (19, 37, 2))
     flat[..., 2] = 5.0
     flat[..., 3] = np.linalg.norm(flat[..., :2], axis=-1)
+    # tile (0, 0): one length, 64 directions: the first pixel in scan order wins both
+    angle = np.arange(64).reshape(8, 8)
+    flat[:8, :8, 0], flat[:8, :8, 1], flat[:8, :8, 3] = np.cos(angle), np.sin(angle), 1.0
     upload(frame, "ue4_flat", TexSpec(4, "f4"), flat)
     run(frame, TileMinMax())
     got = read_gl(frame, "ue4_tiles")
     assert got.shape == (3, 5, 4)
+    assert np.array_equal(got[0, 0], [1, 0, 1, 0])
     assert np.array_equal(got, nu.tile_minmax(flat, 8))
     # the corner tile holds 5 x 3 pixels; nothing outside the screen takes part
     corner = flat[16:, 32:].reshape(-1, 4)
@@ -358,3 +362,123 @@ def test_ue_fast_path_smears_moving_background_over_static_neighbour(synthetic_f
     assert np.array_equal(got[:, 52:76], color[:, 52:76])
     assert np.abs(got[:, 48:52] - color[:, 48:52]).max() > 0.1
     assert got[:, 40:44, 0].min() > 0.1      # red over the background, beyond the jitter
+
+@pytest.mark.parametrize("axis", [0, 1])
+@pytest.mark.parametrize("tap_jitter", [0.0, 1.0])
+def test_uniform_translation_is_a_box_blur_of_length_D(synthetic_frame, axis, tap_jitter):
+    """Everything moves by D = 12 px along x (or y, up): the fast path averages 2K taps
+    spread over [-D/2, D/2], a box blur of length |D| of the (bilinear) image."""
+    n, D, K = 64, 12.0, 8
+    size = (n, 8) if axis == 0 else (24, n)                 # the limit: 6 px either way
+    params = make_params(tile=8, max_radius=0.125 if axis == 0 else 0.25, taps=K,
+                         tap_jitter=tap_jitter)
+    frame = synthetic_frame(size, params, seed=2)
+    s = np.arange(n) + 0.5                                  # pixel centres along the motion
+    step = (s >= 32).astype(np.float32)                     # 0 below 32 px, 1 above
+    color = np.zeros((size[1], size[0], 3), np.float32)
+    color[..., 2] = 0.25
+    if axis == 0:
+        color[..., 0] = step[None, :]
+    else:
+        color[..., 0] = step[:, None]
+    vel = np.zeros((size[1], size[0], 2), np.float32)
+    vel[..., axis] = D
+    depth = np.full(color.shape[:2], 5.0, np.float32)
+    got = render_ue4(frame, color, vel, depth)
+    assert np.abs(got - numpy_ue4(frame, color, vel, depth, seed=2)).max() < 1e-5
+    tiles = read_gl(frame, "ue4_dilated")
+    assert np.all(tiles[..., axis] == D / 2) and np.all(tiles[..., 2 + axis] == D / 2)
+    # against the box filter of the bilinear reconstruction, integrated finely
+    fine = np.linspace(-D / 2, D / 2, 4801)
+    box = np.array([np.clip(x + fine - 31.5, 0, 1).mean() for x in s])
+    red = got[..., 0] if axis == 0 else got[..., 0].T
+    tol = (1.0 if tap_jitter else 0.5) / (2 * K)           # a jittered shift of <= half a step
+    assert np.abs(red - box[None, :]).max() <= tol
+    assert np.all(red[:, :24] == 0) and np.all(red[:, 39:] == 1)    # ramp of length |D|
+    assert np.all(got[..., 2] == np.float32(0.25))
+    # the full path gives the same average here (every weight is 1)
+    slow = synthetic_frame(size, make_params(tile=8, max_radius=params["blur"].max_radius,
+                                             taps=K, tap_jitter=tap_jitter, fast_path=False),
+                           seed=2)
+    assert np.abs(render_ue4(slow, color, vel, depth) - got).max() < 1e-6
+
+
+def test_fast_path_threshold(synthetic_frame):
+    """Half the pixels move 16 px, half 12.8 px (|vmin|^2 = 0.64 |vmax|^2): above the
+    default 0.4 the plain average is taken, which ignores the slower pixels' shorter
+    spread; the full path (fast path off, or a 0.7 threshold) does not."""
+    w, h = 64, 16
+    color = RNG.uniform(0, 1, (h, w, 3)).astype(np.float32)
+    vel = np.zeros((h, w, 2), np.float32)
+    vel[..., 0] = np.where((np.arange(w) // 3) % 2 == 0, 16.0, 12.8)[None, :]
+    depth = np.full((h, w), 3.0, np.float32)
+    out = {}
+    for name, cfg in {"fast": {}, "off": dict(fast_path=False), "0.7": dict(fast_ratio=0.7)}.items():
+        frame = synthetic_frame((w, h), make_params(tile=8, max_radius=0.125, **cfg), seed=4)
+        out[name] = render_ue4(frame, color, vel, depth)
+        assert np.abs(out[name] - numpy_ue4(frame, color, vel, depth, seed=4)).max() < 2e-5
+    assert np.array_equal(out["off"], out["0.7"])
+    assert np.abs(out["fast"] - out["off"]).max() > 0.01
+
+
+def test_static_and_sub_half_pixel_scenes_are_unchanged_exactly(synthetic_frame):
+    color = RNG.uniform(0, 3, (16, 32, 3)).astype(np.float32)
+    depth = RNG.uniform(1, 9, (16, 32)).astype(np.float32)
+    for speed in (0.0, 0.9):                       # |v| = |D| / 2 < 0.5 px: skip path
+        vel = np.zeros((16, 32, 2), np.float32)
+        vel[..., 0] = speed * np.cos(np.arange(32))[None, :]
+        vel[..., 1] = speed * np.sin(np.arange(32))[None, :]
+        got = render_ue4(synthetic_frame((32, 16), make_params(tile=4)), color, vel, depth)
+        assert np.array_equal(got, color)
+
+
+def test_deterministic_per_seed(synthetic_frame):
+    color, vel, depth = bar_scene(64, 16, 20, 40, bar_v=20.0, bg_v=-4.0)
+    runs = [render_ue4(synthetic_frame((64, 16), make_params(max_radius=0.25), seed=s),
+                       color, vel, depth) for s in (9, 9, 10)]
+    assert runs[0].tobytes() == runs[1].tobytes()
+    assert runs[0].tobytes() != runs[2].tobytes()
+
+
+def test_dilation_guard_matches_numpy(synthetic_frame):
+    frame = synthetic_frame((64, 32), make_params(tile=4, max_radius=0.25, fast_path_guard=True))
+    tiles = np.zeros((8, 16, 4), np.float32)
+    tiles[..., 0] = tiles[..., 2] = 6.0             # everything moves 6 px ...
+    tiles[4, 8] = 0.0                               # ... but one screen-static tile
+    upload(frame, "ue4_tiles", tile_spec(frame), tiles)
+    run(frame, Dilate())
+    got = read_gl(frame, "ue4_dilated")
+    assert np.array_equal(got, nu.dilate(tiles, 4, 5, guard=True, tile_jitter=0.25))
+    # r = ceil(6/4 + 1/4) = 2 tiles: the static tile's zero min reaches a 5 x 5 square
+    zero_min = ~got[..., :2].any(axis=-1)
+    assert np.array_equal(np.argwhere(zero_min).min(0), [2, 6])
+    assert np.array_equal(np.argwhere(zero_min).max(0), [6, 10])
+    # without the guard only the static tile itself has a zero min
+    frame2 = synthetic_frame((64, 32), make_params(tile=4, max_radius=0.25))
+    upload(frame2, "ue4_tiles", tile_spec(frame2), tiles)
+    run(frame2, Dilate())
+    assert np.count_nonzero(~read_gl(frame2, "ue4_dilated")[..., :2].any(axis=-1)) == 1
+
+
+def test_mode_beats_off_against_reference_on_basic(ctx):
+    """The whole mode through the Renderer: closer to the reference than the sharp frame,
+    over the whole image and in the outer-blur region."""
+    from viewer.metrics import image_metrics
+    from viewer.render.renderer import Renderer
+    from viewer.scene_loader import load_scene
+    scene = load_scene(CONFORMANCE / "basic.toml")
+    r = Renderer(ctx, scene, (160, 90))
+    try:
+        t = scene.render.time
+        ref = r.render("reference", t, record_visibility=True)
+        region = ref.host["regions"]
+        off = r.render("off", t).image
+        ue4 = r.render("ue4", t).image
+        assert set(("ue4_flat", "ue4_tiles", "ue4_dilated", "ue4")) <= set(r.pool.names())
+    finally:
+        r.release()
+    m_off, m_ue4 = image_metrics(off, ref.image, region), image_metrics(ue4, ref.image, region)
+    assert m_ue4["outer"]["pixels"] > 50
+    for reg in ("all", "outer"):
+        assert m_ue4[reg]["flip"] < m_off[reg]["flip"]
+        assert m_ue4[reg]["psnr"] > m_off[reg]["psnr"]
