@@ -17,9 +17,8 @@ from viewer.conventions import to_image
 from viewer.params import ParamSet
 from viewer.render.gbuffer import GBUFFER
 from viewer.render.pool import TexSpec
+from viewer.render.blur_common import max_radius_px
 from viewer.render.ue4 import Dilate, Flatten, Gather, TileMinMax, dilation_reach, tile_spec
-
-RNG = np.random.default_rng(7)
 
 
 def make_params(**ue4) -> ParamSet:
@@ -86,7 +85,6 @@ def render_ue4(frame, color, velocity, depth):
 
 
 def numpy_ue4(frame, color, velocity, depth, seed=0):
-    from viewer.render.blur_common import max_radius_px
     p = frame.params["ue4"]
     max_px = max_radius_px(frame)
     flat = nu.flatten(velocity, depth, max_px)
@@ -150,10 +148,11 @@ def test_numpy_gather_bar_ramps_by_hand():
 # ---------------------------------------------------------------- single passes on the GPU
 
 def test_flatten_halves_and_clamps(synthetic_frame):
+    rng = np.random.default_rng(1)
     frame = synthetic_frame((32, 16), make_params(max_radius=0.25))     # 8 px
-    vel = RNG.uniform(-30, 30, (16, 32, 2)).astype(np.float32)
+    vel = rng.uniform(-30, 30, (16, 32, 2)).astype(np.float32)
     vel[0, 0] = 0.0
-    depth = RNG.uniform(0.5, 20, (16, 32)).astype(np.float32)
+    depth = rng.uniform(0.5, 20, (16, 32)).astype(np.float32)
     depth[0, 1] = 1e9
     upload(frame, "velocity", GBUFFER["velocity"], vel)
     upload(frame, "depth", GBUFFER["depth"], depth)
@@ -169,9 +168,10 @@ def test_flatten_halves_and_clamps(synthetic_frame):
 
 
 def test_tile_min_max_partial_border_tiles(synthetic_frame):
+    rng = np.random.default_rng(2)
     frame = synthetic_frame((37, 19), make_params(tile=8))          # 5 x 3 tiles, partial
     flat = np.zeros((19, 37, 4), np.float32)
-    flat[..., :2] = RNG.normal(0, 5, (19, 37, 2))
+    flat[..., :2] = rng.normal(0, 5, (19, 37, 2))
     flat[..., 2] = 5.0
     flat[..., 3] = np.linalg.norm(flat[..., :2], axis=-1)
     # tile (0, 0): one length, 64 directions: the first pixel in scan order wins both
@@ -217,10 +217,11 @@ def test_dilation_quad_cover_on_tile_grid(synthetic_frame):
 
 def test_gather_matches_numpy_with_noise(synthetic_frame):
     """Every pixel of a two-layer scene with mixed motion, IGN and tile jitter on."""
+    rng = np.random.default_rng(3)
     params = make_params(tile=8, max_radius=0.25, taps=6)
     frame = synthetic_frame((32, 16), params, seed=5)
     h, w = 16, 32
-    color = RNG.uniform(0, 1, (h, w, 3)).astype(np.float32)
+    color = rng.uniform(0, 1, (h, w, 3)).astype(np.float32)
     yy, xx = np.mgrid[0:h, 0:w]
     disc = (xx - 14) ** 2 + (yy - 8) ** 2 < 30
     vel = np.zeros((h, w, 2), np.float32)
@@ -228,7 +229,6 @@ def test_gather_matches_numpy_with_noise(synthetic_frame):
     vel[~disc] = [-3.0, 0.0]
     vel[:, 26:] = 0.0                                   # a static strip
     depth = np.where(disc, 2.0, 6.0 + 0.01 * xx).astype(np.float32)
-    from viewer.render.blur_common import max_radius_px
     flat = nu.flatten(vel, depth, max_radius_px(frame))
     dil = nu.dilate(nu.tile_minmax(flat, 8), 8, dilation_reach(max_radius_px(frame), 8))
     got = run_gather(frame, color, flat, dil)
@@ -407,13 +407,15 @@ def test_fast_path_threshold(synthetic_frame):
     """Half the pixels move 16 px, half 12.8 px (|vmin|^2 = 0.64 |vmax|^2): above the
     default 0.4 the plain average is taken, which ignores the slower pixels' shorter
     spread; the full path (fast path off, or a 0.7 threshold) does not."""
+    rng = np.random.default_rng(4)
     w, h = 64, 16
-    color = RNG.uniform(0, 1, (h, w, 3)).astype(np.float32)
+    color = rng.uniform(0, 1, (h, w, 3)).astype(np.float32)
     vel = np.zeros((h, w, 2), np.float32)
     vel[..., 0] = np.where((np.arange(w) // 3) % 2 == 0, 16.0, 12.8)[None, :]
     depth = np.full((h, w), 3.0, np.float32)
     out = {}
-    for name, cfg in {"fast": {}, "off": dict(fast_path=False), "0.7": dict(fast_ratio=0.7)}.items():
+    configs = {"fast": {}, "off": dict(fast_path=False), "0.7": dict(fast_ratio=0.7)}
+    for name, cfg in configs.items():
         frame = synthetic_frame((w, h), make_params(tile=8, max_radius=0.125, **cfg), seed=4)
         out[name] = render_ue4(frame, color, vel, depth)
         assert np.abs(out[name] - numpy_ue4(frame, color, vel, depth, seed=4)).max() < 2e-5
@@ -422,8 +424,9 @@ def test_fast_path_threshold(synthetic_frame):
 
 
 def test_static_and_sub_half_pixel_scenes_are_unchanged_exactly(synthetic_frame):
-    color = RNG.uniform(0, 3, (16, 32, 3)).astype(np.float32)
-    depth = RNG.uniform(1, 9, (16, 32)).astype(np.float32)
+    rng = np.random.default_rng(5)
+    color = rng.uniform(0, 3, (16, 32, 3)).astype(np.float32)
+    depth = rng.uniform(1, 9, (16, 32)).astype(np.float32)
     for speed in (0.0, 0.9):                       # |v| = |D| / 2 < 0.5 px: skip path
         vel = np.zeros((16, 32, 2), np.float32)
         vel[..., 0] = speed * np.cos(np.arange(32))[None, :]
