@@ -43,6 +43,8 @@ vec3 tap_color(vec2 p) {
 
 // Weight of one tap at `o` steps from the centre: background (farther) taps count where
 // the centre's own blur reaches them, foreground taps where their blur reaches the centre.
+// The spread edge uses this tap's own offset (UE reuses o+ for both taps of a pair; with
+// opposite jitter that moves the o- tap's edge by up to one step).
 float tap_weight(vec4 centre, vec4 tap, float o, float px_to_step) {
     float dz = tap.z - centre.z;
     vec2 depth_cmp = clamp(0.5 + vec2(u_depth_scale, -u_depth_scale) * dz, 0.0, 1.0);
