@@ -11,6 +11,8 @@ import os
 import select
 import shutil
 import subprocess
+import tempfile
+import time
 
 import pytest
 
@@ -30,24 +32,44 @@ def require_xvfb() -> str:
     return path
 
 
+def _read_line(fd: int, timeout: float) -> str:
+    """Read up to a newline. Xvfb writes the number and the newline separately, and closing
+    the pipe between the two kills it (it cannot write the newline)."""
+    deadline = time.monotonic() + timeout
+    data = b""
+    while not data.endswith(b"\n"):
+        left = deadline - time.monotonic()
+        ready, _, _ = select.select([fd], [], [], max(left, 0.0))
+        if not ready:
+            break
+        chunk = os.read(fd, 64)
+        if not chunk:
+            break
+        data += chunk
+    return data.decode(errors="replace").strip()
+
+
 class Xvfb:
     def __init__(self, screen: str = SCREEN):
         self.screen = screen
         self.proc: subprocess.Popen | None = None
         self.display: str | None = None
+        self.log = None
 
     def start(self) -> "Xvfb":
         exe = require_xvfb()
         read_fd, write_fd = os.pipe()
         try:
+            # The server's chatter (keymap warnings on every connection) goes to a file: an
+            # unread pipe would fill up and stall the server.
+            self.log = tempfile.TemporaryFile()
             self.proc = subprocess.Popen(
                 [exe, "-displayfd", str(write_fd), "-screen", "0", self.screen,
                  "-nolisten", "tcp", "-noreset"],
-                pass_fds=(write_fd,), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+                pass_fds=(write_fd,), stdout=subprocess.DEVNULL, stderr=self.log)
             os.close(write_fd)
             write_fd = -1
-            ready, _, _ = select.select([read_fd], [], [], START_TIMEOUT_S)
-            number = os.read(read_fd, 64).decode().strip() if ready else ""
+            number = _read_line(read_fd, START_TIMEOUT_S)
         finally:
             os.close(read_fd)
             if write_fd >= 0:
@@ -74,11 +96,14 @@ class Xvfb:
         if proc.poll() is None:
             proc.terminate()
         try:
-            _, err = proc.communicate(timeout=10)
+            proc.wait(timeout=10)
         except subprocess.TimeoutExpired:
             proc.kill()
-            _, err = proc.communicate()
-        return (err or b"").decode(errors="replace").strip()
+            proc.wait()
+        self.log.seek(0)
+        err = self.log.read()[-2000:]
+        self.log.close()
+        return err.decode(errors="replace").strip()
 
     def __enter__(self):
         return self.start()

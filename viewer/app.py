@@ -121,6 +121,17 @@ class App:
         except Exception:
             return "?"
 
+    def buffer_names(self) -> tuple[list[str], list[str]]:
+        """Pool textures the current mode writes (pipeline order), and the others still
+        held from modes shown earlier."""
+        pool = set(self.renderer.pool.names())
+        try:
+            passes = self.renderer.pipeline(self.state.mode).passes
+        except Exception:
+            passes = []
+        current = list(dict.fromkeys(n for p in passes for n in p.produces if n in pool))
+        return current, [n for n in self.renderer.pool.names() if n not in current]
+
     def open_scene(self, source: str):
         """Load another scene; on failure keep the current one and show why."""
         source = source.strip()

@@ -11,7 +11,8 @@ from .render.modes import MODES
 def register(sub):
     p = sub.add_parser("view", help="interactive viewer window")
     cliargs.add_scene_args(p)
-    p.add_argument("--mode", default="off", help=f"one of: {', '.join(MODES)}")
+    p.add_argument("--mode", default=None,
+                   help=f"one of: {', '.join(MODES)} (default: the --params sidecar's, else off)")
     p.add_argument("--frames", type=str, default=None,
                    help="run this many frames, then exit (no person needed)")
     p.add_argument("--screenshot", default=None, metavar="PNG",
@@ -27,6 +28,8 @@ def register(sub):
 
 def run(args) -> int:
     s = cliargs.setup(args)
+    if args.mode is None:
+        args.mode = str((s.sidecar or {}).get("mode", "off"))
     if args.mode not in MODES:
         raise cliargs.UserError(f"--mode {args.mode}: expected one of {', '.join(MODES)}")
     frames = cliargs.parse_int("--frames", args.frames, 1) if args.frames is not None else None

@@ -106,8 +106,10 @@ def _mode(app):
 def _buffers(app):
     s = app.state
     output = app.output_name()
-    names = [""] + [n for n in app.renderer.pool.names()]
-    labels = [f"output ({output})"] + names[1:]
+    current, others = app.buffer_names()
+    names = [""] + current + others
+    labels = ([f"output ({output})"] + current
+              + [f"{n} (earlier mode)" for n in others])    # still in the pool, not redrawn
     current = names.index(s.buffer) if s.buffer in names else 0
     changed, idx = imgui.combo("buffer", current, labels)
     if changed:

@@ -25,7 +25,8 @@ class Window:
         glfw.set_error_callback(lambda code, text: self._glfw_errors.append(
             text.decode(errors="replace") if isinstance(text, bytes) else str(text)))
         if not glfw.init():
-            raise UserError(NO_DISPLAY)
+            reason = self._glfw_errors[-1] if self._glfw_errors else ""
+            raise UserError(NO_DISPLAY + (f" (GLFW: {reason})" if reason else ""))
         glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, 3)
         glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, 3)
         glfw.window_hint(glfw.OPENGL_PROFILE, glfw.OPENGL_CORE_PROFILE)
