@@ -4,4 +4,5 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
+mkdir -p out
 exec .venv/bin/hmblur compare living_room --size 640x360 --out out/demo "$@"
