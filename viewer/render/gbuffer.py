@@ -58,13 +58,7 @@ class GBufferPass(Pass):
         ctx.enable(moderngl.DEPTH_TEST)
         ctx.depth_func = "<"
         prog = frame.programs.get("gbuffer.vert", "gbuffer.frag", defines)
-        set_uniform(prog, "u_view", cam.view(t))
-        set_uniform(prog, "u_proj", cam.projection())
-        set_uniform(prog, "u_view_open", cam.view(t_open))
-        set_uniform(prog, "u_view_close", cam.view(t_close))
-        set_uniform(prog, "u_eye", cam.eye(t))
-        set_uniform(prog, "u_viewport", tuple(float(x) for x in frame.size))
-        set_uniform(prog, "u_near", float(cam.spec.near))
+        gpu.bind_camera(prog, cam, t, t_open, t_close, frame.size)
         gpu.bind_lights(prog)
         for obj in gpu.front_to_back(cam.eye(t), t):
             gpu.bind_object(prog, obj, t, t_open, t_close)

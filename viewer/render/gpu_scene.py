@@ -89,6 +89,18 @@ class GpuScene:
                 prog, [(self.buffers[obj.id - 1], " ".join(fmt), *names)])
         return self._vaos[key]
 
+    @staticmethod
+    def bind_camera(prog: moderngl.Program, cam, t: float, t_open: float, t_close: float,
+                    size: tuple[int, int]):
+        """The camera at the frame time and at shutter open and close (glsl/motion.glsl)."""
+        set_uniform(prog, "u_view", cam.view(t))
+        set_uniform(prog, "u_proj", cam.projection())
+        set_uniform(prog, "u_view_open", cam.view(t_open))
+        set_uniform(prog, "u_view_close", cam.view(t_close))
+        set_uniform(prog, "u_eye", cam.eye(t))
+        set_uniform(prog, "u_viewport", tuple(float(x) for x in size))
+        set_uniform(prog, "u_near", float(cam.spec.near))
+
     def bind_lights(self, prog: moderngl.Program):
         s = self.scene
         set_uniform(prog, "u_ambient", s.ambient)
