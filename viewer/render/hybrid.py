@@ -23,11 +23,12 @@ from .modes import mode
 from .passes import Pipeline
 from .raymask import raymask_passes
 from .reveal_pass import reveal_passes
+from .tile_lists import selection_passes
 
 
 def hybrid_passes() -> list:
     """Everything after the G-buffer."""
-    return [*raymask_passes(), *reveal_passes(), *composite_passes()]
+    return [*selection_passes(), *raymask_passes(), *reveal_passes(), *composite_passes()]
 
 
 @mode("hybrid", groups=("blur", "hybrid"))

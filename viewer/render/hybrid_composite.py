@@ -16,6 +16,7 @@ from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" g
 from .passes import FullscreenPass
 from .pool import TexSpec
 from .reveal_pass import layer_names
+from .tile_lists import tile_list
 from .tiles import tile_passes
 
 MOTION = TexSpec(4, "f4")         # (D.x, D.y, depth, w): front w = id, back w = 1 + id if revealed
@@ -53,9 +54,9 @@ class Composite(FullscreenPass):
               "hybrid_back2_color", "hybrid_tilemax", "hybrid_neighbormax", "ray_mask_tiles")
     produces = ("hybrid",)
 
-    def program(self, frame: Frame):
+    def program(self, frame: Frame, vertex: str = "fullscreen.vert"):
         self.fragment = FRAGMENTS[frame.params["hybrid"].composite]
-        return super().program(frame)
+        return super().program(frame, vertex)
 
     def defines(self, frame: Frame):
         p = frame.params["hybrid"]
@@ -68,6 +69,11 @@ class Composite(FullscreenPass):
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
         k = max_radius_px(frame)
+        tiles = tile_list(frame, "active")
+        if tiles is not None:
+            # Outside the active tiles nothing reaches a pixel: its sharp colour stands.
+            frame.ctx.copy_framebuffer(frame.pool.framebuffer(("hybrid",)),
+                                       frame.pool.framebuffer(("color",)))
         self.draw(frame, self.produces,
                   {"u_front_color": "color", "u_front": "hybrid_front",
                    "u_back_color": "hybrid_back_color", "u_back": "hybrid_back",
@@ -78,7 +84,8 @@ class Composite(FullscreenPass):
                    "u_samples_min": int(p.samples_min),
                    "u_samples_max": int(max(p.samples_max, p.samples_min)),
                    "u_spacing": float(p.sample_spacing), "u_jitter": float(p.jitter),
-                   "u_tolerance": float(p.tolerance), "u_iterations": int(p.iterations)})
+                   "u_tolerance": float(p.tolerance), "u_iterations": int(p.iterations)},
+                  tiles=tiles, clear=False)
 
 
 def composite_passes() -> list:

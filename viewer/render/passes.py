@@ -33,15 +33,20 @@ class FullscreenPass(Pass):
     def defines(self, frame: Frame) -> dict:
         return {}
 
-    def program(self, frame: Frame) -> moderngl.Program:
-        return frame.programs.get("fullscreen.vert", self.fragment,
+    def program(self, frame: Frame, vertex: str = "fullscreen.vert") -> moderngl.Program:
+        return frame.programs.get(vertex, self.fragment,
                                   {**glsl_defines(), **self.defines(frame)})
 
     def draw(self, frame: Frame, outputs: tuple[str, ...], textures: dict[str, str],
-             uniforms: dict | None = None, blend: bool = False):
-        """Bind pool textures to sampler uniforms, set uniforms, draw into `outputs`."""
+             uniforms: dict | None = None, blend: bool = False, tiles=None,
+             clear: bool = True):
+        """Bind pool textures to sampler uniforms, set uniforms, draw into `outputs`.
+
+        tiles: a TileList (viewer/render/tile_lists.py) to draw only its tiles; the targets
+        are cleared to 0 first unless `clear` is False (the caller filled them). None: the
+        full-screen triangle."""
         ctx = frame.ctx
-        prog = self.program(frame)
+        prog = self.program(frame, "fullscreen.vert" if tiles is None else "tiles.vert")
         for unit, (uniform, tex_name) in enumerate(textures.items()):
             frame.pool.get(tex_name).use(unit)
             set_uniform(prog, uniform, unit)
@@ -53,11 +58,15 @@ class FullscreenPass(Pass):
         fbo.use()
         fbo.viewport = (0, 0) + fbo.size
         ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
+        if tiles is not None and clear:
+            fbo.clear(0.0, 0.0, 0.0, 0.0)
         if blend:
             ctx.enable(moderngl.BLEND)
             ctx.blend_func = moderngl.ONE, moderngl.ONE
-        vao = frame.programs.empty_vao(prog)
-        vao.render(moderngl.TRIANGLES, vertices=3)
+        if tiles is None:
+            frame.programs.empty_vao(prog).render(moderngl.TRIANGLES, vertices=3)
+        else:
+            tiles.render(prog)
         if blend:
             ctx.disable(moderngl.BLEND)
 

@@ -20,6 +20,7 @@ from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass
 from .pool import TexSpec
+from .tile_lists import tile_list
 
 MASK = TexSpec(1, "u1")
 RAY_MASK = TexSpec(1, "u4")         # own object id where masked
@@ -40,7 +41,8 @@ class DisplacementTest(FullscreenPass):
         self.draw(frame, self.produces,
                   {"u_depth": "depth", "u_id": "id", "u_velocity": "velocity"},
                   {"u_min_speed": float(p.min_speed),
-                   "u_depth_threshold": float(p.depth_threshold)})
+                   "u_depth_threshold": float(p.depth_threshold)},
+                  tiles=tile_list(frame, "moving"))
 
 
 class EdgeTest(FullscreenPass):
@@ -57,7 +59,8 @@ class EdgeTest(FullscreenPass):
         self.draw(frame, self.produces,
                   {"u_displacement_mask": "mask_displacement", "u_depth": "depth",
                    "u_normal": "normal"},
-                  {"u_edge_depth": float(p.edge_depth), "u_edge_normal": float(p.edge_normal)})
+                  {"u_edge_depth": float(p.edge_depth), "u_edge_normal": float(p.edge_normal)},
+                  tiles=tile_list(frame, "moving"))
 
 
 class MaskTiles(FullscreenPass):
@@ -100,7 +103,8 @@ class RangeCheck(FullscreenPass):
                    "u_edge_tiles": "mask_edge_tiles"},
                   {"u_min_speed": float(p.min_speed), "u_tile": max_radius_px(frame),
                    "u_relative_reach": float(p.relative_reach),
-                   "u_max_reach": float(max_radius_px(frame))})
+                   "u_max_reach": float(max_radius_px(frame))},
+                  tiles=tile_list(frame, "moving"))
 
 
 def raymask_passes() -> list:

@@ -1,0 +1,77 @@
+"""Tile lists (viewer/render/tile_lists.py): the hybrid passes drawn only on listed tiles
+give the same pixels as drawn full screen; the tile selection itself against hand values."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from conftest import CONFORMANCE
+from viewer.params import ParamSet
+from viewer.render import tile_lists
+from viewer.render.renderer import Renderer
+from viewer.scene_loader import load_scene
+
+SIZE = (200, 112)
+
+
+def render_buffers(ctx, scene, p, full_screen: bool, monkeypatch):
+    if full_screen:
+        monkeypatch.setattr(tile_lists.SelectTiles, "execute", lambda self, frame: None)
+    r = Renderer(ctx, scene, SIZE)
+    try:
+        res = r.render("hybrid", scene.render.time, p)
+        bufs = {n: r.pool.get(n).read() for n in ("mask_displacement", "mask_edge", "ray_mask",
+                                                  "hybrid")}
+        return res, bufs
+    finally:
+        r.release()
+        monkeypatch.undo()
+
+
+@pytest.mark.parametrize("name", ["living_room", "spinner", "thin", "pan",
+                                  str(CONFORMANCE / "basic.toml")])
+def test_tiled_passes_equal_full_screen(ctx, monkeypatch, name):
+    scene = load_scene(name)
+    p = ParamSet()
+    tiled, a = render_buffers(ctx, scene, p, False, monkeypatch)
+    full, b = render_buffers(ctx, scene, p, True, monkeypatch)
+    assert "active_tiles" in tiled.stats and "active_tiles" not in full.stats
+    for n in ("mask_displacement", "mask_edge", "ray_mask"):
+        assert a[n] == b[n], n
+    # The composite skips only pixels whose every time sample is their own colour; the
+    # full-screen pass averages n equal values there, which may differ in the last bit.
+    ha = np.frombuffer(a["hybrid"], np.float32)
+    hb = np.frombuffer(b["hybrid"], np.float32)
+    np.testing.assert_allclose(ha, hb, rtol=1e-6, atol=1e-7)
+    assert tiled.stats["masked_pixels"] == full.stats["masked_pixels"]
+
+
+def test_moving_tiles_use_the_mask_speed_test():
+    longest = np.array([[0.0, 0.99, 1.0, 5.0]], np.float32)
+    np.testing.assert_array_equal(tile_lists.moving_tiles(longest, 1.0),
+                                  [[False, False, True, True]])
+
+
+def test_active_tiles_reach_half_the_displacement_plus_tolerance():
+    tile = 16
+    longest = np.zeros((1, 12), np.float32)
+    longest[0, 5] = 40.0         # reach 20 + 0.65 + 1 = 21.65 px: gaps 0 and 16 px
+    got = tile_lists.active_tiles(longest, tile, max_disp=200.0, tolerance=0.65)
+    np.testing.assert_array_equal(np.flatnonzero(got[0]), [3, 4, 5, 6, 7])
+    # The displacement is clamped to the blur limit before it reaches anything.
+    got = tile_lists.active_tiles(longest, tile, max_disp=20.0, tolerance=0.65)
+    np.testing.assert_array_equal(np.flatnonzero(got[0]), [4, 5, 6])
+    # Nothing moves: nothing is active.
+    assert not tile_lists.active_tiles(np.zeros((3, 3), np.float32), tile, 50.0, 0.65).any()
+
+
+def test_tile_quads_cover_exactly_the_listed_tiles(ctx):
+    tl = tile_lists.TileList(ctx)
+    try:
+        tl.set(np.array([[0, 0], [2, 1]]), 16, (40, 20))
+        quads = np.frombuffer(tl.buffer.read(), np.float32)[:24].reshape(2, 6, 2)
+        assert quads[0].min(axis=0).tolist() == [0, 0] and quads[0].max(axis=0).tolist() == [16, 16]
+        # The last tile is cut at the screen's edge.
+        assert quads[1].min(axis=0).tolist() == [32, 16] and quads[1].max(axis=0).tolist() == [40, 20]
+    finally:
+        tl.release()

@@ -1,0 +1,182 @@
+"""Tile lists: run a fragment pass only on the tiles where it has work.
+
+On a software rasteriser (llvmpipe) every fragment costs, even one that returns at once,
+and most of a frame does not move. After the G-buffer, `motion_tiles` reduces the
+displacement to its longest |D| per FINE x FINE tile; the host reads that small texture
+back and lists two sets of tiles (GL orientation: tile (0, 0) at the bottom left):
+
+  moving: a pixel there moves at least hybrid.min_speed: the ray mask's per-pixel passes
+      run only there (everywhere else their answer is "not masked");
+  active: a surface's motion can reach the tile (within half its longest displacement,
+      clamped to the blur limit, plus the composite's landing tolerance and a pixel): the
+      composite runs only there; everywhere else it would return the sharp colour.
+
+A pass given a TileList draws the list's quads (glsl/tiles.vert) with its own fragment
+shader instead of the full-screen triangle; its targets are cleared first (or, for the
+composite, start as a copy of the sharp colour). Without lists (synthetic tests, single
+passes) every pass draws full screen: both ways give the same pixels, which
+tests/test_tile_lists.py checks on real scenes.
+"""
+from __future__ import annotations
+
+import math
+
+import moderngl
+import numpy as np
+
+from .blur_common import max_radius_px
+from .frame import Frame
+from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
+from .passes import FullscreenPass, Pass
+from .pool import TexSpec
+
+FINE = 16                      # px per side of a list tile
+STATE_KEY = "tile_lists"
+# Extra reach (px) on top of half the displacement and the landing tolerance: the
+# composite's walks floor positions to pixels, so a landing can sit a pixel further out.
+MARGIN = 1.0
+
+
+class TileList:
+    """The quads of a set of tiles in one vertex buffer (grown, never shrunk), and one
+    vertex array per program that draws them."""
+
+    def __init__(self, ctx: moderngl.Context):
+        self.ctx = ctx
+        self.buffer: moderngl.Buffer | None = None
+        self.vaos: dict[int, moderngl.VertexArray] = {}
+        self.count = 0                 # tiles in the current list
+        self.tiles = np.zeros((0, 2), np.int64)
+
+    def set(self, tiles: np.ndarray, tile: int, size: tuple[int, int]):
+        """tiles: (n, 2) tile coordinates (tx, ty), GL orientation."""
+        self.tiles = np.asarray(tiles, np.int64).reshape(-1, 2)
+        self.count = len(self.tiles)
+        w, h = size
+        x0 = self.tiles[:, 0] * tile
+        y0 = self.tiles[:, 1] * tile
+        x1 = np.minimum(x0 + tile, w)
+        y1 = np.minimum(y0 + tile, h)
+        # Two triangles per tile: (x0,y0) (x1,y0) (x0,y1) and (x1,y0) (x1,y1) (x0,y1).
+        xs = np.stack([x0, x1, x0, x1, x1, x0], axis=1)
+        ys = np.stack([y0, y0, y1, y0, y1, y1], axis=1)
+        data = np.stack([xs, ys], axis=2).astype(np.float32).reshape(-1)
+        nbytes = max(data.nbytes, 4)
+        if self.buffer is None or self.buffer.size < nbytes:
+            self._release_buffer()
+            self.buffer = self.ctx.buffer(reserve=max(nbytes, 1 << 14))
+        if data.nbytes:
+            self.buffer.write(data.tobytes())
+
+    def render(self, prog: moderngl.Program):
+        if not self.count:
+            return
+        vao = self.vaos.get(prog.glo)
+        if vao is None:
+            vao = self.vaos[prog.glo] = self.ctx.vertex_array(
+                prog, [(self.buffer, "2f", "in_corner")])
+        vao.render(moderngl.TRIANGLES, vertices=6 * self.count)
+
+    def _release_buffer(self):
+        for v in self.vaos.values():
+            v.release()
+        self.vaos.clear()
+        if self.buffer is not None:
+            self.buffer.release()
+            self.buffer = None
+
+    def release(self):
+        self._release_buffer()
+
+
+class TileLists:
+    """Per-renderer host state: the two lists, reused frame after frame."""
+
+    def __init__(self, ctx: moderngl.Context):
+        self.ctx = ctx
+        self.moving = TileList(ctx)
+        self.active = TileList(ctx)
+
+    def release(self):
+        self.moving.release()
+        self.active.release()
+
+
+def moving_tiles(longest: np.ndarray, min_speed: float) -> np.ndarray:
+    """Tiles holding a pixel with |D| >= min_speed (the ray mask's own test)."""
+    # A hair below min_speed so float rounding can only add a tile, never drop one.
+    return longest >= np.float32(min_speed) * np.float32(1.0 - 1e-6)
+
+
+def active_tiles(longest: np.ndarray, tile: int, max_disp: float, tolerance: float) -> np.ndarray:
+    """Tiles that any moving surface can reach: tile T is active when some tile T' with
+    longest displacement m' > 0 lies within min(m', max_disp) / 2 + tolerance + MARGIN px
+    (Chebyshev gap between the tiles, a bound on the distance between their pixels)."""
+    m = np.minimum(longest.astype(np.float64), max_disp)
+    reach = np.where(m > 0.0, 0.5 * m + tolerance + MARGIN, -1.0)
+    radius = int(math.ceil((0.5 * max_disp + tolerance + MARGIN) / tile)) + 1
+    h, w = m.shape
+    out = reach >= 0.0
+    for dy in range(-radius, radius + 1):
+        for dx in range(-radius, radius + 1):
+            gap = max(0, max(abs(dx), abs(dy)) - 1) * tile
+            if (dx == 0 and dy == 0) or gap > 0.5 * max_disp + tolerance + MARGIN:
+                continue
+            # out[y, x] |= reach[y + dy, x + dx] >= gap, where that tile exists.
+            src = reach[max(0, dy):h + min(0, dy), max(0, dx):w + min(0, dx)] >= gap
+            out[max(0, -dy):h + min(0, -dy), max(0, -dx):w + min(0, -dx)] |= src
+    return out
+
+
+def tile_coords(selected: np.ndarray) -> np.ndarray:
+    """(n, 2) (tx, ty) of the True entries of a GL-orientation (rows = ty) tile map."""
+    ty, tx = np.nonzero(selected)
+    return np.stack([tx, ty], axis=1)
+
+
+class MotionTiles(FullscreenPass):
+    name = "motion_tiles"
+    fragment = "motion_tiles.frag"
+    inputs = ("velocity",)
+    produces = ("motion_tiles",)
+
+    def outputs(self, frame: Frame):
+        return {"motion_tiles": TexSpec(1, "f4", tile=FINE)}
+
+    def execute(self, frame: Frame):
+        self.draw(frame, self.produces, {"u_velocity": "velocity"}, {"u_tile": FINE})
+
+
+class SelectTiles(Pass):
+    """Host side: read `motion_tiles` back (a few thousand floats) and fill the lists."""
+    name = "select_tiles"
+    inputs = ("motion_tiles",)
+    produces = ("tile_lists",)          # host-side: frame.host["tile_lists"]
+
+    def execute(self, frame: Frame):
+        state = frame.host.setdefault("state", {})
+        lists = state.get(STATE_KEY)
+        if lists is None or lists.ctx is not frame.ctx:
+            lists = state[STATE_KEY] = TileLists(frame.ctx)
+        tex = frame.pool.get("motion_tiles")
+        tw, th = tex.size
+        longest = np.frombuffer(tex.read(), np.float32).reshape(th, tw)   # GL rows
+        p = frame.params["hybrid"]
+        moving = moving_tiles(longest, p.min_speed)
+        active = active_tiles(longest, FINE, 2.0 * max_radius_px(frame), p.tolerance)
+        lists.moving.set(tile_coords(moving), FINE, frame.size)
+        lists.active.set(tile_coords(active), FINE, frame.size)
+        frame.host["tile_lists"] = lists
+        frame.stats["tiles"] = int(tw * th)
+        frame.stats["moving_tiles"] = lists.moving.count
+        frame.stats["active_tiles"] = lists.active.count
+
+
+def tile_list(frame: Frame, which: str) -> TileList | None:
+    """The frame's `which` ("moving" or "active") list, or None to draw full screen."""
+    lists = frame.host.get("tile_lists")
+    return getattr(lists, which) if lists is not None else None
+
+
+def selection_passes() -> list:
+    return [MotionTiles(), SelectTiles()]
