@@ -19,10 +19,7 @@
 // revealed background, the farther fragments' plain mean fills instead (the mirrored
 // background of post-process filters).
 #include "noise.glsl"
-uniform sampler2D u_front_color;
-uniform sampler2D u_front;          // (D.xy, depth, id), see hybrid_layers.frag
-uniform sampler2D u_back_color;
-uniform sampler2D u_back;           // (D.xy, depth, 1 + id where revealed, else 0)
+#include "hybrid_layers.glsl"
 uniform sampler2D u_neighbormax;
 uniform int u_tile;
 uniform float u_max_disp;
@@ -87,7 +84,7 @@ void main() {
     g_size = textureSize(u_front, 0);
     vec3 own_colour = texelFetch(u_front_color, x, 0).rgb;
     vec4 fx = texelFetch(u_front, x, 0);
-    vec4 bx = texelFetch(u_back, x, 0);
+    vec4 bx = back_motion(x);
     vec2 vn = clamp_length(texelFetch(u_neighbormax, x / u_tile, 0).xy);
     if (max(length(vn), max(length(fx.xy), length(bx.xy))) <= 1.0) {
         out_color = vec4(own_colour, 1.0);
@@ -148,15 +145,15 @@ void main() {
     // where nothing was revealed, so the line may run out of the mask).
     vec3 fill = g_far_count > 0.0 ? g_far_sum / g_far_count : own_colour;
     if (revealed) {
-        fill = texelFetch(u_back_color, x, 0).rgb;
+        fill = back_colour(x);
         float rb = 0.5 * length(bx.xy);
         if (rb > 0.5) {
             vec2 dir = bx.xy / length(bx.xy);
             int n = taps_for(rb);
             for (int i = 0; i < n; ++i) {
                 ivec2 y = tap(x, dir, rb, i, n, a, b);
-                vec4 m = texelFetch(u_back, y, 0);
-                if (m.z >= back_depth * 0.999) add(BACK, texelFetch(u_back_color, y, 0).rgb, coverage(a, b, length(m.xy)));
+                vec4 m = back_motion(y);
+                if (m.z >= back_depth * 0.999) add(BACK, back_colour(y), coverage(a, b, length(m.xy)));
             }
         } else {
             add(BACK, fill, 1.0);

@@ -14,14 +14,7 @@
 // covers (data missing: unmasked inner blur, off-screen), the closest miss stands in,
 // preferring surfaces behind the pixel's own. The average over the times is the pixel.
 #include "noise.glsl"
-uniform sampler2D u_front_color;
-uniform sampler2D u_front;          // (D.xy, depth, id), see hybrid_layers.frag
-uniform sampler2D u_back_color;
-uniform sampler2D u_back;           // (D.xy, depth, 1 + id where revealed, else 0)
-#if LAYERS >= 2
-uniform sampler2D u_back2_color;
-uniform sampler2D u_back2;
-#endif
+#include "hybrid_layers.glsl"
 uniform sampler2D u_neighbormax;    // largest displacement over the 3x3 tiles
 uniform sampler2D u_tilemax;        // largest displacement per tile
 uniform sampler2D u_mask_tiles;     // raymask_tiles.frag MODE 1: y = 1 if a tile has rays
@@ -40,19 +33,19 @@ vec2 g_centre;
 float g_own_depth;
 
 vec4 motion(int layer, ivec2 p) {
-    if (layer == 0) return texelFetch(u_front, p, 0);
+    if (layer == 0) return front_motion(p);
 #if LAYERS >= 2
-    if (layer == 2) return texelFetch(u_back2, p, 0);
+    if (layer == 2) return back2_motion(p);
 #endif
-    return texelFetch(u_back, p, 0);
+    return back_motion(p);
 }
 
 vec3 colour(int layer, ivec2 p) {
-    if (layer == 0) return texelFetch(u_front_color, p, 0).rgb;
+    if (layer == 0) return front_colour(p);
 #if LAYERS >= 2
-    if (layer == 2) return texelFetch(u_back2_color, p, 0).rgb;
+    if (layer == 2) return back2_colour(p);
 #endif
-    return texelFetch(u_back_color, p, 0).rgb;
+    return back_colour(p);
 }
 
 // The frame-time pixel q of `layer` whose surface lies on this pixel at time u; returns
@@ -125,14 +118,14 @@ void main() {
     ivec2 x = ivec2(gl_FragCoord.xy);
     g_size = textureSize(u_front, 0);
     g_centre = vec2(x) + 0.5;
-    vec3 own = texelFetch(u_front_color, x, 0).rgb;
-    vec4 fx = texelFetch(u_front, x, 0);
-    vec4 bx = texelFetch(u_back, x, 0);
+    vec3 own = front_colour(x);
+    vec4 fx = front_motion(x);
+    vec4 bx = back_motion(x);
     ivec2 tile = x / u_tile;
     vec2 vn = clamp_length(texelFetch(u_neighbormax, tile, 0).xy);
     float reach = max(length(vn), max(length(fx.xy), length(bx.xy)));
 #if LAYERS >= 2
-    vec4 b2x = texelFetch(u_back2, x, 0);
+    vec4 b2x = back2_motion(x);
     reach = max(reach, length(b2x.xy));
 #endif
     // Nothing within reach moves half a pixel either way: the sharp pixel is the answer.

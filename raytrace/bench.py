@@ -12,14 +12,18 @@ from .embree_scene import RayScene, _embree_run, apply3
 
 
 def bare_embree_rays_per_s(batch: dict | None, repeats: int = 5) -> float:
-    """`batch`: {"rayscene": RayScene, "origins": (n,3), "dirs": (n,3), "t": float} as the
-    hybrid mode records it. Median over `repeats` of n / (time of all the run calls)."""
-    if not batch or len(batch["origins"]) == 0:
+    """`batch`: {"rayscene": RayScene, "camera": Camera, "pixels": (n, 2) image (i, j),
+    "t": float} as the hybrid mode records it (frame.host["reveal_batch"]): the primary
+    rays through those pixel centres, each into the static scene and every moving one.
+    Median over `repeats` of n / (time of all the run calls)."""
+    if not batch or len(batch["pixels"]) == 0:
         return 0.0
     rs: RayScene = batch["rayscene"]
-    o = np.ascontiguousarray(batch["origins"], dtype=np.float32)
-    d = np.ascontiguousarray(batch["dirs"], dtype=np.float32)
     t = float(batch["t"])
+    px = np.asarray(batch["pixels"])
+    origins, dirs = batch["camera"].rays(t, px[:, 0], px[:, 1])
+    o = np.ascontiguousarray(origins, dtype=np.float32)
+    d = np.ascontiguousarray(dirs, dtype=np.float32)
     jobs = []
     if rs._static is not None:
         jobs.append((rs._static, o, d))

@@ -161,9 +161,9 @@ def clamp_length(d: np.ndarray, limit: float) -> np.ndarray:
 
 def pack_layers(color, depth, disp, rev_color, rev_depth, rev_disp, max_disp, ids=None,
                 rev_ids=None):
-    """hybrid_layers for one revealed layer: front and back as (motion (H,W,4), colour);
-    the front motion's 4th channel is the object id, the back's 1 + the revealed id where
-    revealed, else 0."""
+    """One revealed layer as glsl/hybrid_layers.glsl reads it: front and back as (motion
+    (H,W,4), colour); the front motion's 4th channel is the object id, the back's 1 + the
+    revealed id where revealed, else 0 (and there the back reads the front's values)."""
     ids = np.zeros(depth.shape) if ids is None else ids
     front = np.concatenate([clamp_length(disp, max_disp), depth[..., None],
                             np.asarray(ids, np.float64)[..., None]], axis=-1)
@@ -175,6 +175,16 @@ def pack_layers(color, depth, disp, rev_color, rev_depth, rev_disp, max_disp, id
     back[..., 3] = np.where(revealed, 1.0 + rev_ids, 0.0)
     back_color = np.where(revealed[..., None], rev_color[..., :3], color[..., :3])
     return front, color[..., :3], back, back_color
+
+
+def stored_back(back, back_color):
+    """The back layer as reveal_shade stores it: the packed texel and (colour, 1) where
+    revealed, zeros elsewhere (the shader falls back to the front there)."""
+    revealed = back[..., 3] > 0.5
+    motion = np.where(revealed[..., None], back, 0.0)
+    colour = np.where(revealed[..., None], np.concatenate(
+        [back_color, np.ones(back_color.shape[:2] + (1,))], axis=-1), 0.0)
+    return motion, colour
 
 
 def walk(motion, centre, u, seed, iterations, tolerance):

@@ -23,7 +23,7 @@ from viewer.render.hybrid_composite import composite_passes
 from viewer.render.modes import MODES
 from viewer.render.raymask import RAY_MASK, RELATIVE, MaskTiles
 from viewer.render.renderer import Renderer
-from viewer.render.reveal_pass import LAYER_SPECS, layer_names
+from viewer.render.reveal_pass import LAYER_SPECS, PACKED, layer_names, packed_names
 from viewer.scene_loader import load_scene
 
 SMALL = (160, 90)
@@ -169,7 +169,8 @@ W, H = 40, 4
 
 
 def upload(frame, name, a):
-    spec = GBUFFER.get(name) or LAYER_SPECS[name.split("_", 1)[1]]
+    spec = GBUFFER.get(name) or (PACKED if name.startswith("hybrid_back")
+                                 else LAYER_SPECS[name.split("_", 1)[1]])
     frame.pool.texture(name, spec)
     frame.write(name, to_image(np.asarray(a, np.uint32 if spec.dtype == "u4" else np.float32)))
 
@@ -200,14 +201,18 @@ def bar_layers(rng, bar=(12, 24), d=(9.3, 0.0), reveal_cols=range(12, 24)):
 
 
 def run_composite(frame, b):
+    """The composite on the layers as the G-buffer and reveal_shade store them."""
     ones = np.ones((H, W, 1))
     upload(frame, "color", np.concatenate([b["colour"], ones], -1))
-    upload(frame, "depth", b["depth"])
-    upload(frame, "id", b["ids"])
     upload(frame, "velocity", b["disp"])
-    empty = (np.zeros((H, W, 4)), np.full((H, W), 1e9), np.zeros((H, W)), np.zeros((H, W, 2)))
-    for k, layer in enumerate([(b["rev_c"], b["rev_d"], b["rev_ids"], b["rev_v"]), empty]):
-        for name, a in zip(layer_names(k), layer):
+    front, _, back, back_color = nh.pack_layers(
+        b["colour"], b["depth"], b["disp"], b["rev_c"], b["rev_d"], b["rev_v"],
+        2.0 * max_radius_px(frame), b["ids"], b["rev_ids"])
+    upload(frame, "hybrid_front", front)
+    stored = nh.stored_back(back, back_color)
+    empty = (np.zeros((H, W, 4)),) * 2
+    for k, layer in enumerate([stored, empty]):
+        for name, a in zip(packed_names(k), layer):
             upload(frame, name, a)
     # The mask the revealed pixels came from, summarised per tile for the composite.
     frame.pool.texture("ray_mask", RAY_MASK)
@@ -370,6 +375,27 @@ def test_deterministic(ctx):
     for name in ("ray_mask", "revealed_color", "revealed_velocity", "hybrid"):
         assert ba[name].tobytes() == bb[name].tobytes()
     assert a.stats["rays"] == b.stats["rays"] > 0
+
+
+def test_stored_layers_are_the_packed_g_buffer_and_revealed_layer(ctx):
+    # The G-buffer's hybrid_front and reveal_shade's hybrid_back are what the composite's
+    # numpy model packs from the plain buffers (tests/numpy_hybrid.py pack_layers).
+    scene = load_scene(CONFORMANCE / "basic.toml")
+    p = ParamSet()
+    p.set("blur.max_radius", 0.05)            # k = 8 px: some displacements get clamped
+    res, bufs = render(ctx, scene, "hybrid", 0.0, p)
+    k = 8
+    rev = bufs["revealed_color"]
+    front, _, back, back_color = nh.pack_layers(
+        bufs["color"], bufs["depth"], bufs["velocity"], rev, bufs["revealed_depth"],
+        bufs["revealed_velocity"], 2.0 * k, bufs["id"], bufs["revealed_id"])
+    assert np.linalg.norm(bufs["velocity"], axis=-1).max() > 2.0 * k
+    np.testing.assert_allclose(bufs["hybrid_front"], front, rtol=1e-6, atol=1e-5)
+    motion, colour = nh.stored_back(back, back_color)
+    assert res.stats["revealed_pixels"] > 0
+    np.testing.assert_allclose(bufs["hybrid_back"], motion, rtol=1e-6, atol=1e-5)
+    np.testing.assert_allclose(bufs["hybrid_back_color"], colour, rtol=1e-6, atol=1e-6)
+    assert not bufs["hybrid_back2"].any()      # one layer traced
 
 
 def test_static_scene_traces_nothing_and_equals_off(ctx):

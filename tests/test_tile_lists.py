@@ -75,3 +75,27 @@ def test_tile_quads_cover_exactly_the_listed_tiles(ctx):
         assert quads[1].min(axis=0).tolist() == [32, 16] and quads[1].max(axis=0).tolist() == [40, 20]
     finally:
         tl.release()
+
+
+def test_partial_clears_leave_nothing_of_the_last_frame(ctx):
+    # Frames at two times on one renderer: the second one's mask, revealed layers and image
+    # equal those of a fresh renderer, though only the boxes written last were cleared.
+    scene = load_scene(str(CONFORMANCE / "basic.toml"))
+    names = ("mask_displacement", "mask_edge", "ray_mask", "revealed_color", "revealed_depth",
+             "hybrid_back", "hybrid_back_color", "hybrid")
+    r = Renderer(ctx, scene, SIZE)
+    fresh = Renderer(ctx, scene, SIZE)
+    try:
+        first = r.render("hybrid", 0.0, ParamSet())
+        second = r.render("hybrid", 0.5, ParamSet())
+        want = fresh.render("hybrid", 0.5, ParamSet())
+        assert first.stats["masked_pixels"] > 0 and second.stats["masked_pixels"] > 0
+        for n in names:
+            assert r.pool.get(n).read() == fresh.pool.get(n).read(), n
+        assert second.image.tobytes() == want.image.tobytes()
+        # Clears are partial: after the frame, only the last points' box is marked.
+        x0, y0, x1, y1 = r.pool._written["revealed_color"]
+        assert 0 < (x1 - x0) * (y1 - y0) < SIZE[0] * SIZE[1]
+    finally:
+        r.release()
+        fresh.release()

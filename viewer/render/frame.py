@@ -56,6 +56,7 @@ class Frame:
             raise ValueError(f"{name}: array {a.shape} does not fit texture "
                              f"{(tex.size[1], tex.size[0], tex.components)}")
         tex.write(to_image(a).tobytes())
+        self.pool.mark_written((name,))
 
 
 _NP = {"f4": np.float32, "f2": np.float16, "u4": np.uint32, "u1": np.uint8, "i4": np.int32}

@@ -4,12 +4,14 @@ Post-process blur cannot know the background a moving object hides, which its bl
 partly uncovers (inner blur). The hybrid mode finds those pixels, ray-traces the true
 background behind them, shades it like the raster layer, and resolves both layers:
 
-  gbuffer -> mask_displacement -> mask_edge (+ tiles) -> ray_mask (+ tiles)
-                                                            (viewer/render/raymask.py)
-          -> reveal (CPU rays) -> reveal_shade (revealed_*, revealed2_*)
-                                                            (viewer/render/reveal_pass.py)
-          -> hybrid_layers -> hybrid tiles -> hybrid_composite (time-sampled or bucketed)
-                                                            (viewer/render/hybrid_composite.py)
+  gbuffer (+ hybrid_front) -> motion_tiles -> select_tiles (host: which tiles move, which
+          any motion reaches)                                (viewer/render/tile_lists.py)
+          -> mask_displacement -> mask_edge (+ tiles) -> ray_mask (+ tiles), on the moving
+          tiles                                              (viewer/render/raymask.py)
+          -> reveal (CPU rays) -> reveal_shade (revealed_*, hybrid_back*)
+                                                             (viewer/render/reveal_pass.py)
+          -> hybrid tiles -> hybrid_composite (time-sampled or bucketed), on the active tiles
+                                                             (viewer/render/hybrid_composite.py)
 
 Parameters: the `hybrid` group (viewer/render/hybrid_params.py) and the shared `blur` limit.
 Stats: masked_pixels, rays, revealed_pixels, reveal_ms (host work) and its parts.
@@ -33,4 +35,4 @@ def hybrid_passes() -> list:
 
 @mode("hybrid", groups=("blur", "hybrid"))
 def hybrid_pipeline() -> Pipeline:
-    return Pipeline("hybrid", [GBufferPass(), *hybrid_passes()], output="hybrid")
+    return Pipeline("hybrid", [GBufferPass(layout="hybrid"), *hybrid_passes()], output="hybrid")

@@ -1,12 +1,12 @@
 """The hybrid mode's composite: both layers blurred and combined in one resolve.
 
-  hybrid_layers: packs the raster layer and the revealed layers (merged with the raster
-      where no ray was cast) into motion textures (displacement, depth, revealed flag) and
-      colours, the displacement clamped to the shared blur limit;
+  (inputs) the layers packed for the inner loop as glsl/hybrid_layers.glsl describes:
+      the front by the G-buffer (layout "hybrid"), the revealed ones by reveal_shade;
   hybrid_tilemax_x / hybrid_tilemax / hybrid_neighbormax: the largest displacement around
       each tile (viewer/render/tiles.py, McGuire's passes on the raster displacement);
   hybrid_composite -> hybrid: the time-sampled composite (glsl/hybrid_time.frag), or the
-      bucketed gather (glsl/hybrid_bucket.frag) for comparison.
+      bucketed gather (glsl/hybrid_bucket.frag) for comparison; only on the active tiles
+      where the frame has tile lists (viewer/render/tile_lists.py), the sharp colour elsewhere.
 """
 from __future__ import annotations
 
@@ -15,35 +15,12 @@ from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass
 from .pool import TexSpec
-from .reveal_pass import layer_names
 from .tile_lists import tile_list
 from .tiles import tile_passes
 
-MOTION = TexSpec(4, "f4")         # (D.x, D.y, depth, w): front w = id, back w = 1 + id if revealed
-COLOUR = TexSpec(4, "f4")
 # Which noise stream of glsl/noise.glsl's hash01 jitters the time samples or taps.
 JITTER_STREAM = 2
 FRAGMENTS = {"time": "hybrid_time.frag", "bucket": "hybrid_bucket.frag"}
-
-
-class PackLayers(FullscreenPass):
-    name = "hybrid_layers"
-    fragment = "hybrid_layers.frag"
-    inputs = ("color", "depth", "id", "velocity", *layer_names(0), *layer_names(1))
-    produces = ("hybrid_front", "hybrid_back", "hybrid_back_color", "hybrid_back2",
-                "hybrid_back2_color")
-
-    def outputs(self, frame: Frame):
-        return {n: (COLOUR if n.endswith("color") else MOTION) for n in self.produces}
-
-    def execute(self, frame: Frame):
-        textures = {"u_color": "color", "u_depth": "depth", "u_id": "id",
-                    "u_velocity": "velocity"}
-        for k, tag in ((0, "rev"), (1, "rev2")):
-            for n in layer_names(k):
-                textures[f"u_{tag}_{n.rsplit('_', 1)[1]}"] = n
-        self.draw(frame, self.produces, textures,
-                  {"u_max_disp": 2.0 * max_radius_px(frame)})
 
 
 class Composite(FullscreenPass):
@@ -89,5 +66,5 @@ class Composite(FullscreenPass):
 
 
 def composite_passes() -> list:
-    """Layer packing, the displacement tiles and the composite, after the reveal."""
-    return [PackLayers(), *tile_passes("velocity", "hybrid"), Composite()]
+    """The displacement tiles and the composite, after the reveal."""
+    return [*tile_passes("velocity", "hybrid"), Composite()]

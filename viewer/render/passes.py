@@ -43,8 +43,8 @@ class FullscreenPass(Pass):
         """Bind pool textures to sampler uniforms, set uniforms, draw into `outputs`.
 
         tiles: a TileList (viewer/render/tile_lists.py) to draw only its tiles; the targets
-        are cleared to 0 first unless `clear` is False (the caller filled them). None: the
-        full-screen triangle."""
+        are cleared to 0 first (where written since their last clear) unless `clear` is
+        False (the caller filled them). None: the full-screen triangle."""
         ctx = frame.ctx
         prog = self.program(frame, "fullscreen.vert" if tiles is None else "tiles.vert")
         for unit, (uniform, tex_name) in enumerate(textures.items()):
@@ -59,7 +59,8 @@ class FullscreenPass(Pass):
         fbo.viewport = (0, 0) + fbo.size
         ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
         if tiles is not None and clear:
-            fbo.clear(0.0, 0.0, 0.0, 0.0)
+            frame.pool.clear(tuple(outputs))
+        frame.pool.mark_written(outputs, None if tiles is None else tiles.box)
         if blend:
             ctx.enable(moderngl.BLEND)
             ctx.blend_func = moderngl.ONE, moderngl.ONE

@@ -41,6 +41,9 @@ class ResourcePool:
         self._tex: dict[str, tuple[TexSpec, tuple[int, int], moderngl.Texture]] = {}
         self._fbo: dict[tuple, moderngl.Framebuffer] = {}
         self._depth: dict[tuple[int, int], moderngl.Texture] = {}
+        # name -> (x0, y0, x1, y1): the GL pixel box written since the texture's last clear
+        # (None: nothing). A texture without an entry may hold anything: clear it all.
+        self._written: dict[str, tuple[int, int, int, int] | None] = {}
 
     def resize(self, size: tuple[int, int]):
         self.size = (int(size[0]), int(size[1]))
@@ -52,6 +55,7 @@ class ResourcePool:
             return have[2]
         if have:
             self._drop(name)
+        self._written.pop(name, None)
         tex = self.ctx.texture(size, spec.components, dtype=spec.dtype)
         f = moderngl.LINEAR if spec.filter == "linear" else moderngl.NEAREST
         tex.filter = (f, f)
@@ -85,6 +89,29 @@ class ResourcePool:
             self._fbo[key] = fbo
         return fbo
 
+    def mark_written(self, names, box: tuple[int, int, int, int] | None = None):
+        """Record that `names` were written inside `box` (x0, y0, x1, y1, GL pixels); None
+        means anywhere."""
+        for n in names:
+            if box is None:
+                self._written.pop(n, None)
+            elif n in self._written:
+                self._written[n] = _union(self._written[n], box)
+
+    def clear(self, names: tuple[str, ...], value=(0.0, 0.0, 0.0, 0.0)):
+        """Clear textures `names` (one framebuffer) to `value`, only inside the box written
+        since their last clear: a memset of a few thousand pixels instead of megabytes
+        where a pass writes little (the revealed layers, the ray mask)."""
+        box = None
+        for n in names:
+            w, h = self._tex[n][1]
+            box = _union(box, self._written[n] if n in self._written else (0, 0, w, h))
+        if box is not None:
+            x0, y0, x1, y1 = box
+            self.framebuffer(tuple(names)).clear(*value, viewport=(x0, y0, x1 - x0, y1 - y0))
+        for n in names:
+            self._written[n] = None
+
     def _drop(self, name: str):
         park_framebuffer(self.ctx)
         for key in [k for k in self._fbo if name in k[0]]:
@@ -99,4 +126,12 @@ class ResourcePool:
             tex.release()
         for d in self._depth.values():
             d.release()
-        self._fbo.clear(), self._tex.clear(), self._depth.clear()
+        self._fbo.clear(), self._tex.clear(), self._depth.clear(), self._written.clear()
+
+
+def _union(a, b):
+    if a is None:
+        return b
+    if b is None:
+        return a
+    return (min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), max(a[3], b[3]))

@@ -19,14 +19,15 @@ import numpy as np
 
 from raytrace import RayScene
 
-from ..conventions import glsl_defines, to_image
+from ..conventions import BACKGROUND_DEPTH, glsl_defines, to_image
 from .blur_common import max_radius_px
 from .frame import Frame
 from .gpu_scene import MAX_LIGHTS, set_uniform
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
-from .passes import FullscreenPass, Pass
+from .passes import Pass
 from .pool import TexSpec
 
+PACKED = TexSpec(4, "f4")
 LAYER_SPECS = {"color": TexSpec(4, "f4"), "depth": TexSpec(1, "f4"),
                "id": TexSpec(1, "u4"), "velocity": TexSpec(2, "f4")}
 MAX_LAYERS = 2
@@ -54,6 +55,7 @@ class RevealState:
         self.buffers: dict[int, moderngl.Buffer] = {}
         self.vaos: dict[tuple[int, int], moderngl.VertexArray] = {}
         self.batches: list = []        # per layer: (ranges, count) of the current frame
+        self.boxes: list = []          # per layer: GL pixel box around its points, or None
 
     def upload(self, k: int, data: np.ndarray) -> moderngl.Buffer:
         nbytes = max(data.nbytes, 4)
@@ -130,6 +132,12 @@ def read_masked_pixels(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
     return masked_pixels(window, origin=(i0, h - y1))
 
 
+def gl_box(pixels_ij: np.ndarray, height: int) -> tuple[int, int, int, int]:
+    """(x0, y0, x1, y1) in GL pixels around image pixels (i, j) (row j from the top)."""
+    i, j = pixels_ij[:, 0], pixels_ij[:, 1]
+    return (int(i.min()), int(height - 1 - j.max()), int(i.max()) + 1, int(height - j.min()))
+
+
 def pack_layer(pixels: np.ndarray, layer) -> tuple[np.ndarray, list[tuple[int, int, int]]]:
     """Vertex data of one revealed layer, grouped by object id (0 = the ray left the
     scene), and the (object id, first, count) ranges to draw. Untraced rows are left out."""
@@ -158,7 +166,7 @@ class RevealTrace(Pass):
         st = reveal_state(frame)
         pixels, own = read_masked_pixels(frame)
         t1 = time.perf_counter()
-        st.batches = []
+        st.batches, st.boxes = [], []
         result = None
         if len(pixels) and p.trace:
             result = st.rays.reveal(frame.camera, frame.time, pixels, own, layers=p.layers,
@@ -171,6 +179,7 @@ class RevealTrace(Pass):
             data, ranges = pack_layer(pixels, result.layers[k])
             st.upload(k, data)
             st.batches.append((ranges, len(data)))
+            st.boxes.append(gl_box(data[:, :2], frame.size[1]) if len(data) else None)
         t3 = time.perf_counter()
         s = frame.stats
         s["masked_pixels"] = int(len(pixels))
@@ -182,26 +191,41 @@ class RevealTrace(Pass):
         s["reveal_trace_ms"] = (t2 - t1) * 1e3
         s["reveal_upload_ms"] = (t3 - t2) * 1e3
         s["reveal_ms"] = (t3 - t0) * 1e3
+        # What `hmblur bench` needs to time bare Embree on the same primary rays.
+        frame.host["reveal_batch"] = {"rayscene": st.rays, "camera": frame.camera,
+                                      "pixels": pixels, "t": frame.time}
 
 
-class ClearLayer(FullscreenPass):
-    fragment = "reveal_clear.frag"
+def packed_names(k: int) -> tuple[str, str]:
+    """The composite's packed motion and colour textures of revealed layer k
+    (glsl/hybrid_layers.glsl): hybrid_back, hybrid_back_color; hybrid_back2, ..."""
+    tag = "hybrid_back" if k == 0 else f"hybrid_back{k + 1}"
+    return tag, tag + "_color"
 
 
 class RevealShade(Pass):
     """GPU side: the revealed layers' colour, depth, id and displacement at the masked
-    pixels, everything else cleared to 'nothing revealed' (alpha 0). Every layer up to
+    pixels, everything else cleared to 'nothing revealed' (alpha 0, the background's
+    depth, id 0); and the same packed for the composite (packed_names). Every layer up to
     MAX_LAYERS is produced (the deeper ones stay cleared when fewer are traced), so the
     pipeline's textures do not depend on the `hybrid.layers` setting."""
     name = "reveal_shade"
     inputs = ("reveal_hits",)
-    produces = tuple(n for k in range(MAX_LAYERS) for n in layer_names(k))
-
-    def __init__(self):
-        self.clear = ClearLayer()
+    produces = tuple(n for k in range(MAX_LAYERS) for n in (*layer_names(k), *packed_names(k)))
 
     def outputs(self, frame: Frame):
-        return {n: LAYER_SPECS[n.split("_", 1)[1]] for n in self.produces}
+        out = {}
+        for k in range(MAX_LAYERS):
+            out.update({n: LAYER_SPECS[n.split("_", 1)[1]] for n in layer_names(k)})
+            out.update({n: PACKED for n in packed_names(k)})
+        return out
+
+    @staticmethod
+    def clear(frame: Frame, names: tuple[str, ...]):
+        """Clear where the last frame drew (ResourcePool.clear): everything to 0, the depth
+        (names[1]) to the background's."""
+        frame.pool.clear(names[:1] + names[2:])
+        frame.pool.clear(names[1:2], (BACKGROUND_DEPTH, 0.0, 0.0, 0.0))
 
     def execute(self, frame: Frame):
         ctx, cam, gpu = frame.ctx, frame.camera, frame.gpu
@@ -211,17 +235,19 @@ class RevealShade(Pass):
         prog = frame.programs.get("reveal_points.vert", "reveal_shade.frag",
                                   {**glsl_defines(), "MAX_LIGHTS": MAX_LIGHTS})
         for k in range(MAX_LAYERS):
-            names = layer_names(k)
-            self.clear.draw(frame, names, {})
+            names = (*layer_names(k), *packed_names(k))
+            self.clear(frame, names)
             ranges, count = st.batches[k] if k < len(st.batches) else ([], 0)
             if not count:
                 continue
+            frame.pool.mark_written(names, st.boxes[k])
             fbo = frame.pool.framebuffer(names)
             fbo.use()
             fbo.viewport = (0, 0) + fbo.size
             ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE | moderngl.BLEND)
             gpu.bind_camera(prog, cam, t, t_open, t_close, frame.size)
             set_uniform(prog, "u_background", frame.scene.background)
+            set_uniform(prog, "u_max_disp", 2.0 * max_radius_px(frame))
             gpu.bind_lights(prog)
             vao = st.vao(prog, k)
             objects = {o.id: o for o in frame.scene.objects}

@@ -47,6 +47,7 @@ class TileList:
         self.vaos: dict[int, moderngl.VertexArray] = {}
         self.count = 0                 # tiles in the current list
         self.tiles = np.zeros((0, 2), np.int64)
+        self.box = None                # (x0, y0, x1, y1) GL pixels around the tiles
 
     def set(self, tiles: np.ndarray, tile: int, size: tuple[int, int]):
         """tiles: (n, 2) tile coordinates (tx, ty), GL orientation."""
@@ -57,6 +58,8 @@ class TileList:
         y0 = self.tiles[:, 1] * tile
         x1 = np.minimum(x0 + tile, w)
         y1 = np.minimum(y0 + tile, h)
+        self.box = ((int(x0.min()), int(y0.min()), int(x1.max()), int(y1.max()))
+                    if self.count else None)
         # Two triangles per tile: (x0,y0) (x1,y0) (x0,y1) and (x1,y0) (x1,y1) (x0,y1).
         xs = np.stack([x0, x1, x0, x1, x1, x0], axis=1)
         ys = np.stack([y0, y0, y1, y0, y1, y1], axis=1)

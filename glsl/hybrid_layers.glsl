@@ -1,0 +1,37 @@
+// The layers the hybrid composites resolve (viewer/render/hybrid_composite.py).
+// front: the G-buffer's hybrid_front, (D.xy, depth, object id), D the displacement over the
+//     exposure clamped to the blur limit (|D| <= 2k);
+// back (and back2): written by reveal_shade where a ray was cast, (D.xy, depth, 1 + the
+//     revealed object's id), and cleared to 0 elsewhere: there a layer reads the one in
+//     front of it (back -> front, back2 -> back) with w = 0, "nothing revealed here", so
+//     a back-layer walk that leaves the mask reads the visible surface.
+uniform sampler2D u_front_color;
+uniform sampler2D u_front;
+uniform sampler2D u_back_color;
+uniform sampler2D u_back;
+#if LAYERS >= 2
+uniform sampler2D u_back2_color;
+uniform sampler2D u_back2;
+#endif
+
+vec4 front_motion(ivec2 p) { return texelFetch(u_front, p, 0); }
+vec3 front_colour(ivec2 p) { return texelFetch(u_front_color, p, 0).rgb; }
+
+vec4 back_motion(ivec2 p) {
+    vec4 b = texelFetch(u_back, p, 0);
+    return b.w > 0.5 ? b : vec4(front_motion(p).xyz, 0.0);
+}
+vec3 back_colour(ivec2 p) {
+    vec4 c = texelFetch(u_back_color, p, 0);
+    return c.a > 0.5 ? c.rgb : front_colour(p);
+}
+#if LAYERS >= 2
+vec4 back2_motion(ivec2 p) {
+    vec4 b = texelFetch(u_back2, p, 0);
+    return b.w > 0.5 ? b : back_motion(p);
+}
+vec3 back2_colour(ivec2 p) {
+    vec4 c = texelFetch(u_back2_color, p, 0);
+    return c.a > 0.5 ? c.rgb : back_colour(p);
+}
+#endif
