@@ -19,7 +19,7 @@ from viewer.metrics import image_metrics
 from viewer.params import ParamSet
 from viewer.render.blur_common import max_radius_px
 from viewer.render.gbuffer import GBUFFER
-from viewer.render.hybrid_composite import composite_passes
+from viewer.render.hybrid_composite import composite_kind, composite_passes
 from viewer.render.modes import MODES
 from viewer.render.raymask import RAY_MASK, RELATIVE, MaskTiles
 from viewer.render.renderer import Renderer
@@ -231,7 +231,7 @@ def numpy_composite(frame, b):
     front, fc, back, bc = nh.pack_layers(b["colour"], b["depth"], b["disp"], b["rev_c"],
                                          b["rev_d"], b["rev_v"], 2.0 * k, b["ids"], b["rev_ids"])
     tiles = nm.tilemax(b["disp"].astype(np.float32), k)
-    if p.composite == "bucket":
+    if composite_kind(frame) == "bucket":
         return nh.bucket_composite(front, fc, back, bc, nm.neighbormax(tiles), k, 2.0 * k,
                                    p.samples_min, p.samples_max, p.sample_spacing)
     return nh.time_composite(front, fc, back, bc, tiles, nm.neighbormax(tiles), k, 2.0 * k,
@@ -240,7 +240,7 @@ def numpy_composite(frame, b):
 
 
 def composite_params(**kw):
-    p = params(**{"jitter": 0.0, "samples_min": 8, "samples_max": 8, **kw})
+    p = params(**{"composite": "time", "jitter": 0.0, "samples_min": 8, "samples_max": 8, **kw})
     p.set("blur.max_radius", 0.25)          # k = 10 px
     return p
 
@@ -428,3 +428,17 @@ def test_inner_blur_beats_the_post_process_modes_on_basic(ctx):
     for other in set(flip) - {"hybrid"}:
         assert flip["hybrid"]["inner"]["flip"] < 0.6 * flip[other]["inner"]["flip"], other
         assert flip["hybrid"]["all"]["flip"] <= flip[other]["all"]["flip"], other
+
+
+def test_auto_composite_is_the_bucket_for_a_still_camera_and_time_for_a_moving_one(synthetic_frame):
+    from conftest import empty_scene
+    still = synthetic_frame((W, H), params())
+    assert still.params["hybrid"].composite == "auto"
+    assert composite_kind(still) == "bucket"
+    scene = empty_scene()
+    scene.camera.velocity = np.array([1.0, 0.0, 0.0])
+    assert composite_kind(synthetic_frame((W, H), params(), scene=scene)) == "time"
+    scene.camera.velocity = np.zeros(3)
+    scene.camera.angular_velocity = np.array([0.0, 0.5, 0.0])
+    assert composite_kind(synthetic_frame((W, H), params(), scene=scene)) == "time"
+    assert composite_kind(synthetic_frame((W, H), params(composite="time"))) == "time"

@@ -23,16 +23,25 @@ JITTER_STREAM = 2
 FRAGMENTS = {"time": "hybrid_time.frag", "bucket": "hybrid_bucket.frag"}
 
 
+def composite_kind(frame: Frame) -> str:
+    """"time" or "bucket": the `hybrid.composite` setting, "auto" resolved by whether the
+    camera moves (docs/performance.md has the measurements behind the choice)."""
+    kind = frame.params["hybrid"].composite
+    if kind == "auto":
+        return "time" if frame.scene.camera.moving else "bucket"
+    return kind
+
+
 class Composite(FullscreenPass):
-    """The composite the `hybrid.composite` setting picks: "time" (glsl/hybrid_time.frag)
-    or "bucket" (glsl/hybrid_bucket.frag)."""
+    """The composite composite_kind picks: "time" (glsl/hybrid_time.frag) or "bucket"
+    (glsl/hybrid_bucket.frag)."""
     name = "hybrid_composite"
     inputs = ("color", "hybrid_front", "hybrid_back", "hybrid_back_color", "hybrid_back2",
               "hybrid_back2_color", "hybrid_tilemax", "hybrid_neighbormax", "ray_mask_tiles")
     produces = ("hybrid",)
 
     def program(self, frame: Frame, vertex: str = "fullscreen.vert"):
-        self.fragment = FRAGMENTS[frame.params["hybrid"].composite]
+        self.fragment = FRAGMENTS[composite_kind(frame)]
         return super().program(frame, vertex)
 
     def defines(self, frame: Frame):
