@@ -99,3 +99,28 @@ def test_partial_clears_leave_nothing_of_the_last_frame(ctx):
     finally:
         r.release()
         fresh.release()
+
+
+def brute_force_active(longest, tile, max_disp, tolerance):
+    """active_tiles by its definition, tile pair by tile pair."""
+    h, w = longest.shape
+    out = np.zeros((h, w), bool)
+    for y in range(h):
+        for x in range(w):
+            for v in range(h):
+                for u in range(w):
+                    m = min(float(longest[v, u]), max_disp)
+                    gap = max(0, max(abs(x - u), abs(y - v)) - 1) * tile
+                    if m > 0 and gap <= 0.5 * m + tolerance + tile_lists.MARGIN:
+                        out[y, x] = True
+    return out
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_active_tiles_match_their_definition(seed):
+    rng = np.random.default_rng(seed)
+    longest = np.where(rng.uniform(size=(9, 13)) < 0.1, rng.uniform(0, 120, (9, 13)), 0.0)
+    longest = longest.astype(np.float32)
+    for max_disp in (20.0, 60.0, 200.0):
+        got = tile_lists.active_tiles(longest, 8, max_disp, 0.65)
+        np.testing.assert_array_equal(got, brute_force_active(longest, 8, max_disp, 0.65))

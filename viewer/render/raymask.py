@@ -20,7 +20,8 @@ from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass
 from .pool import TexSpec
-from .tile_lists import tile_list
+from .tile_lists import FINE, moving_threshold, tile_list
+from .tiles import StripSpec
 
 MASK = TexSpec(1, "u1")
 RAY_MASK = TexSpec(1, "u4")         # own object id where masked
@@ -65,24 +66,35 @@ class EdgeTest(FullscreenPass):
 
 class MaskTiles(FullscreenPass):
     """Per-tile summary of `source`: mode "edges" (largest reach, any edge) or "mask"
-    (anything masked); see glsl/raymask_tiles.frag."""
+    (anything masked), in two separable steps (glsl/raymask_tiles.frag): k x 1 into
+    SOURCE_tiles_x, then 1 x k into SOURCE_tiles."""
     fragment = "raymask_tiles.frag"
 
     def __init__(self, source: str, mode: str):
         self.source, self.mode = source, mode
         self.name = source + "_tiles"
         self.inputs = (source, "mask_relative")
-        self.produces = (self.name,)
+        self.produces = (self.name + "_x", self.name)
 
     def defines(self, frame: Frame):
-        return {"MODE": 0 if self.mode == "edges" else 1}
+        return {"MODE": 0 if self.mode == "edges" else 1, "STAGE": self._stage,
+                "MOTION_TILES": int(self._stage == 0 and tile_list(frame, "moving") is not None)}
 
     def outputs(self, frame: Frame):
-        return {self.name: TexSpec(2, "f4", tile=max_radius_px(frame))}
+        k = max_radius_px(frame)
+        return {self.name + "_x": StripSpec(2, "f4", tile=k), self.name: TexSpec(2, "f4", tile=k)}
 
     def execute(self, frame: Frame):
-        self.draw(frame, self.produces, {"u_mask": self.source, "u_relative": "mask_relative"},
-                  {"u_tile": max_radius_px(frame)})
+        k = max_radius_px(frame)
+        self._stage = 0
+        textures = {"u_mask": self.source, "u_relative": "mask_relative"}
+        uniforms = {"u_tile": k}
+        if tile_list(frame, "moving") is not None:
+            textures["u_motion_tiles"] = "motion_tiles"
+            uniforms.update(u_fine=FINE, u_min_speed=moving_threshold(frame))
+        self.draw(frame, (self.name + "_x",), textures, uniforms)
+        self._stage = 1
+        self.draw(frame, (self.name,), {"u_strip": self.name + "_x"}, {"u_tile": k})
 
 
 class RangeCheck(FullscreenPass):

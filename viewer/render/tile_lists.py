@@ -23,12 +23,14 @@ import math
 
 import moderngl
 import numpy as np
+from scipy.ndimage import maximum_filter
 
 from .blur_common import max_radius_px
 from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
+from .tiles import StripSpec
 
 FINE = 16                      # px per side of a list tile
 STATE_KEY = "tile_lists"
@@ -107,8 +109,17 @@ class TileLists:
 
 def moving_tiles(longest: np.ndarray, min_speed: float) -> np.ndarray:
     """Tiles holding a pixel with |D| >= min_speed (the ray mask's own test)."""
+    return longest >= _threshold(min_speed)
+
+
+def _threshold(min_speed: float) -> np.float32:
     # A hair below min_speed so float rounding can only add a tile, never drop one.
-    return longest >= np.float32(min_speed) * np.float32(1.0 - 1e-6)
+    return np.float32(min_speed) * np.float32(1.0 - 1e-6)
+
+
+def moving_threshold(frame: Frame) -> float:
+    """The longest |D| from which a tile counts as moving (for shaders that test tiles)."""
+    return float(_threshold(frame.params["hybrid"].min_speed))
 
 
 def active_tiles(longest: np.ndarray, tile: int, max_disp: float, tolerance: float) -> np.ndarray:
@@ -118,16 +129,14 @@ def active_tiles(longest: np.ndarray, tile: int, max_disp: float, tolerance: flo
     m = np.minimum(longest.astype(np.float64), max_disp)
     reach = np.where(m > 0.0, 0.5 * m + tolerance + MARGIN, -1.0)
     radius = int(math.ceil((0.5 * max_disp + tolerance + MARGIN) / tile)) + 1
-    h, w = m.shape
     out = reach >= 0.0
-    for dy in range(-radius, radius + 1):
-        for dx in range(-radius, radius + 1):
-            gap = max(0, max(abs(dx), abs(dy)) - 1) * tile
-            if (dx == 0 and dy == 0) or gap > 0.5 * max_disp + tolerance + MARGIN:
-                continue
-            # out[y, x] |= reach[y + dy, x + dx] >= gap, where that tile exists.
-            src = reach[max(0, dy):h + min(0, dy), max(0, dx):w + min(0, dx)] >= gap
-            out[max(0, -dy):h + min(0, -dy), max(0, -dx):w + min(0, -dx)] |= src
+    # Tiles L apart (Chebyshev) have a gap of (L - 1) tiles: dilate the sources that reach
+    # that gap by L, a separable square max filter, one ring level at a time.
+    for level in range(1, radius + 1):
+        sources = reach >= (level - 1) * tile
+        if not sources.any():
+            break
+        out |= maximum_filter(sources, size=2 * level + 1, mode="constant", cval=False)
     return out
 
 
@@ -141,13 +150,19 @@ class MotionTiles(FullscreenPass):
     name = "motion_tiles"
     fragment = "motion_tiles.frag"
     inputs = ("velocity",)
-    produces = ("motion_tiles",)
+    produces = ("motion_tiles_x", "motion_tiles")
+
+    def defines(self, frame: Frame):
+        return {"STAGE": self._stage}
 
     def outputs(self, frame: Frame):
-        return {"motion_tiles": TexSpec(1, "f4", tile=FINE)}
+        return {"motion_tiles_x": StripSpec(1, "f4", tile=FINE),
+                "motion_tiles": TexSpec(1, "f4", tile=FINE)}
 
     def execute(self, frame: Frame):
-        self.draw(frame, self.produces, {"u_velocity": "velocity"}, {"u_tile": FINE})
+        for self._stage, src, dst in ((0, "velocity", "motion_tiles_x"),
+                                      (1, "motion_tiles_x", "motion_tiles")):
+            self.draw(frame, (dst,), {"u_source": src}, {"u_tile": FINE})
 
 
 class SelectTiles(Pass):
