@@ -29,14 +29,67 @@ def barycentric_weights(u, v) -> np.ndarray:
     return np.stack([1.0 - u - v, u, v], axis=-1)
 
 
-def interpolate(values: np.ndarray, faces: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """Per-vertex `values` (n_vertices, k) at points with the given faces and weights."""
-    return np.einsum("nc,nck->nk", weights, values[faces])
-
-
 def _normalised(x: np.ndarray) -> np.ndarray:
-    length = np.linalg.norm(x, axis=1, keepdims=True)
+    length = np.sqrt(np.einsum("nk,nk->n", x, x))[:, None]
     return np.divide(x, length, out=np.zeros_like(x), where=length > 0)
+
+
+class SurfaceTable:
+    """Every object's mesh in one set of arrays (built once per scene), so the attributes
+    of all hits are a few gathers, not a loop over the objects hit."""
+
+    def __init__(self, objects: dict[int, SceneObject]):
+        objs = [objects[k] for k in sorted(objects)]
+        max_id = max(objects, default=0)
+        self.face_offset = np.zeros(max_id + 1, dtype=np.int64)
+        verts, vnorms, uvs, faces, fnorms, flat = [], [], [], [], [], []
+        nv = nf = 0
+        for o in objs:
+            m = o.mesh
+            self.face_offset[o.id] = nf
+            verts.append(m.vertices)
+            vnorms.append(m.vertex_normals)
+            uvs.append(m.uv if m.uv is not None else np.zeros((len(m.vertices), 2)))
+            faces.append(np.asarray(m.faces, dtype=np.int64) + nv)
+            fnorms.append(m.face_normals)
+            flat.append(np.full(len(m.faces), o.shading == "flat"))
+            nv += len(m.vertices)
+            nf += len(m.faces)
+
+        def cat(parts, shape):
+            return np.concatenate(parts) if parts else np.zeros(shape)
+        vertices = cat(verts, (0, 3)).astype(np.float64)
+        faces = cat(faces, (0, 3)).astype(np.int64)
+        # Per face, its three corners' values (F, 3, k): one np.take per attribute (much
+        # faster than fancy indexing) gathers everything a hit needs.
+        self.corner_position = vertices[faces]
+        self.corner_normal = cat(vnorms, (0, 3)).astype(np.float64)[faces]
+        self.corner_uv = cat(uvs, (0, 2)).astype(np.float64)[faces]
+        self.face_normals = cat(fnorms, (0, 3)).astype(np.float64)
+        self.flat = cat(flat, (0,)).astype(bool)
+
+    def lookup(self, object_id, prim_id, u, v) -> LocalSurface:
+        """Local position, shading normal and uv of hits (object_id 0 = miss: zeros)."""
+        object_id = np.asarray(object_id)
+        n = len(object_id)
+        position, normal, uv = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 2))
+        rows = np.flatnonzero(object_id != 0)
+        if not len(rows):
+            return LocalSurface(position, normal, uv)
+        g = np.take(self.face_offset, object_id[rows]) + np.take(prim_id, rows)
+        b = np.take(u, rows).astype(np.float64)[:, None]
+        c = np.take(v, rows).astype(np.float64)[:, None]
+        a = 1.0 - b - c
+
+        def interp(corners):
+            k = np.take(corners, g, axis=0)
+            return a * k[:, 0] + b * k[:, 1] + c * k[:, 2]
+        position[rows] = interp(self.corner_position)
+        normal[rows] = np.where(np.take(self.flat, g)[:, None],
+                                np.take(self.face_normals, g, axis=0),
+                                _normalised(interp(self.corner_normal)))
+        uv[rows] = interp(self.corner_uv)
+        return LocalSurface(position, normal, uv)
 
 
 def local_surface(objects: dict[int, SceneObject], object_id, prim_id, u, v) -> LocalSurface:
@@ -45,25 +98,6 @@ def local_surface(objects: dict[int, SceneObject], object_id, prim_id, u, v) -> 
     The normal follows the object's `shading`: "flat" gives trimesh's face normal, "smooth"
     the trimesh vertex normals interpolated with the barycentrics, then normalised
     (normalising first or not changes nothing after the shader's own normalisation).
+    One-off form of SurfaceTable(objects).lookup (a RayScene keeps its table).
     """
-    object_id = np.asarray(object_id)
-    n = len(object_id)
-    w = barycentric_weights(u, v)
-    position = np.zeros((n, 3))
-    normal = np.zeros((n, 3))
-    uv = np.zeros((n, 2))
-    for oid in np.unique(object_id):
-        if oid == 0:
-            continue
-        rows = np.flatnonzero(object_id == oid)
-        mesh = objects[int(oid)].mesh
-        prims = np.asarray(prim_id)[rows]
-        faces = mesh.faces[prims]
-        position[rows] = interpolate(mesh.vertices, faces, w[rows])
-        if objects[int(oid)].shading == "flat":
-            normal[rows] = mesh.face_normals[prims]
-        else:
-            normal[rows] = _normalised(interpolate(mesh.vertex_normals, faces, w[rows]))
-        if mesh.uv is not None:
-            uv[rows] = interpolate(mesh.uv, faces, w[rows])
-    return LocalSurface(position, normal, uv)
+    return SurfaceTable(objects).lookup(object_id, prim_id, u, v)

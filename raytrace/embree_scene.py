@@ -24,6 +24,8 @@ from embreex.mesh_construction import TriangleMesh
 
 from viewer.scene import Scene, SceneObject
 
+from .attributes import SurfaceTable
+
 
 @dataclass
 class Hits:
@@ -71,6 +73,7 @@ class RayScene:
         # is not found again, and far thinner than any wall of a real mesh.
         self.restart_eps = float(restart_eps)
         self.objects: dict[int, SceneObject] = {o.id: o for o in scene.objects}
+        self.surfaces = SurfaceTable(self.objects)     # hit attributes, raytrace/attributes.py
         self._device = rtc.EmbreeDevice()
 
         static = [o for o in scene.objects if not o.moving and len(o.mesh.faces)]

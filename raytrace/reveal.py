@@ -21,7 +21,6 @@ import numpy as np
 from viewer.camera import Camera
 from viewer.conventions import BACKGROUND_DEPTH
 
-from .attributes import local_surface
 from .embree_scene import RayScene
 
 MIN_CHUNK = 4096     # below this, a thread costs more than it saves
@@ -61,7 +60,7 @@ def _layer(rs: RayScene, hits, origin, direction, cos, traced) -> RevealLayer:
     """The layer of the traced rays (compact: one row per traced ray)."""
     hit = hits.hit
     dist = np.where(hit, hits.distance, 0.0)
-    surf = local_surface(rs.objects, hits.object_id, hits.prim_id, hits.u, hits.v)
+    surf = rs.surfaces.lookup(hits.object_id, hits.prim_id, hits.u, hits.v)
     return RevealLayer(
         traced=traced,
         object_id=hits.object_id,
