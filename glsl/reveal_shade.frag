@@ -2,6 +2,10 @@
 // The revealed layer, shaded exactly as the raster G-buffer shades (gbuffer.frag): the same
 // shade() with the same GpuScene uniforms, the object's M(t) for position and normal, and
 // its M at shutter open and close for the displacement, so the filter can blur it.
+// Drawn over the tiles holding traced pixels (viewer/render/reveal_pass.py), once per
+// revealed object: a pixel is this draw's when its hit record's key is u_key. The hit
+// (face row, Embree u, v) is turned into mesh-space position, normal and uv here, from the
+// face's three corners in u_faces, with the weights (1 - u - v, u, v).
 // u_miss draws the rays that left the scene: the background colour, as the G-buffer's
 // background pass writes it. Alpha 1 marks "revealed" (cleared targets hold alpha 0).
 // The last two targets hold the same packed for the composite (glsl/hybrid_layers.glsl):
@@ -9,10 +13,10 @@
 #include "shading.glsl"
 #include "motion.glsl"
 
-in vec3 v_local;
-in vec3 v_normal_local;
-in vec2 v_uv;
-
+uniform sampler2D u_hits;       // (face row, u, v, 1 + object id); 0 where no ray
+uniform sampler2D u_faces;      // 6 texels per face: corner c at 2c: (position, normal.x),
+                                // at 2c + 1: (normal.yz, uv)
+uniform float u_key;
 uniform mat4 u_model;
 uniform mat4 u_view;
 uniform mat3 u_normal_matrix;
@@ -36,7 +40,14 @@ void pack() {
     out_packed_color = out_color;
 }
 
+vec4 face_texel(int i) {
+    int w = textureSize(u_faces, 0).x;
+    return texelFetch(u_faces, ivec2(i % w, i / w), 0);
+}
+
 void main() {
+    vec4 hit = texelFetch(u_hits, ivec2(gl_FragCoord.xy), 0);
+    if (hit.w != u_key) discard;
     if (u_miss) {
         out_color = vec4(u_background, 1.0);
         out_depth = BACKGROUND_DEPTH;
@@ -45,13 +56,24 @@ void main() {
         pack();
         return;
     }
-    vec4 world = u_model * vec4(v_local, 1.0);
+    float weight[3] = float[3](1.0 - hit.y - hit.z, hit.y, hit.z);
+    int base = int(hit.x) * 6;
+    vec3 local = vec3(0.0), normal_local = vec3(0.0);
+    vec2 uv = vec2(0.0);
+    for (int c = 0; c < 3; ++c) {
+        vec4 a = face_texel(base + 2 * c);
+        vec4 b = face_texel(base + 2 * c + 1);
+        local += weight[c] * a.xyz;
+        normal_local += weight[c] * vec3(a.w, b.xy);
+        uv += weight[c] * b.zw;
+    }
+    vec4 world = u_model * vec4(local, 1.0);
     vec4 view_now = u_view * world;
-    vec3 n = normalize(u_normal_matrix * v_normal_local);
+    vec3 n = normalize(u_normal_matrix * normal_local);
     if (dot(n, u_eye - world.xyz) < 0.0) n = -n;
-    out_color = vec4(shade(world.xyz, n, v_local, v_uv, u_eye), 1.0);
+    out_color = vec4(shade(world.xyz, n, local, uv, u_eye), 1.0);
     out_depth = -view_now.z;
     out_id = u_object_id;
-    out_velocity = exposure_displacement(v_local, view_now);
+    out_velocity = exposure_displacement(local, view_now);
     pack();
 }

@@ -68,6 +68,20 @@ class SurfaceTable:
         self.face_normals = cat(fnorms, (0, 3)).astype(np.float64)
         self.flat = cat(flat, (0,)).astype(bool)
 
+    def face_index(self, object_id, prim_id) -> np.ndarray:
+        """(n,) int64 row of each hit's face in this table (object_id 0: -1)."""
+        object_id = np.asarray(object_id)
+        g = np.take(self.face_offset, object_id) + np.asarray(prim_id, dtype=np.int64)
+        return np.where(object_id != 0, g, -1)
+
+    def gpu_corners(self) -> np.ndarray:
+        """(faces, 3 corners, 8) float32: position, shading normal (the face normal at all
+        three corners of a flat face), uv: what glsl/reveal_shade.frag interpolates."""
+        normal = np.where(self.flat[:, None, None], self.face_normals[:, None, :],
+                          self.corner_normal)
+        return np.concatenate([self.corner_position, normal, self.corner_uv],
+                              axis=2).astype(np.float32)
+
     def lookup(self, object_id, prim_id, u, v) -> LocalSurface:
         """Local position, shading normal and uv of hits (object_id 0 = miss: zeros)."""
         object_id = np.asarray(object_id)

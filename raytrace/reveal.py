@@ -14,13 +14,15 @@ from __future__ import annotations
 
 import os
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
+from functools import cached_property
 
 import numpy as np
 
 from viewer.camera import Camera
 from viewer.conventions import BACKGROUND_DEPTH
 
+from .attributes import LocalSurface, SurfaceTable
 from .embree_scene import RayScene
 
 MIN_CHUNK = 4096     # below this, a thread costs more than it saves
@@ -37,13 +39,37 @@ class RevealLayer:
     distance: np.ndarray        # (n,) float64, from the eye along the unit ray; inf = miss
     depth: np.ndarray           # (n,) float64, view depth at t; BACKGROUND_DEPTH = miss
     world_position: np.ndarray  # (n, 3) float64, eye + distance * dir; zeros on a miss
-    local_position: np.ndarray  # (n, 3) float64, mesh space (for checker/stripes)
-    local_normal: np.ndarray    # (n, 3) float64, mesh space, unit; flat or smooth per object
-    uv: np.ndarray              # (n, 2) float64, mesh uv interpolated; zeros without uv
+    table: SurfaceTable | None = field(default=None, repr=False, compare=False)
 
     @property
     def hit(self) -> np.ndarray:
         return self.object_id != 0
+
+    @property
+    def face_index(self) -> np.ndarray:
+        """(n,) int64 row of each hit's face in the scene's SurfaceTable; -1 = miss (what
+        the GPU shades the revealed layer from, with the barycentrics)."""
+        return self.table.face_index(self.object_id, self.prim_id)
+
+    # Mesh-space attributes, computed on the CPU only when asked for (the hybrid mode
+    # interpolates them on the GPU): local position (for checker/stripes), unit normal
+    # (flat or smooth per object), uv (zeros without uv); zeros on a miss.
+    @cached_property
+    def surface(self) -> LocalSurface:
+        return self.table.lookup(self.object_id, self.prim_id, self.barycentrics[:, 0],
+                                 self.barycentrics[:, 1])
+
+    @property
+    def local_position(self) -> np.ndarray:
+        return self.surface.position
+
+    @property
+    def local_normal(self) -> np.ndarray:
+        return self.surface.normal
+
+    @property
+    def uv(self) -> np.ndarray:
+        return self.surface.uv
 
 
 @dataclass
@@ -60,7 +86,6 @@ def _layer(rs: RayScene, hits, origin, direction, cos, traced) -> RevealLayer:
     """The layer of the traced rays (compact: one row per traced ray)."""
     hit = hits.hit
     dist = np.where(hit, hits.distance, 0.0)
-    surf = rs.surfaces.lookup(hits.object_id, hits.prim_id, hits.u, hits.v)
     return RevealLayer(
         traced=traced,
         object_id=hits.object_id,
@@ -70,14 +95,11 @@ def _layer(rs: RayScene, hits, origin, direction, cos, traced) -> RevealLayer:
         # The rays are unit length from the eye: view depth = distance * cos(ray, forward).
         depth=np.where(hit, dist * cos, BACKGROUND_DEPTH),
         world_position=(origin + direction * dist[:, None]) * hit[:, None],
-        local_position=surf.position,
-        local_normal=surf.normal,
-        uv=surf.uv)
+        table=rs.surfaces)
 
 
 _MISS = {"object_id": 0, "prim_id": -1, "barycentrics": 0.0, "distance": np.inf,
-         "depth": BACKGROUND_DEPTH, "world_position": 0.0, "local_position": 0.0,
-         "local_normal": 0.0, "uv": 0.0}
+         "depth": BACKGROUND_DEPTH, "world_position": 0.0}
 
 
 def _expand(compact: RevealLayer, traced: np.ndarray) -> RevealLayer:
@@ -88,7 +110,7 @@ def _expand(compact: RevealLayer, traced: np.ndarray) -> RevealLayer:
         full = np.full((len(traced),) + a.shape[1:], miss, dtype=a.dtype)
         full[traced] = a
         cols[name] = full
-    return RevealLayer(**cols)
+    return RevealLayer(**cols, table=compact.table)
 
 
 def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
@@ -138,8 +160,8 @@ def _concatenate(parts: list[RevealResult]) -> RevealResult:
     layers = []
     for k in range(len(parts[0].layers)):
         cols = {f.name: np.concatenate([getattr(p.layers[k], f.name) for p in parts])
-                for f in fields(RevealLayer)}
-        layers.append(RevealLayer(**cols))
+                for f in fields(RevealLayer) if f.name != "table"}
+        layers.append(RevealLayer(**cols, table=parts[0].layers[k].table))
     out = RevealResult(layers=layers)
     for name in ("rays", "queries", "restarts", "unresolved", "pixels_hit"):
         setattr(out, name, sum(getattr(p, name) for p in parts))

@@ -2,17 +2,22 @@
 shade what they reveal on the GPU exactly as the raster layer is shaded.
 
   reveal (host): read `ray_mask` back within the bounding box of its non-empty tiles (one
-      R32UI read gives the masked pixels and their own object ids), cast one ray per masked pixel through its centre from the camera at
-      the frame time with raytrace.RayScene (built once per scene, kept in the renderer's
-      host state), and pack the hits, grouped by object, into a vertex buffer;
-  reveal_shade (GPU): draw one point per revealed pixel into revealed_color / _depth / _id
-      / _velocity (and revealed2_* for a second layer), one draw per revealed object with
-      that object's GpuScene uniforms, so glsl/shading.glsl and glsl/motion.glsl give the
-      same colour, depth and displacement as the G-buffer would.
+      R32UI read gives the masked pixels and their own object ids), cast one ray per
+      masked pixel through its centre from the camera at the frame time with
+      raytrace.RayScene (built once per scene, kept in the renderer's host state), and
+      write each hit as (face row, u, v, 1 + object id) into `reveal_hits` (one texture
+      per layer, only the box around the pixels uploaded);
+  reveal_shade (GPU): a fragment pass over the tiles holding those pixels, one draw per
+      revealed object with that object's GpuScene uniforms: it interpolates the face's
+      corners (a texture of every mesh's faces, uploaded once) and shades with the same
+      glsl/shading.glsl and glsl/motion.glsl as the G-buffer, into revealed_color /
+      _depth / _id / _velocity (revealed2_* for a second layer) and the composite's packed
+      hybrid_back* (a fragment pass, because llvmpipe draws one point per pixel at ~1.5 us).
 """
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import moderngl
 import numpy as np
@@ -24,15 +29,14 @@ from .blur_common import max_radius_px
 from .frame import Frame
 from .gpu_scene import MAX_LIGHTS, set_uniform
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
-from .passes import Pass
+from .passes import FullscreenPass, Pass
 from .pool import TexSpec
+from .tile_lists import FINE, TileList
 
 PACKED = TexSpec(4, "f4")
 LAYER_SPECS = {"color": TexSpec(4, "f4"), "depth": TexSpec(1, "f4"),
                "id": TexSpec(1, "u4"), "velocity": TexSpec(2, "f4")}
 MAX_LAYERS = 2
-# Per revealed pixel: image (i, j), mesh-space position, mesh-space normal, uv.
-VERTEX_FORMAT = (("in_pixel", 2), ("in_local", 3), ("in_normal", 3), ("in_uv", 2))
 STATE_KEY = "hybrid_reveal"
 
 
@@ -45,51 +49,57 @@ def layer_names(k: int) -> tuple[str, ...]:
     return tuple(layer_prefix(k) + n for n in LAYER_SPECS)
 
 
+FACE_TEXTURE_WIDTH = 4096
+TEXELS_PER_FACE = 6      # per corner: (position, normal.x), (normal.yz, uv)
+FACE_UNIT = 7
+
+
 class RevealState:
-    """Per-scene host state: the Embree scene (built once) and the GL objects the points
-    are drawn from (grown, never reallocated per frame)."""
+    """Per-scene host state: the Embree scene (built once), the faces' corners as a GPU
+    texture (uploaded once), and this frame's hits per layer."""
 
     def __init__(self, ctx: moderngl.Context, scene):
         self.ctx, self.scene = ctx, scene
         self.rays = RayScene(scene)
-        self.buffers: dict[int, moderngl.Buffer] = {}
-        self.vaos: dict[tuple[int, int], moderngl.VertexArray] = {}
-        self.batches: list = []        # per layer: (ranges, count) of the current frame
-        self.boxes: list = []          # per layer: GL pixel box around its points, or None
+        self._faces: moderngl.Texture | None = None
+        self.layers: list = []        # per layer: LayerHits of the current frame, or None
+        self.tiles: dict[int, TileList] = {}
 
-    def upload(self, k: int, data: np.ndarray) -> moderngl.Buffer:
-        nbytes = max(data.nbytes, 4)
-        buf = self.buffers.get(k)
-        if buf is None or buf.size < nbytes:
-            for key in [key for key in self.vaos if key[1] == k]:
-                self.vaos.pop(key).release()
-            if buf is not None:
-                buf.release()
-            buf = self.buffers[k] = self.ctx.buffer(reserve=max(nbytes, 1 << 16))
-        if data.nbytes:
-            buf.write(data.tobytes())
-        return buf
+    def face_texture(self) -> moderngl.Texture:
+        if self._faces is None:
+            corners = self.rays.surfaces.gpu_corners().reshape(-1, 4)
+            if len(corners) // TEXELS_PER_FACE >= 1 << 24:
+                raise ValueError("the hybrid reveal shades at most 2^24 faces")
+            w = FACE_TEXTURE_WIDTH
+            rows = max(1, -(-len(corners) // w))
+            data = np.zeros((rows * w, 4), np.float32)
+            data[:len(corners)] = corners
+            self._faces = self.ctx.texture((w, rows), 4, data.tobytes(), dtype="f4")
+            self._faces.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        return self._faces
 
-    def vao(self, prog: moderngl.Program, k: int) -> moderngl.VertexArray:
-        key = (prog.glo, k)
-        if key not in self.vaos:
-            fmt, names = [], []
-            for name, n in VERTEX_FORMAT:
-                if name in prog:
-                    fmt.append(f"{n}f")
-                    names.append(name)
-                else:
-                    fmt.append(f"{4 * n}x")        # dropped by the compiler: skip its bytes
-            self.vaos[key] = self.ctx.vertex_array(
-                prog, [(self.buffers[k], " ".join(fmt), *names)])
-        return self.vaos[key]
+    def tile_list(self, k: int) -> TileList:
+        if k not in self.tiles:
+            self.tiles[k] = TileList(self.ctx)
+        return self.tiles[k]
 
     def release(self):
-        for v in self.vaos.values():
-            v.release()
-        for b in self.buffers.values():
-            b.release()
-        self.vaos.clear(), self.buffers.clear()
+        if self._faces is not None:
+            self._faces.release()
+            self._faces = None
+        for tl in self.tiles.values():
+            tl.release()
+        self.tiles.clear()
+
+
+@dataclass
+class LayerHits:
+    """One layer's traced pixels: GL pixel box, the (H, W, 4) hit records inside it, and
+    the keys (1 + object id, 1 = the ray left the scene) present."""
+    box: tuple[int, int, int, int]
+    records: np.ndarray
+    keys: list[tuple[int, int, int]]   # (key, first, count) of each key's run in `tiles`
+    tiles: np.ndarray            # (n, 2) FINE tiles (GL orientation) holding each key's pixels
 
 
 def reveal_state(frame: Frame) -> RevealState:
@@ -138,27 +148,39 @@ def gl_box(pixels_ij: np.ndarray, height: int) -> tuple[int, int, int, int]:
     return (int(i.min()), int(height - 1 - j.max()), int(i.max()) + 1, int(height - j.min()))
 
 
-def pack_layer(pixels: np.ndarray, layer) -> tuple[np.ndarray, list[tuple[int, int, int]]]:
-    """Vertex data of one revealed layer, grouped by object id (0 = the ray left the
-    scene), and the (object id, first, count) ranges to draw. Untraced rows are left out."""
+def layer_hits(pixels: np.ndarray, layer, height: int) -> LayerHits | None:
+    """The traced rows of a layer as hit records (face row, u, v, 1 + object id) in the
+    GL box around them; None when nothing was traced."""
     rows = np.flatnonzero(layer.traced)
+    if not len(rows):
+        return None
+    px = pixels[rows]
+    box = gl_box(px, height)
+    x0, y0, x1, y1 = box
+    records = np.zeros((y1 - y0, x1 - x0, 4), np.float32)
     ids = layer.object_id[rows]
-    order = rows[np.argsort(ids, kind="stable")]
-    data = np.empty((len(order), 10), dtype=np.float32)
-    data[:, 0:2] = pixels[order]
-    data[:, 2:5] = layer.local_position[order]
-    data[:, 5:8] = layer.local_normal[order]
-    data[:, 8:10] = layer.uv[order]
-    sorted_ids = layer.object_id[order]
-    uniq, first, count = np.unique(sorted_ids, return_index=True, return_counts=True)
-    return data, [(int(u), int(f), int(c)) for u, f, c in zip(uniq, first, count)]
+    gx = px[:, 0] - x0
+    gy = (height - 1 - px[:, 1]) - y0
+    records[gy, gx, 0] = np.maximum(layer.face_index[rows], 0)
+    records[gy, gx, 1:3] = layer.barycentrics[rows]
+    records[gy, gx, 3] = 1.0 + ids
+    # Per key (object), the tiles holding its pixels: its draw covers only those.
+    tx, ty = (gx + x0) // FINE, (gy + y0) // FINE
+    cols = -(-(x1 + FINE) // FINE)
+    cells_per_key = cols * (-(-(y1 + FINE) // FINE))
+    cells = np.unique(ids.astype(np.int64) * cells_per_key + ty * cols + tx)
+    key_of, cell = np.divmod(cells, cells_per_key)
+    tiles = np.stack([cell % cols, cell // cols], axis=1)
+    keys, first, count = np.unique(key_of, return_index=True, return_counts=True)
+    return LayerHits(box, records, [(int(k) + 1, int(f), int(c))
+                                    for k, f, c in zip(keys, first, count)], tiles)
 
 
 class RevealTrace(Pass):
-    """Host side: mask read-back, ray casting, vertex packing and upload."""
+    """Host side: mask read-back, ray casting, and the hit records of every layer."""
     name = "reveal"
     inputs = ("ray_mask", "ray_mask_tiles")
-    produces = ("reveal_hits",)          # host-side: the vertex buffers in RevealState
+    produces = ("reveal_hits",)          # host-side: RevealState.layers
 
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
@@ -166,20 +188,13 @@ class RevealTrace(Pass):
         st = reveal_state(frame)
         pixels, own = read_masked_pixels(frame)
         t1 = time.perf_counter()
-        st.batches, st.boxes = [], []
         result = None
         if len(pixels) and p.trace:
             result = st.rays.reveal(frame.camera, frame.time, pixels, own, layers=p.layers,
                                     max_depth=p.max_depth, threads=p.threads or None)
         t2 = time.perf_counter()
-        for k in range(p.layers):
-            if result is None:
-                st.batches.append(([], 0))
-                continue
-            data, ranges = pack_layer(pixels, result.layers[k])
-            st.upload(k, data)
-            st.batches.append((ranges, len(data)))
-            st.boxes.append(gl_box(data[:, :2], frame.size[1]) if len(data) else None)
+        st.layers = [layer_hits(pixels, result.layers[k], frame.size[1]) if result else None
+                     for k in range(p.layers)]
         t3 = time.perf_counter()
         s = frame.stats
         s["masked_pixels"] = int(len(pixels))
@@ -189,7 +204,7 @@ class RevealTrace(Pass):
         s["unresolved"] = int(result.unresolved) if result else 0
         s["reveal_readback_ms"] = (t1 - t0) * 1e3
         s["reveal_trace_ms"] = (t2 - t1) * 1e3
-        s["reveal_upload_ms"] = (t3 - t2) * 1e3
+        s["reveal_pack_ms"] = (t3 - t2) * 1e3
         s["reveal_ms"] = (t3 - t0) * 1e3
         # What `hmblur bench` needs to time bare Embree on the same primary rays.
         frame.host["reveal_batch"] = {"rayscene": st.rays, "camera": frame.camera,
@@ -203,21 +218,31 @@ def packed_names(k: int) -> tuple[str, str]:
     return tag, tag + "_color"
 
 
-class RevealShade(Pass):
+def hits_name(k: int) -> str:
+    return "reveal_hits" if k == 0 else f"reveal_hits{k + 1}"
+
+
+class RevealShade(FullscreenPass):
     """GPU side: the revealed layers' colour, depth, id and displacement at the masked
     pixels, everything else cleared to 'nothing revealed' (alpha 0, the background's
     depth, id 0); and the same packed for the composite (packed_names). Every layer up to
     MAX_LAYERS is produced (the deeper ones stay cleared when fewer are traced), so the
     pipeline's textures do not depend on the `hybrid.layers` setting."""
     name = "reveal_shade"
+    fragment = "reveal_shade.frag"
     inputs = ("reveal_hits",)
-    produces = tuple(n for k in range(MAX_LAYERS) for n in (*layer_names(k), *packed_names(k)))
+    produces = tuple(n for k in range(MAX_LAYERS)
+                     for n in (*layer_names(k), *packed_names(k), hits_name(k)))
+
+    def defines(self, frame: Frame):
+        return {"MAX_LIGHTS": MAX_LIGHTS}
 
     def outputs(self, frame: Frame):
         out = {}
         for k in range(MAX_LAYERS):
             out.update({n: LAYER_SPECS[n.split("_", 1)[1]] for n in layer_names(k)})
             out.update({n: PACKED for n in packed_names(k)})
+            out[hits_name(k)] = PACKED
         return out
 
     @staticmethod
@@ -228,34 +253,39 @@ class RevealShade(Pass):
         frame.pool.clear(names[1:2], (BACKGROUND_DEPTH, 0.0, 0.0, 0.0))
 
     def execute(self, frame: Frame):
-        ctx, cam, gpu = frame.ctx, frame.camera, frame.gpu
+        cam, gpu = frame.camera, frame.gpu
         st = reveal_state(frame)
         t = frame.time
         t_open, t_close = frame.exposure
-        prog = frame.programs.get("reveal_points.vert", "reveal_shade.frag",
-                                  {**glsl_defines(), "MAX_LIGHTS": MAX_LIGHTS})
         for k in range(MAX_LAYERS):
             names = (*layer_names(k), *packed_names(k))
             self.clear(frame, names)
-            ranges, count = st.batches[k] if k < len(st.batches) else ([], 0)
-            if not count:
+            hits = st.layers[k] if k < len(st.layers) else None
+            frame.pool.clear((hits_name(k),))
+            if hits is None:
                 continue
-            frame.pool.mark_written(names, st.boxes[k])
-            fbo = frame.pool.framebuffer(names)
-            fbo.use()
-            fbo.viewport = (0, 0) + fbo.size
-            ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE | moderngl.BLEND)
+            x0, y0, x1, y1 = hits.box
+            frame.pool.get(hits_name(k)).write(hits.records.tobytes(),
+                                               viewport=(x0, y0, x1 - x0, y1 - y0))
+            frame.pool.mark_written((hits_name(k),), hits.box)
+            # The tiles holding this layer's pixels; each object's draw keeps its own.
+            tl = st.tile_list(k)
+            tl.set(hits.tiles, FINE, frame.size)
+            prog = self.program(frame, "tiles.vert")
             gpu.bind_camera(prog, cam, t, t_open, t_close, frame.size)
             set_uniform(prog, "u_background", frame.scene.background)
             set_uniform(prog, "u_max_disp", 2.0 * max_radius_px(frame))
             gpu.bind_lights(prog)
-            vao = st.vao(prog, k)
+            st.face_texture().use(FACE_UNIT)      # draw() binds its textures from unit 0
+            set_uniform(prog, "u_faces", FACE_UNIT)
             objects = {o.id: o for o in frame.scene.objects}
-            for oid, first, n in ranges:
-                set_uniform(prog, "u_miss", oid == 0)
-                if oid:
-                    gpu.bind_object(prog, objects[oid], t, t_open, t_close)
-                vao.render(moderngl.POINTS, vertices=n, first=first)
+            for key, first, count in hits.keys:
+                set_uniform(prog, "u_miss", key == 1)
+                set_uniform(prog, "u_key", float(key))
+                if key > 1:
+                    gpu.bind_object(prog, objects[key - 1], t, t_open, t_close)
+                self.draw(frame, names, {"u_hits": hits_name(k)}, tiles=tl.part(first, count),
+                          clear=False)
 
 
 def reveal_passes() -> list:

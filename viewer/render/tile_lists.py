@@ -60,8 +60,8 @@ class TileList:
         y0 = self.tiles[:, 1] * tile
         x1 = np.minimum(x0 + tile, w)
         y1 = np.minimum(y0 + tile, h)
-        self.box = ((int(x0.min()), int(y0.min()), int(x1.max()), int(y1.max()))
-                    if self.count else None)
+        self.tile, self.size = tile, size
+        self.box = _box(self.tiles, tile, size) if self.count else None
         # Two triangles per tile: (x0,y0) (x1,y0) (x0,y1) and (x1,y0) (x1,y1) (x0,y1).
         xs = np.stack([x0, x1, x0, x1, x1, x0], axis=1)
         ys = np.stack([y0, y0, y1, y0, y1, y1], axis=1)
@@ -73,14 +73,21 @@ class TileList:
         if data.nbytes:
             self.buffer.write(data.tobytes())
 
-    def render(self, prog: moderngl.Program):
-        if not self.count:
+    def render(self, prog: moderngl.Program, first: int = 0, count: int | None = None):
+        """Draw tiles first .. first + count - 1 (default: all) with `prog`."""
+        count = self.count - first if count is None else count
+        if count <= 0:
             return
         vao = self.vaos.get(prog.glo)
         if vao is None:
             vao = self.vaos[prog.glo] = self.ctx.vertex_array(
                 prog, [(self.buffer, "2f", "in_corner")])
-        vao.render(moderngl.TRIANGLES, vertices=6 * self.count)
+        vao.render(moderngl.TRIANGLES, vertices=6 * count, first=6 * first)
+
+    def part(self, first: int, count: int) -> "TileRange":
+        """Tiles first .. first + count - 1 of this list, drawable like a list."""
+        return TileRange(self, first, count)
+
 
     def _release_buffer(self):
         for v in self.vaos.values():
@@ -92,6 +99,25 @@ class TileList:
 
     def release(self):
         self._release_buffer()
+
+
+class TileRange:
+    """A run of a TileList's tiles (what FullscreenPass.draw needs: render and box)."""
+
+    def __init__(self, tiles: TileList, first: int, count: int):
+        self.tiles, self.first, self.count = tiles, first, count
+        t = tiles.tiles[first:first + count]
+        self.box = tiles.box if count == 0 else _box(t, tiles.tile, tiles.size)
+
+    def render(self, prog: moderngl.Program):
+        self.tiles.render(prog, self.first, self.count)
+
+
+def _box(tiles: np.ndarray, tile: int, size) -> tuple[int, int, int, int]:
+    """(x0, y0, x1, y1) GL pixels around tiles (n >= 1), cut at the screen's edge."""
+    lo = tiles.min(axis=0) * tile
+    hi = np.minimum((tiles.max(axis=0) + 1) * tile, size)
+    return int(lo[0]), int(lo[1]), int(hi[0]), int(hi[1])
 
 
 class TileLists:
