@@ -8,7 +8,7 @@ import time
 
 import numpy as np
 
-from .embree_scene import RayScene, _embree_run, apply3
+from .embree_scene import RayScene, _embree_run, transform_points, transform_vectors
 
 
 def bare_embree_rays_per_s(batch: dict | None, repeats: int = 5) -> float:
@@ -28,9 +28,8 @@ def bare_embree_rays_per_s(batch: dict | None, repeats: int = 5) -> float:
     if rs._static is not None:
         jobs.append((rs._static, o, d))
     for obj, es in rs.moving:
-        inv = np.linalg.inv(obj.matrix(t))
-        jobs.append((es, (apply3(inv[:3, :3], o) + inv[:3, 3]).astype(np.float32),
-                     apply3(inv[:3, :3], d).astype(np.float32)))
+        inv = np.linalg.inv(obj.matrix(t)).astype(np.float32)
+        jobs.append((es, transform_points(inv, o), transform_vectors(inv, d)))
     far = np.full(len(o), np.inf, dtype=np.float32)
     runs = []
     for _ in range(repeats):

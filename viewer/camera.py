@@ -42,9 +42,13 @@ class Camera:
         true_up = np.cross(right, fwd)
         x, y = pixel_centres_ndc(i, j, self.width, self.height)
         tan_half = np.tan(np.radians(self.spec.fov_y) * 0.5)
-        d = (fwd[None, :] + (x * tan_half * self.aspect)[:, None] * right[None, :]
-             + (y * tan_half)[:, None] * true_up[None, :])
-        d /= np.linalg.norm(d, axis=1, keepdims=True)
+        sx, sy = x * (tan_half * self.aspect), y * tan_half
+        # Column by column: (n, 3) broadcasting costs several times more here.
+        d = np.empty((len(sx), 3))
+        for k in range(3):
+            d[:, k] = fwd[k] + sx * right[k] + sy * true_up[k]
+        inv_len = 1.0 / np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])
+        d *= inv_len[:, None]
         return np.broadcast_to(eye, d.shape).copy(), d
 
     def project(self, t: float, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

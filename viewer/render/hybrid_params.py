@@ -49,7 +49,7 @@ class HybridParams:
     samples_min: int = param(8, lo=1, hi=256,
                              help="time samples per pixel (bucket: taps per line) where "
                                   "anything moves, at least")
-    samples_max: int = param(48, lo=1, hi=256,
+    samples_max: int = param(16, lo=1, hi=256,
                              help="time samples per pixel (bucket: taps per line), at most")
     sample_spacing: float = param(2.0, lo=0.25, hi=16.0,
                                   help="pixels of motion per time sample or tap: the count "
