@@ -159,6 +159,8 @@ class RayScene:
 
         o_start = o + d * start[:, None] if tnear is not None else o
         o32, d32 = o_start.astype(np.float32), d.astype(np.float32)
+        # Primary rays share the eye: carry one point into each object's space, not n.
+        shared = n > 1 and tnear is None and bool((o32 == o32[0]).all())
         for obj, es in self.moving:
             traced = excl != obj.id           # a moving excluded object is not traced
             if not traced.any():
@@ -166,8 +168,10 @@ class RayScene:
             # Every ray goes in (Embree is cheaper than gathering the traced ones) and the
             # excluded ones' hits are dropped: the same work as bare Embree on these rays.
             inv = np.linalg.inv(obj.matrix(t)).astype(np.float32)
-            lo = transform_points(inv, o32)
-            ld = transform_vectors(inv, d32)  # not renormalised: t stays in world units
+            lo = (np.broadcast_to(transform_points(inv, o32[:1]), o32.shape) if shared
+                  else transform_points(inv, o32))
+            # Not renormalised, so t stays in world units; a pure translation keeps them.
+            ld = d32 if np.array_equal(inv[:3, :3], np.eye(3)) else transform_vectors(inv, d32)
             r = _embree_run(es, lo, ld, best - start)
             queries += int(np.count_nonzero(traced))    # the rays whose hits count
             dist = start + r["tfar"]

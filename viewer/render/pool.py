@@ -98,6 +98,17 @@ class ResourcePool:
             elif n in self._written:
                 self._written[n] = _union(self._written[n], box)
 
+    def written_box(self, name: str):
+        """The box written since `name`'s last clear: None if nothing, "unknown" if it
+        may hold anything (never cleared, reallocated, written full screen)."""
+        return self._written.get(name, "unknown")
+
+    def mark_clean(self, names):
+        """The caller has cleared everything `names` held (e.g. by drawing over exactly
+        what it wrote)."""
+        for n in names:
+            self._written[n] = None
+
     def clear(self, names: tuple[str, ...], value=(0.0, 0.0, 0.0, 0.0)):
         """Clear textures `names` (one framebuffer) to `value`, only inside the box written
         since their last clear: a memset of a few thousand pixels instead of megabytes

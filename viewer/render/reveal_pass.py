@@ -31,7 +31,7 @@ from .gpu_scene import MAX_LIGHTS, set_uniform
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
-from .tile_lists import FINE, TileList
+from .tile_lists import TileList
 
 PACKED = TexSpec(4, "f4")
 LAYER_SPECS = {"color": TexSpec(4, "f4"), "depth": TexSpec(1, "f4"),
@@ -52,6 +52,9 @@ def layer_names(k: int) -> tuple[str, ...]:
 FACE_TEXTURE_WIDTH = 4096
 TEXELS_PER_FACE = 6      # per corner: (position, normal.x), (normal.yz, uv)
 FACE_UNIT = 7
+# Tile side for reveal_shade's draws: finer than the tile lists' FINE, so fewer fragments
+# outside the revealed pixels run the shader (the quads themselves cost next to nothing).
+SHADE_TILE = 8
 
 
 class RevealState:
@@ -99,7 +102,7 @@ class LayerHits:
     box: tuple[int, int, int, int]
     records: np.ndarray
     keys: list[tuple[int, int, int]]   # (key, first, count) of each key's run in `tiles`
-    tiles: np.ndarray            # (n, 2) FINE tiles (GL orientation) holding each key's pixels
+    tiles: np.ndarray            # (n, 2) SHADE_TILE tiles (GL orientation) of each key's pixels
 
 
 def reveal_state(frame: Frame) -> RevealState:
@@ -165,9 +168,9 @@ def layer_hits(pixels: np.ndarray, layer, height: int) -> LayerHits | None:
     records[gy, gx, 1:3] = layer.barycentrics[rows]
     records[gy, gx, 3] = 1.0 + ids
     # Per key (object), the tiles holding its pixels: its draw covers only those.
-    tx, ty = (gx + x0) // FINE, (gy + y0) // FINE
-    cols = -(-(x1 + FINE) // FINE)
-    cells_per_key = cols * (-(-(y1 + FINE) // FINE))
+    tx, ty = (gx + x0) // SHADE_TILE, (gy + y0) // SHADE_TILE
+    cols = -(-(x1 + SHADE_TILE) // SHADE_TILE)
+    cells_per_key = cols * (-(-(y1 + SHADE_TILE) // SHADE_TILE))
     cells = np.unique(ids.astype(np.int64) * cells_per_key + ty * cols + tx)
     key_of, cell = np.divmod(cells, cells_per_key)
     tiles = np.stack([cell % cols, cell // cols], axis=1)
@@ -218,6 +221,11 @@ def packed_names(k: int) -> tuple[str, str]:
     return tag, tag + "_color"
 
 
+class ClearTiles(FullscreenPass):
+    """A revealed layer's targets back to 'nothing revealed', where drawn."""
+    fragment = "reveal_clear.frag"
+
+
 def hits_name(k: int) -> str:
     return "reveal_hits" if k == 0 else f"reveal_hits{k + 1}"
 
@@ -233,6 +241,9 @@ class RevealShade(FullscreenPass):
     inputs = ("reveal_hits",)
     produces = tuple(n for k in range(MAX_LAYERS)
                      for n in (*layer_names(k), *packed_names(k), hits_name(k)))
+
+    def __init__(self):
+        self.clear_tiles = ClearTiles()
 
     def defines(self, frame: Frame):
         return {"MAX_LIGHTS": MAX_LIGHTS}
@@ -259,7 +270,15 @@ class RevealShade(FullscreenPass):
         t_open, t_close = frame.exposure
         for k in range(MAX_LAYERS):
             names = (*layer_names(k), *packed_names(k))
-            self.clear(frame, names)
+            tl = st.tile_list(k)
+            if tl.count and all(frame.pool.written_box(n) == tl.box for n in names):
+                # Only last frame's draws wrote here: undo them tile by tile (a thin
+                # object's box can span the screen while its tiles hold a few pixels).
+                self.clear_tiles.draw(frame, names, {}, tiles=tl, clear=False)
+                frame.pool.mark_clean(names)
+            else:
+                self.clear(frame, names)
+            tl.set(np.zeros((0, 2)), SHADE_TILE, frame.size)
             hits = st.layers[k] if k < len(st.layers) else None
             frame.pool.clear((hits_name(k),))
             if hits is None:
@@ -269,8 +288,7 @@ class RevealShade(FullscreenPass):
                                                viewport=(x0, y0, x1 - x0, y1 - y0))
             frame.pool.mark_written((hits_name(k),), hits.box)
             # The tiles holding this layer's pixels; each object's draw keeps its own.
-            tl = st.tile_list(k)
-            tl.set(hits.tiles, FINE, frame.size)
+            tl.set(hits.tiles, SHADE_TILE, frame.size)
             prog = self.program(frame, "tiles.vert")
             gpu.bind_camera(prog, cam, t, t_open, t_close, frame.size)
             set_uniform(prog, "u_background", frame.scene.background)
