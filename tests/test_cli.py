@@ -127,3 +127,35 @@ def test_no_gl_driver_names_what_to_install(tmp_path):
     assert p.returncode == 2
     assert p.stderr.count("\n") == 1 and "apt-get install libegl1" in p.stderr
     assert not (tmp_path / "x.png").exists()
+
+
+def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys):
+    out = tmp_path / "bench.json"
+    assert main(["bench", BASIC, "--size", "96x54", "--frames", "2", "--warmup", "0",
+                 "--json", str(out), "--speeds", "0.5,1"]) == 0
+    rep = json.loads(out.read_text())
+    assert rep["size"] == [96, 54] and rep["device"]
+    assert set(rep["modes"]) == {"off", "mcguire", "ue4", "hybrid"}
+    for mode, r in rep["modes"].items():
+        assert r["frame_ms"] > 0 and r["frame"]["n"] == 2
+        assert r["passes"]["gbuffer"] > 0
+    hyb = rep["modes"]["hybrid"]
+    assert {"select_tiles", "ray_mask", "reveal", "reveal_shade", "hybrid_composite"} <= set(hyb["passes"])
+    for m in ("hybrid", "ue4"):
+        assert rep["ratios"][f"{m}/mcguire"] == pytest.approx(
+            rep["modes"][m]["frame_ms"] / rep["modes"]["mcguire"]["frame_ms"])
+    rv = rep["reveal"]
+    assert rv["rays"] >= rv["masked_pixels"] > 0
+    assert rv["rays_per_s"] > 0 and rv["embree_rays_per_s"] > 0
+    assert rv["fraction_of_embree"] == pytest.approx(rv["rays_per_s"] / rv["embree_rays_per_s"])
+    # Slower objects mask fewer pixels.
+    scaling = rep["scaling"]
+    assert [row["speed"] for row in scaling] == [0.5, 1.0]
+    assert 0 < scaling[0]["masked_pixels"] < scaling[1]["masked_pixels"]
+    text = capsys.readouterr().out
+    assert "hybrid/mcguire" in text and "bare Embree" in text
+
+
+def test_bench_rejects_an_unknown_mode(capsys):
+    assert main(["bench", BASIC, "--modes", "mcguire,fancy"]) == 2
+    assert "fancy" in capsys.readouterr().err
