@@ -72,6 +72,27 @@ def transform_vectors(m: np.ndarray, p: np.ndarray) -> np.ndarray:
     return transform_points(m, p, 0.0)
 
 
+def _box_corners(vertices: np.ndarray) -> np.ndarray:
+    """(8, 3) corners of the axis-aligned box around `vertices`."""
+    lo, hi = vertices.min(axis=0), vertices.max(axis=0)
+    return np.array([[(lo, hi)[i >> k & 1][k] for k in range(3)] for i in range(8)])
+
+
+def _slab(o: np.ndarray, inv_d: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+          t0: np.ndarray, t1: np.ndarray) -> np.ndarray:
+    """Which rays o + s d meet the box [lo, hi] for some s in [t0, t1] (the slab test;
+    a zero direction component gives infinities, and the NaN of 0 * inf is ignored by
+    fmin/fmax, so a ray along a face counts as meeting it)."""
+    near, far = t0.astype(np.float32), t1.astype(np.float32)
+    with np.errstate(invalid="ignore"):
+        for k in range(3):
+            a = (np.float32(lo[k]) - o[:, k]) * inv_d[:, k]
+            b = (np.float32(hi[k]) - o[:, k]) * inv_d[:, k]
+            near = np.fmax(near, np.fmin(a, b))
+            far = np.fmin(far, np.fmax(a, b))
+    return near <= far
+
+
 def _embree_run(scene: rtcs.EmbreeScene, origins: np.ndarray, dirs: np.ndarray,
                 tfar: np.ndarray) -> dict:
     # run() writes the hit distances into `dists` in place: always hand it a fresh array.
@@ -110,6 +131,9 @@ class RayScene:
                 es = rtcs.EmbreeScene(self._device)
                 TriangleMesh(es, o.mesh.vertices.astype(np.float32), o.mesh.faces.astype(np.int32))
                 self.moving.append((o, es))
+        # The corners of each moving mesh's local bounding box: at time t their world
+        # box culls the rays that cannot hit the object before any Embree call.
+        self._corners = {o.id: _box_corners(o.mesh.vertices) for o, _ in self.moving}
 
     def reveal(self, camera, t: float, pixels_ij, own_ids, layers: int = 1, max_depth: int = 8,
                threads: int | None = None, **kw):
@@ -161,26 +185,36 @@ class RayScene:
         o32, d32 = o_start.astype(np.float32), d.astype(np.float32)
         # Primary rays share the eye: carry one point into each object's space, not n.
         shared = n > 1 and tnear is None and bool((o32 == o32[0]).all())
+        with np.errstate(divide="ignore"):
+            inv_d = np.float32(1.0) / d32
         for obj, es in self.moving:
-            traced = excl != obj.id           # a moving excluded object is not traced
-            if not traced.any():
+            m = obj.matrix(t)
+            world = transform_points(m, self._corners[obj.id])
+            pad = 1e-4 * float(np.ptp(world, axis=0).max()) + 1e-6
+            # Rays that may hit the object's world box within [start, best]; a moving
+            # excluded object is not traced at all.
+            rows = np.flatnonzero(_slab(o32, inv_d, world.min(axis=0) - pad,
+                                        world.max(axis=0) + pad, start, best)
+                                  & (excl != obj.id))
+            if not rows.size:
                 continue
-            # Every ray goes in (Embree is cheaper than gathering the traced ones) and the
-            # excluded ones' hits are dropped: the same work as bare Embree on these rays.
-            inv = np.linalg.inv(obj.matrix(t)).astype(np.float32)
-            lo = (np.broadcast_to(transform_points(inv, o32[:1]), o32.shape) if shared
-                  else transform_points(inv, o32))
+            inv = np.linalg.inv(m).astype(np.float32)
+            lo = (np.broadcast_to(transform_points(inv, o32[:1]), (rows.size, 3)) if shared
+                  else transform_points(inv, np.take(o32, rows, axis=0)))
             # Not renormalised, so t stays in world units; a pure translation keeps them.
-            ld = d32 if np.array_equal(inv[:3, :3], np.eye(3)) else transform_vectors(inv, d32)
-            r = _embree_run(es, lo, ld, best - start)
-            queries += int(np.count_nonzero(traced))    # the rays whose hits count
-            dist = start + r["tfar"]
-            hit = (r["geomID"] >= 0) & traced & (dist < best)
-            object_id[hit] = obj.id
-            prim_id[hit] = r["primID"][hit]
-            u[hit] = r["u"][hit]
-            v[hit] = r["v"][hit]
-            best[hit] = dist[hit]
+            dr = np.take(d32, rows, axis=0)
+            ld = dr if np.array_equal(inv[:3, :3], np.eye(3)) else transform_vectors(inv, dr)
+            s0 = np.take(start, rows)
+            r = _embree_run(es, lo, ld, np.take(best, rows) - s0)
+            queries += rows.size
+            dist = s0 + r["tfar"]
+            hit = (r["geomID"] >= 0) & (dist < np.take(best, rows))
+            w = rows[hit]
+            object_id[w] = obj.id
+            prim_id[w] = r["primID"][hit]
+            u[w] = r["u"][hit]
+            v[w] = r["v"][hit]
+            best[w] = dist[hit]
 
         restarts = unresolved = 0
         if self._static is not None:

@@ -487,3 +487,36 @@ def test_reveal_equals_casting_the_scene_without_the_own_object():
         both = ~differ & want.hit
         np.testing.assert_allclose(got.depth[rows][both], want.depth[both], rtol=1e-5)
         np.testing.assert_array_equal(got.prim_id[rows][both], want.prim_id[both])
+
+
+def test_box_culling_changes_no_hit(monkeypatch):
+    # The world-box test that keeps rays away from moving objects they cannot hit gives
+    # exactly the hits of tracing every ray into every moving object.
+    import raytrace.embree_scene as es
+    s = busy_scene()
+    rs = RayScene(s)
+    cam = Camera(s.camera, 48, 40)
+    jj, ii = np.mgrid[0:40, 0:48]
+    o, d = cam.rays(0.05, ii.ravel(), jj.ravel())
+    own = np.random.default_rng(2).integers(0, 5, len(o))
+    culled = rs.intersect(o, d, 0.05, own)
+    monkeypatch.setattr(es, "_slab", lambda o, *a: np.ones(len(o), bool))
+    full = rs.intersect(o, d, 0.05, own)
+    assert culled.queries < full.queries
+    for name in ("object_id", "prim_id", "u", "v", "distance"):
+        np.testing.assert_array_equal(getattr(culled, name), getattr(full, name), name)
+    assert np.count_nonzero(np.isin(culled.object_id, [3, 4])) > 50
+
+
+def test_slab_hand_values():
+    import raytrace.embree_scene as es
+    o = np.array([[0, 0, 5], [0, 0, 5], [3, 0, 5], [0.5, 0, 5]], np.float32)
+    d = np.array([[0, 0, -1], [0, 0, 1], [0, 0, -1], [0, 0, -1]], np.float32)
+    with np.errstate(divide="ignore"):
+        inv_d = 1.0 / d
+    lo, hi = np.array([-1.0, -1, -1]), np.array([1.0, 1, 1])
+    t0, t1 = np.zeros(4), np.full(4, np.inf)
+    # Towards the box, away from it, beside it, along the x = 0.5 line through it.
+    np.testing.assert_array_equal(es._slab(o, inv_d, lo, hi, t0, t1), [True, False, False, True])
+    # The box lies 4 to 6 along the first ray: a far limit of 3.9 misses it.
+    assert not es._slab(o[:1], inv_d[:1], lo, hi, t0[:1], np.array([3.9]))[0]
