@@ -25,7 +25,7 @@ from viewer.conventions import BACKGROUND_DEPTH
 from .attributes import LocalSurface, SurfaceTable
 from .embree_scene import RayScene
 
-MIN_CHUNK = 8192     # below this, a thread costs more than it saves (measured on 2 cores)
+MIN_CHUNK = 32768    # below this, a thread costs more than it saves (measured on 2 cores)
 MAX_CHUNK = 32768    # above this, the per-ray numpy temporaries fall out of the caches
 
 

@@ -157,16 +157,23 @@ def layer_hits(pixels: np.ndarray, layer, height: int) -> LayerHits | None:
     rows = np.flatnonzero(layer.traced)
     if not len(rows):
         return None
-    px = pixels[rows]
+    every = len(rows) == len(pixels)          # layer 1: no gather needed
+
+    def pick(a):
+        return a if every else np.take(a, rows, axis=0)
+    px = pick(pixels)
     box = gl_box(px, height)
     x0, y0, x1, y1 = box
     records = np.zeros((y1 - y0, x1 - x0, 4), np.float32)
-    ids = layer.object_id[rows]
+    ids = pick(layer.object_id)
     gx = px[:, 0] - x0
     gy = (height - 1 - px[:, 1]) - y0
-    records[gy, gx, 0] = np.maximum(layer.face_index[rows], 0)
-    records[gy, gx, 1:3] = layer.barycentrics[rows]
-    records[gy, gx, 3] = 1.0 + ids
+    rec = np.empty((len(rows), 4), np.float32)
+    rec[:, 0] = np.maximum(pick(layer.face_index), 0)
+    rec[:, 1:3] = pick(layer.barycentrics)
+    rec[:, 3] = ids
+    rec[:, 3] += 1.0
+    records.reshape(-1, 4)[gy * (x1 - x0) + gx] = rec      # one scatter of whole rows
     # Per key (object), the tiles holding its pixels: its draw covers only those.
     tx, ty = (gx + x0) // SHADE_TILE, (gy + y0) // SHADE_TILE
     cols = -(-(x1 + SHADE_TILE) // SHADE_TILE)
