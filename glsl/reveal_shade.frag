@@ -3,7 +3,7 @@
 // shade() with the same GpuScene uniforms, the object's M(t) for position and normal, and
 // its M at shutter open and close for the displacement, so the filter can blur it.
 // Drawn over the tiles holding traced pixels (viewer/render/reveal_pass.py), once per
-// revealed object: a pixel is this draw's when its hit record's key is u_key. The hit
+// revealed object over its own tiles: a pixel is this draw's when its record's key is u_key. The hit
 // (face row, Embree u, v) is turned into mesh-space position, normal and uv here, from the
 // face's three corners in u_faces, with the weights (1 - u - v, u, v).
 // u_miss draws the rays that left the scene: the background colour, as the G-buffer's
@@ -13,6 +13,7 @@
 #include "shading.glsl"
 #include "motion.glsl"
 
+noperspective in vec2 v_record; // this pixel's hit record (glsl/reveal_tiles.vert)
 uniform sampler2D u_hits;       // (face row, u, v, 1 + object id); 0 where no ray
 uniform sampler2D u_faces;      // 6 texels per face: corner c at 2c: (position, normal.x),
                                 // at 2c + 1: (normal.yz, uv)
@@ -46,7 +47,7 @@ vec4 face_texel(int i) {
 }
 
 void main() {
-    vec4 hit = texelFetch(u_hits, ivec2(gl_FragCoord.xy), 0);
+    vec4 hit = texelFetch(u_hits, ivec2(floor(v_record)), 0);
     if (hit.w != u_key) discard;
     if (u_miss) {
         out_color = vec4(u_background, 1.0);

@@ -65,11 +65,22 @@ class SceneObject:
         return bool(np.any(self.velocity != 0) or np.any(self.angular_velocity != 0))
 
     def matrix(self, t: float) -> np.ndarray:
-        """M(t) = T(position + velocity t) @ Rot(angular_velocity t) @ R0 @ S."""
-        m = tf.translate(self.position + self.velocity * t) @ self._rest()
-        if np.any(self.angular_velocity != 0):
-            m[:3, :3] = rotation_at(self.angular_velocity, t) @ m[:3, :3]
-        return m
+        """M(t) = T(position + velocity t) @ Rot(angular_velocity t) @ R0 @ S.
+
+        A frame asks for the same few times (t, shutter open and close) in many passes:
+        the last few results are kept, keyed by t and every field they depend on."""
+        key = (float(t), self.position.tobytes(), self.velocity.tobytes(),
+               self.angular_velocity.tobytes(), self.rotation.tobytes(), self.scale.tobytes())
+        memo = self.__dict__.setdefault("_matrix_memo", {})
+        m = memo.get(key)
+        if m is None:
+            m = tf.translate(self.position + self.velocity * t) @ self._rest()
+            if np.any(self.angular_velocity != 0):
+                m[:3, :3] = rotation_at(self.angular_velocity, t) @ m[:3, :3]
+            if len(memo) >= 8:
+                memo.pop(next(iter(memo)))
+            memo[key] = m
+        return m.copy()
 
     def _rest(self) -> np.ndarray:
         """R0 @ S, cached against the values it was made from (the fields may be edited)."""

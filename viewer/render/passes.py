@@ -46,7 +46,7 @@ class FullscreenPass(Pass):
         are cleared to 0 first (where written since their last clear) unless `clear` is
         False (the caller filled them). None: the full-screen triangle."""
         ctx = frame.ctx
-        prog = self.program(frame, "fullscreen.vert" if tiles is None else "tiles.vert")
+        prog = self.program(frame, "fullscreen.vert" if tiles is None else tiles.vertex_shader)
         for unit, (uniform, tex_name) in enumerate(textures.items()):
             frame.pool.get(tex_name).use(unit)
             set_uniform(prog, uniform, unit)

@@ -5,8 +5,8 @@ shade what they reveal on the GPU exactly as the raster layer is shaded.
       R32UI read gives the masked pixels and their own object ids), cast one ray per
       masked pixel through its centre from the camera at the frame time with
       raytrace.RayScene (built once per scene, kept in the renderer's host state), and
-      write each hit as (face row, u, v, 1 + object id) into `reveal_hits` (one texture
-      per layer, only the box around the pixels uploaded);
+      write each hit as (face row, u, v, 1 + object id) into a record texture, one
+      8 x 8 block per (object, screen tile) holding its pixels (layer_hits);
   reveal_shade (GPU): a fragment pass over the tiles holding those pixels, one draw per
       revealed object with that object's GpuScene uniforms: it interpolates the face's
       corners (a texture of every mesh's faces, uploaded once) and shades with the same
@@ -52,6 +52,7 @@ def layer_names(k: int) -> tuple[str, ...]:
 FACE_TEXTURE_WIDTH = 4096
 TEXELS_PER_FACE = 6      # per corner: (position, normal.x), (normal.yz, uv)
 FACE_UNIT = 7
+RECORD_UNIT = 6
 # Tile side for reveal_shade's draws: finer than the tile lists' FINE, so fewer fragments
 # outside the revealed pixels run the shader (the quads themselves cost next to nothing).
 SHADE_TILE = 8
@@ -67,6 +68,7 @@ class RevealState:
         self._faces: moderngl.Texture | None = None
         self.layers: list = []        # per layer: LayerHits of the current frame, or None
         self.tiles: dict[int, TileList] = {}
+        self.records: dict[int, moderngl.Texture] = {}
 
     def face_texture(self) -> moderngl.Texture:
         if self._faces is None:
@@ -81,6 +83,19 @@ class RevealState:
             self._faces.filter = (moderngl.NEAREST, moderngl.NEAREST)
         return self._faces
 
+    def records_texture(self, k: int, shape: tuple[int, int]) -> moderngl.Texture:
+        """Layer k's hit-record texture, at least `shape` (rows, columns); grown in whole
+        powers of two of rows so that it is seldom reallocated."""
+        tex = self.records.get(k)
+        h, w = shape
+        if tex is None or tex.size[0] < w or tex.size[1] < h:
+            if tex is not None:
+                tex.release()
+            rows = 1 << max(4, (h - 1).bit_length())
+            tex = self.records[k] = self.ctx.texture((w, rows), 4, dtype="f4")
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        return tex
+
     def tile_list(self, k: int) -> TileList:
         if k not in self.tiles:
             self.tiles[k] = TileList(self.ctx)
@@ -92,14 +107,15 @@ class RevealState:
             self._faces = None
         for tl in self.tiles.values():
             tl.release()
-        self.tiles.clear()
+        for tex in self.records.values():
+            tex.release()
+        self.tiles.clear(), self.records.clear()
 
 
 @dataclass
 class LayerHits:
-    """One layer's traced pixels: GL pixel box, the (H, W, 4) hit records inside it, and
-    the keys (1 + object id, 1 = the ray left the scene) present."""
-    box: tuple[int, int, int, int]
+    """One layer's traced pixels: their hit records in blocks (layer_hits), the keys
+    (1 + object id, 1 = the ray left the scene) present, and the tiles of each key."""
     records: np.ndarray
     keys: list[tuple[int, int, int]]   # (key, first, count) of each key's run in `tiles`
     tiles: np.ndarray            # (n, 2) SHADE_TILE tiles (GL orientation) of each key's pixels
@@ -145,15 +161,13 @@ def read_masked_pixels(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
     return masked_pixels(window, origin=(i0, h - y1))
 
 
-def gl_box(pixels_ij: np.ndarray, height: int) -> tuple[int, int, int, int]:
-    """(x0, y0, x1, y1) in GL pixels around image pixels (i, j) (row j from the top)."""
-    i, j = pixels_ij[:, 0], pixels_ij[:, 1]
-    return (int(i.min()), int(height - 1 - j.max()), int(i.max()) + 1, int(height - j.min()))
+BLOCKS_PER_ROW = 256     # record blocks (SHADE_TILE x SHADE_TILE) per row of the texture
 
 
 def layer_hits(pixels: np.ndarray, layer, height: int) -> LayerHits | None:
-    """The traced rows of a layer as hit records (face row, u, v, 1 + object id) in the
-    GL box around them; None when nothing was traced."""
+    """The traced rows of a layer as hit records (face row, u, v, 1 + object id), one
+    SHADE_TILE x SHADE_TILE block per (object, screen tile) holding its pixels, blocks in
+    rows of BLOCKS_PER_ROW; None when nothing was traced."""
     rows = np.flatnonzero(layer.traced)
     if not len(rows):
         return None
@@ -162,28 +176,31 @@ def layer_hits(pixels: np.ndarray, layer, height: int) -> LayerHits | None:
     def pick(a):
         return a if every else np.take(a, rows, axis=0)
     px = pick(pixels)
-    box = gl_box(px, height)
-    x0, y0, x1, y1 = box
-    records = np.zeros((y1 - y0, x1 - x0, 4), np.float32)
-    ids = pick(layer.object_id)
-    gx = px[:, 0] - x0
-    gy = (height - 1 - px[:, 1]) - y0
+    ids = pick(layer.object_id).astype(np.int64)
+    gx = px[:, 0].astype(np.int64)
+    gy = (height - 1 - px[:, 1]).astype(np.int64)        # GL rows
+    # Per key (object), the screen tiles holding its pixels, sorted by key: each key's
+    # draw covers only its own run of tiles.
+    tx, ty = gx // SHADE_TILE, gy // SHADE_TILE
+    cols = int(tx.max()) + 1
+    cells_per_key = cols * (int(ty.max()) + 1)
+    cells, block = np.unique(ids * cells_per_key + ty * cols + tx, return_inverse=True)
+    key_of, cell = np.divmod(cells, cells_per_key)
+    tiles = np.stack([cell % cols, cell // cols], axis=1)
+    keys, first, count = np.unique(key_of, return_index=True, return_counts=True)
+    # Pixel (gx, gy) of block b lands at block b's corner plus its offset in its tile.
+    n_rows = -(-len(cells) // BLOCKS_PER_ROW)
+    records = np.zeros((n_rows * SHADE_TILE, BLOCKS_PER_ROW * SHADE_TILE, 4), np.float32)
+    rx = (block % BLOCKS_PER_ROW) * SHADE_TILE + gx - tx * SHADE_TILE
+    ry = (block // BLOCKS_PER_ROW) * SHADE_TILE + gy - ty * SHADE_TILE
     rec = np.empty((len(rows), 4), np.float32)
     rec[:, 0] = np.maximum(pick(layer.face_index), 0)
     rec[:, 1:3] = pick(layer.barycentrics)
     rec[:, 3] = ids
     rec[:, 3] += 1.0
-    records.reshape(-1, 4)[gy * (x1 - x0) + gx] = rec      # one scatter of whole rows
-    # Per key (object), the tiles holding its pixels: its draw covers only those.
-    tx, ty = (gx + x0) // SHADE_TILE, (gy + y0) // SHADE_TILE
-    cols = -(-(x1 + SHADE_TILE) // SHADE_TILE)
-    cells_per_key = cols * (-(-(y1 + SHADE_TILE) // SHADE_TILE))
-    cells = np.unique(ids.astype(np.int64) * cells_per_key + ty * cols + tx)
-    key_of, cell = np.divmod(cells, cells_per_key)
-    tiles = np.stack([cell % cols, cell // cols], axis=1)
-    keys, first, count = np.unique(key_of, return_index=True, return_counts=True)
-    return LayerHits(box, records, [(int(k) + 1, int(f), int(c))
-                                    for k, f, c in zip(keys, first, count)], tiles)
+    records.reshape(-1, 4)[ry * records.shape[1] + rx] = rec     # one scatter of rows
+    return LayerHits(records, [(int(k) + 1, int(f), int(c))
+                               for k, f, c in zip(keys, first, count)], tiles)
 
 
 class RevealTrace(Pass):
@@ -233,10 +250,6 @@ class ClearTiles(FullscreenPass):
     fragment = "reveal_clear.frag"
 
 
-def hits_name(k: int) -> str:
-    return "reveal_hits" if k == 0 else f"reveal_hits{k + 1}"
-
-
 class RevealShade(FullscreenPass):
     """GPU side: the revealed layers' colour, depth, id and displacement at the masked
     pixels, everything else cleared to 'nothing revealed' (alpha 0, the background's
@@ -246,8 +259,7 @@ class RevealShade(FullscreenPass):
     name = "reveal_shade"
     fragment = "reveal_shade.frag"
     inputs = ("reveal_hits",)
-    produces = tuple(n for k in range(MAX_LAYERS)
-                     for n in (*layer_names(k), *packed_names(k), hits_name(k)))
+    produces = tuple(n for k in range(MAX_LAYERS) for n in (*layer_names(k), *packed_names(k)))
 
     def __init__(self):
         self.clear_tiles = ClearTiles()
@@ -260,7 +272,6 @@ class RevealShade(FullscreenPass):
         for k in range(MAX_LAYERS):
             out.update({n: LAYER_SPECS[n.split("_", 1)[1]] for n in layer_names(k)})
             out.update({n: PACKED for n in packed_names(k)})
-            out[hits_name(k)] = PACKED
         return out
 
     @staticmethod
@@ -287,30 +298,29 @@ class RevealShade(FullscreenPass):
                 self.clear(frame, names)
             tl.set(np.zeros((0, 2)), SHADE_TILE, frame.size)
             hits = st.layers[k] if k < len(st.layers) else None
-            frame.pool.clear((hits_name(k),))
             if hits is None:
                 continue
-            x0, y0, x1, y1 = hits.box
-            frame.pool.get(hits_name(k)).write(hits.records.tobytes(),
-                                               viewport=(x0, y0, x1 - x0, y1 - y0))
-            frame.pool.mark_written((hits_name(k),), hits.box)
+            records = st.records_texture(k, hits.records.shape[:2])
+            h, w = hits.records.shape[:2]
+            records.write(hits.records.tobytes(), viewport=(0, 0, w, h))
             # The tiles holding this layer's pixels; each object's draw keeps its own.
-            tl.set(hits.tiles, SHADE_TILE, frame.size)
-            prog = self.program(frame, "tiles.vert")
+            tl.set(hits.tiles, SHADE_TILE, frame.size, BLOCKS_PER_ROW)
+            prog = self.program(frame, tl.vertex_shader)
             gpu.bind_camera(prog, cam, t, t_open, t_close, frame.size)
             set_uniform(prog, "u_background", frame.scene.background)
             set_uniform(prog, "u_max_disp", 2.0 * max_radius_px(frame))
             gpu.bind_lights(prog)
             st.face_texture().use(FACE_UNIT)      # draw() binds its textures from unit 0
             set_uniform(prog, "u_faces", FACE_UNIT)
+            records.use(RECORD_UNIT)
+            set_uniform(prog, "u_hits", RECORD_UNIT)
             objects = {o.id: o for o in frame.scene.objects}
             for key, first, count in hits.keys:
                 set_uniform(prog, "u_miss", key == 1)
                 set_uniform(prog, "u_key", float(key))
                 if key > 1:
                     gpu.bind_object(prog, objects[key - 1], t, t_open, t_close)
-                self.draw(frame, names, {"u_hits": hits_name(k)}, tiles=tl.part(first, count),
-                          clear=False)
+                self.draw(frame, names, {}, tiles=tl.part(first, count), clear=False)
 
 
 def reveal_passes() -> list:

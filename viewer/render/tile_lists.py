@@ -50,9 +50,16 @@ class TileList:
         self.count = 0                 # tiles in the current list
         self.tiles = np.zeros((0, 2), np.int64)
         self.box = None                # (x0, y0, x1, y1) GL pixels around the tiles
+        self.vertex_shader = "tiles.vert"
+        self.blocks_per_row = None
 
-    def set(self, tiles: np.ndarray, tile: int, size: tuple[int, int]):
-        """tiles: (n, 2) tile coordinates (tx, ty), GL orientation."""
+    def set(self, tiles: np.ndarray, tile: int, size: tuple[int, int],
+            blocks_per_row: int | None = None):
+        """tiles: (n, 2) tile coordinates (tx, ty), GL orientation.
+
+        blocks_per_row: also give every vertex `in_record`, its place in a texture that
+        stores tile k's pixels as a tile x tile block at (k % blocks_per_row,
+        k // blocks_per_row) * tile (glsl/reveal_tiles.vert)."""
         self.tiles = np.asarray(tiles, np.int64).reshape(-1, 2)
         self.count = len(self.tiles)
         w, h = size
@@ -65,7 +72,17 @@ class TileList:
         # Two triangles per tile: (x0,y0) (x1,y0) (x0,y1) and (x1,y0) (x1,y1) (x0,y1).
         xs = np.stack([x0, x1, x0, x1, x1, x0], axis=1)
         ys = np.stack([y0, y0, y1, y0, y1, y1], axis=1)
-        data = np.stack([xs, ys], axis=2).astype(np.float32).reshape(-1)
+        columns = [xs, ys]
+        if blocks_per_row:
+            k = np.arange(self.count)
+            bx = (k % blocks_per_row) * tile - x0       # block corner minus tile corner
+            by = (k // blocks_per_row) * tile - y0
+            columns += [xs + bx[:, None], ys + by[:, None]]
+        if blocks_per_row != self.blocks_per_row:
+            self._release_buffer()                      # the vertex layout changes
+        self.blocks_per_row = blocks_per_row
+        self.vertex_shader = "reveal_tiles.vert" if blocks_per_row else "tiles.vert"
+        data = np.stack(columns, axis=2).astype(np.float32).reshape(-1)
         nbytes = max(data.nbytes, 4)
         if self.buffer is None or self.buffer.size < nbytes:
             self._release_buffer()
@@ -80,8 +97,13 @@ class TileList:
             return
         vao = self.vaos.get(prog.glo)
         if vao is None:
-            vao = self.vaos[prog.glo] = self.ctx.vertex_array(
-                prog, [(self.buffer, "2f", "in_corner")])
+            if not self.blocks_per_row:
+                layout = (self.buffer, "2f", "in_corner")
+            elif "in_record" in prog:
+                layout = (self.buffer, "2f 2f", "in_corner", "in_record")
+            else:
+                layout = (self.buffer, "2f 8x", "in_corner")
+            vao = self.vaos[prog.glo] = self.ctx.vertex_array(prog, [layout])
         vao.render(moderngl.TRIANGLES, vertices=6 * count, first=6 * first)
 
     def part(self, first: int, count: int) -> "TileRange":
@@ -106,6 +128,7 @@ class TileRange:
 
     def __init__(self, tiles: TileList, first: int, count: int):
         self.tiles, self.first, self.count = tiles, first, count
+        self.vertex_shader = tiles.vertex_shader
         t = tiles.tiles[first:first + count]
         self.box = tiles.box if count == 0 else _box(t, tiles.tile, tiles.size)
 
