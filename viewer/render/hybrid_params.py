@@ -43,9 +43,9 @@ class HybridParams:
                                 "the raster and revealed layers; bucket: fragments "
                                 "gathered along lines, sorted by object and depth, "
                                 "combined front to back (both ALGORITHMS.md 4.3); auto: "
-                                "bucket where the camera is still (as good within a few "
-                                "thousandths of FLIP, 3-6x cheaper), time where it moves "
-                                "(the bucket's static-background model breaks there)")
+                                "bucket where the camera is still (whole-image FLIP within "
+                                "0.01 of time's, 3-6x cheaper), time where it moves (the "
+                                "bucket under-blurs there; docs/performance.md)")
     samples_min: int = param(8, lo=1, hi=256,
                              help="time samples per pixel (bucket: taps per line) where "
                                   "anything moves, at least")

@@ -1,0 +1,95 @@
+"""Markdown tables from `hmblur bench --json` files (docs/performance.md is made of them).
+
+    python scripts/perf_tables.py docs/perf/*.json
+"""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+SHOWN_PASSES = {
+    "hybrid": ("gbuffer", "motion_tiles", "select_tiles", "mask_displacement", "mask_edge",
+               "mask_edge_tiles", "ray_mask", "ray_mask_tiles", "reveal", "reveal_shade",
+               "hybrid_tilemax_x", "hybrid_composite"),
+}
+
+
+def load(paths):
+    return [(Path(p).stem, json.loads(Path(p).read_text())) for p in paths]
+
+
+def frame_table(reports) -> str:
+    lines = ["| scene | size | off | McGuire | UE4-style | hybrid | hybrid / McGuire | UE4 / McGuire |",
+             "|---|---|---:|---:|---:|---:|---:|---:|"]
+    for _, r in reports:
+        m = r["modes"]
+
+        def ms(mode):
+            return f"{m[mode]['frame_ms']:.1f}" if mode in m else "-"
+        ratios = r.get("ratios", {})
+        lines.append(f"| {r['scene']} | {r['size'][0]}x{r['size'][1]} | {ms('off')} | "
+                     f"{ms('mcguire')} | {ms('ue4')} | {ms('hybrid')} | "
+                     f"{ratios.get('hybrid/mcguire', float('nan')):.2f} | "
+                     f"{ratios.get('ue4/mcguire', float('nan')):.2f} |")
+    return "\n".join(lines)
+
+
+def pass_table(reports) -> str:
+    names = SHOWN_PASSES["hybrid"]
+    lines = ["| scene | size | McGuire gather | " + " | ".join(names) + " |",
+             "|---|---|---:|" + "---:|" * len(names)]
+    for _, r in reports:
+        h = r["modes"].get("hybrid", {}).get("passes", {})
+        g = r["modes"].get("mcguire", {}).get("passes", {}).get("mcguire_gather")
+        cells = [f"{h[n]:.1f}" if n in h else "-" for n in names]
+        lines.append(f"| {r['scene']} | {r['size'][0]}x{r['size'][1]} | "
+                     f"{g:.1f} | " + " | ".join(cells) + " |" if g else "")
+    return "\n".join(x for x in lines if x)
+
+
+def reveal_table(reports) -> str:
+    lines = ["| scene | size | masked pixels | rays | reveal ms | of which tracing | "
+             "M rays/s (whole / tracing) | bare Embree M rays/s | whole / bare | tracing / bare |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for _, r in reports:
+        rv = r.get("reveal")
+        if not rv:
+            continue
+        lines.append(
+            f"| {r['scene']} | {r['size'][0]}x{r['size'][1]} | {rv['masked_pixels']} | "
+            f"{rv['rays']} | {rv['reveal_ms']:.1f} | {rv['trace_ms']:.1f} | "
+            f"{rv['rays_per_s'] / 1e6:.2f} / {rv['trace_rays_per_s'] / 1e6:.2f} | "
+            f"{rv['embree_rays_per_s'] / 1e6:.2f} | {rv['fraction_of_embree'] or 0:.0%} | "
+            f"{rv['trace_fraction_of_embree'] or 0:.0%} |")
+    return "\n".join(lines)
+
+
+def scaling_table(reports) -> str:
+    lines = ["| scene | size | speed x | masked pixels | rays | reveal ms | ms per 1000 rays |",
+             "|---|---|---:|---:|---:|---:|---:|"]
+    for _, r in reports:
+        for row in r.get("scaling", []):
+            per = 1e3 * row["reveal_ms"] / row["rays"] if row["rays"] else 0.0
+            lines.append(f"| {r['scene']} | {r['size'][0]}x{r['size'][1]} | {row['speed']:g} | "
+                         f"{row['masked_pixels']} | {row['rays']} | {row['reveal_ms']:.2f} | "
+                         f"{per:.2f} |")
+    return "\n".join(lines)
+
+
+def main(paths) -> int:
+    reports = load(paths)
+    print("### Frame time (median ms) and ratios\n")
+    print(frame_table(reports))
+    print("\n### Hybrid passes (median ms)\n")
+    print(pass_table(reports))
+    print("\n### Reveal throughput\n")
+    print(reveal_table(reports))
+    print("\n### Reveal cost against the mask\n")
+    print(scaling_table(reports))
+    print(f"\nDevice: {reports[0][1]['device']}" if reports else "")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
