@@ -296,9 +296,9 @@ class RevealShade(FullscreenPass):
                 frame.pool.mark_clean(names)
             else:
                 self.clear(frame, names)
-            tl.set(np.zeros((0, 2)), SHADE_TILE, frame.size)
             hits = st.layers[k] if k < len(st.layers) else None
             if hits is None:
+                tl.set(np.zeros((0, 2)), SHADE_TILE, frame.size, BLOCKS_PER_ROW)
                 continue
             records = st.records_texture(k, hits.records.shape[:2])
             h, w = hits.records.shape[:2]

@@ -110,7 +110,6 @@ class TileList:
         """Tiles first .. first + count - 1 of this list, drawable like a list."""
         return TileRange(self, first, count)
 
-
     def _release_buffer(self):
         for v in self.vaos.values():
             v.release()
