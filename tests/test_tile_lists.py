@@ -124,3 +124,21 @@ def test_active_tiles_match_their_definition(seed):
     for max_disp in (20.0, 60.0, 200.0):
         got = tile_lists.active_tiles(longest, 8, max_disp, 0.65)
         np.testing.assert_array_equal(got, brute_force_active(longest, 8, max_disp, 0.65))
+
+
+def test_resize_between_frames_gives_a_fresh_renderers_frame(ctx):
+    scene = load_scene(str(CONFORMANCE / "basic.toml"))
+    r = Renderer(ctx, scene, SIZE)
+    fresh = Renderer(ctx, scene, (150, 90))
+    try:
+        r.render("hybrid", 0.0, ParamSet())
+        r.resize((150, 90))
+        got = r.render("hybrid", 0.25, ParamSet())
+        want = fresh.render("hybrid", 0.25, ParamSet())
+        assert got.stats["masked_pixels"] == want.stats["masked_pixels"] > 0
+        assert got.image.tobytes() == want.image.tobytes()
+        for n in ("ray_mask", "revealed_color", "hybrid_back"):
+            assert r.pool.get(n).read() == fresh.pool.get(n).read(), n
+    finally:
+        r.release()
+        fresh.release()
