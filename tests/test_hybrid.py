@@ -430,15 +430,58 @@ def test_inner_blur_beats_the_post_process_modes_on_basic(ctx):
         assert flip["hybrid"]["all"]["flip"] <= flip[other]["all"]["flip"], other
 
 
-def test_auto_composite_is_the_bucket_for_a_still_camera_and_time_for_a_moving_one(synthetic_frame):
+def test_auto_composite_is_the_bucket_for_a_still_camera_and_split_for_a_moving_one(synthetic_frame):
     from conftest import empty_scene
     still = synthetic_frame((W, H), params())
     assert still.params["hybrid"].composite == "auto"
     assert composite_kind(still) == "bucket"
     scene = empty_scene()
     scene.camera.velocity = np.array([1.0, 0.0, 0.0])
-    assert composite_kind(synthetic_frame((W, H), params(), scene=scene)) == "time"
+    assert composite_kind(synthetic_frame((W, H), params(), scene=scene)) == "split"
     scene.camera.velocity = np.zeros(3)
     scene.camera.angular_velocity = np.array([0.0, 0.5, 0.0])
-    assert composite_kind(synthetic_frame((W, H), params(), scene=scene)) == "time"
+    assert composite_kind(synthetic_frame((W, H), params(), scene=scene)) == "split"
     assert composite_kind(synthetic_frame((W, H), params(composite="time"))) == "time"
+
+
+def test_split_composite_is_time_near_the_mask_and_bucket_elsewhere(ctx):
+    # A moving camera: each active tile holds exactly what the time-sampled or the bucketed
+    # composite gives there; the time tiles are those within reach of a masked pixel.
+    from viewer.render.tile_lists import FINE
+    scene = load_scene(CONFORMANCE / "vase_pan.toml")
+    size = (160, 90)
+    r = Renderer(ctx, scene, size)
+    try:
+        split = r.render("hybrid", 0.0, params())
+        lists = r._host_passes["tile_lists"]
+        time_tiles = lists.extra("time").tiles.copy()
+        bucket_tiles = lists.extra("bucket").tiles.copy()
+        mask = r.pool.get("ray_mask").read()
+        t = r.render("hybrid", 0.0, params(composite="time"))
+        b = r.render("hybrid", 0.0, params(composite="bucket"))
+    finally:
+        r.release()
+    assert len(time_tiles) and len(bucket_tiles) and split.stats["time_tiles"] == len(time_tiles)
+    assert np.frombuffer(mask, np.uint32).any()
+    gl = [to_image(x.image) for x in (split, t, b)]     # GL rows, as the tiles count
+    for tiles, want in ((time_tiles, gl[1]), (bucket_tiles, gl[2])):
+        for tx, ty in tiles:
+            sl = np.s_[ty * FINE:(ty + 1) * FINE, tx * FINE:(tx + 1) * FINE]
+            assert gl[0][sl].tobytes() == want[sl].tobytes(), (tx, ty)
+
+
+def test_split_tiles_hand_values():
+    from viewer.render.hybrid_composite import split_tiles
+    from viewer.render.tile_lists import FINE
+    active = np.ones((3, 6), bool)
+    active[0, 5] = False
+    # One masked pixel in image row 0 of a 48-row screen: GL row 47, tile row 2; column 20
+    # is tile column 1. Reach 1: tile columns 0-2, tile rows 1-2 are near it.
+    time, bucket = split_tiles(active, np.array([[20, 0]]), 3 * FINE, 1)
+    want = np.zeros((3, 6), bool)
+    want[1:3, 0:3] = True
+    np.testing.assert_array_equal(time, want)
+    np.testing.assert_array_equal(bucket, active & ~want)
+    # No mask: every active tile is the bucket's.
+    time, bucket = split_tiles(active, np.zeros((0, 2), int), 3 * FINE, 1)
+    assert not time.any() and (bucket == active).all()

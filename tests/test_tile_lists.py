@@ -28,11 +28,14 @@ def render_buffers(ctx, scene, p, full_screen: bool, monkeypatch):
         monkeypatch.undo()
 
 
-@pytest.mark.parametrize("name", ["living_room", "spinner", "thin", "pan",
-                                  str(CONFORMANCE / "basic.toml")])
-def test_tiled_passes_equal_full_screen(ctx, monkeypatch, name):
+@pytest.mark.parametrize("name, composite", [
+    ("living_room", "bucket"), ("spinner", "time"), ("thin", "bucket"), ("pan", "time"),
+    ("pan", "bucket"), (str(CONFORMANCE / "basic.toml"), "time")])
+def test_tiled_passes_equal_full_screen(ctx, monkeypatch, name, composite):
+    # (The "split" composite exists only with tile lists: tests/test_hybrid.py checks it.)
     scene = load_scene(name)
     p = ParamSet()
+    p.set("hybrid.composite", composite)
     tiled, a = render_buffers(ctx, scene, p, False, monkeypatch)
     full, b = render_buffers(ctx, scene, p, True, monkeypatch)
     assert "active_tiles" in tiled.stats and "active_tiles" not in full.stats

@@ -15,7 +15,10 @@ from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass
 from .pool import TexSpec
-from .tile_lists import tile_list
+import numpy as np
+from scipy.ndimage import maximum_filter
+
+from .tile_lists import FINE, tile_coords, tile_list
 from .tiles import tile_passes
 
 # Which noise stream of glsl/noise.glsl's hash01 jitters the time samples or taps.
@@ -24,24 +27,46 @@ FRAGMENTS = {"time": "hybrid_time.frag", "bucket": "hybrid_bucket.frag"}
 
 
 def composite_kind(frame: Frame) -> str:
-    """"time" or "bucket": the `hybrid.composite` setting, "auto" resolved by whether the
-    camera moves (docs/performance.md has the measurements behind the choice)."""
+    """"time", "bucket" or "split": the `hybrid.composite` setting, "auto" resolved by
+    whether the camera moves: the bucket where it is still; where it moves, "split": the
+    time-sampled composite near the ray mask and the bucket elsewhere (the bucket
+    misjudges the inner blur of a moving camera's parallax; docs/performance.md)."""
     kind = frame.params["hybrid"].composite
     if kind == "auto":
-        return "time" if frame.scene.camera.moving else "bucket"
+        return "split" if frame.scene.camera.moving else "bucket"
     return kind
 
 
+# Tiles around the masked ones that get the time-sampled composite under a moving camera.
+# Measured (640x360, FLIP whole / inner / outer, composite ms): pan 0 tiles .036/.044/.053
+# 246 ms, 1 tile .035/.040/.042 376 ms, 5 tiles (all within the blur limit) the same as 1
+# at 507 ms; vase_pan 1 tile = 5 tiles = .042/.059/.054 at 123 and 370 ms.
+SPLIT_REACH = 1
+
+
+def split_tiles(active: np.ndarray, masked_ij: np.ndarray, height: int, reach: int):
+    """(time, bucket) boolean tile maps (GL rows): the active tiles within `reach` tiles
+    (Chebyshev) of a tile holding a masked pixel, and the other active tiles."""
+    near = np.zeros_like(active)
+    if len(masked_ij):
+        near[(height - 1 - masked_ij[:, 1]) // FINE, masked_ij[:, 0] // FINE] = True
+        near = maximum_filter(near, size=2 * reach + 1, mode="constant", cval=False)
+    return active & near, active & ~near
+
+
 class Composite(FullscreenPass):
-    """The composite composite_kind picks: "time" (glsl/hybrid_time.frag) or "bucket"
-    (glsl/hybrid_bucket.frag)."""
+    """The composite composite_kind picks: "time" (glsl/hybrid_time.frag), "bucket"
+    (glsl/hybrid_bucket.frag), or "split" between them by tiles."""
     name = "hybrid_composite"
     inputs = ("color", "hybrid_front", "hybrid_back", "hybrid_back_color", "hybrid_back2",
               "hybrid_back2_color", "hybrid_tilemax", "hybrid_neighbormax", "ray_mask_tiles")
     produces = ("hybrid",)
 
+    def __init__(self):
+        self._kind = "time"
+
     def program(self, frame: Frame, vertex: str = "fullscreen.vert"):
-        self.fragment = FRAGMENTS[composite_kind(frame)]
+        self.fragment = FRAGMENTS[self._kind]
         return super().program(frame, vertex)
 
     def defines(self, frame: Frame):
@@ -53,13 +78,31 @@ class Composite(FullscreenPass):
         return {"hybrid": TexSpec(4, "f4")}
 
     def execute(self, frame: Frame):
-        p = frame.params["hybrid"]
-        k = max_radius_px(frame)
+        kind = composite_kind(frame)
         tiles = tile_list(frame, "active")
         if tiles is not None:
             # Outside the active tiles nothing reaches a pixel: its sharp colour stands.
             frame.ctx.copy_framebuffer(frame.pool.framebuffer(("hybrid",)),
                                        frame.pool.framebuffer(("color",)))
+        if kind != "split":
+            return self._draw(frame, kind, tiles)
+        if tiles is None:            # no tile lists (a pass run on its own): all time
+            return self._draw(frame, "time", None)
+        lists = frame.host["tile_lists"]
+        active = np.zeros(lists.shape, bool)
+        active[tiles.tiles[:, 1], tiles.tiles[:, 0]] = True
+        near, far = split_tiles(active, frame.host.get("masked_pixels", np.zeros((0, 2), int)),
+                                frame.size[1], SPLIT_REACH)
+        for which, selected in (("time", near), ("bucket", far)):
+            tl = lists.extra(which)
+            tl.set(tile_coords(selected), FINE, frame.size)
+            self._draw(frame, which, tl)
+        frame.stats["time_tiles"] = int(near.sum())
+
+    def _draw(self, frame: Frame, kind: str, tiles):
+        p = frame.params["hybrid"]
+        k = max_radius_px(frame)
+        self._kind = kind
         self.draw(frame, self.produces,
                   {"u_front_color": "color", "u_front": "hybrid_front",
                    "u_back_color": "hybrid_back_color", "u_back": "hybrid_back",

@@ -43,9 +43,10 @@ class HybridParams:
                                 "the raster and revealed layers; bucket: fragments "
                                 "gathered along lines, sorted by object and depth, "
                                 "combined front to back (both ALGORITHMS.md 4.3); auto: "
-                                "bucket where the camera is still (whole-image FLIP within "
-                                "0.01 of time's, 3-6x cheaper), time where it moves (the "
-                                "bucket under-blurs there; docs/performance.md)")
+                                "bucket where the camera is still (3-6x cheaper, "
+                                "whole-image FLIP within 0.01 of time's); where it moves, "
+                                "time near the ray mask and bucket elsewhere "
+                                "(docs/performance.md)")
     samples_min: int = param(8, lo=1, hi=256,
                              help="time samples per pixel (bucket: taps per line) where "
                                   "anything moves, at least")

@@ -233,6 +233,7 @@ class RevealTrace(Pass):
         s["reveal_trace_ms"] = (t2 - t1) * 1e3
         s["reveal_pack_ms"] = (t3 - t2) * 1e3
         s["reveal_ms"] = (t3 - t0) * 1e3
+        frame.host["masked_pixels"] = pixels        # the composite's split (image i, j)
         # What `hmblur bench` needs to time bare Embree on the same primary rays.
         frame.host["reveal_batch"] = {"rayscene": st.rays, "camera": frame.camera,
                                       "pixels": pixels, "t": frame.time}

@@ -149,10 +149,20 @@ class TileLists:
         self.ctx = ctx
         self.moving = TileList(ctx)
         self.active = TileList(ctx)
+        self.shape = (0, 0)            # (rows, columns) of FINE tiles this frame
+        self._extra: dict[str, TileList] = {}
+
+    def extra(self, name: str) -> TileList:
+        """Another list kept with these (e.g. the composite's split of the active tiles)."""
+        if name not in self._extra:
+            self._extra[name] = TileList(self.ctx)
+        return self._extra[name]
 
     def release(self):
         self.moving.release()
         self.active.release()
+        for tl in self._extra.values():
+            tl.release()
 
 
 def moving_tiles(longest: np.ndarray, min_speed: float) -> np.ndarray:
@@ -230,6 +240,7 @@ class SelectTiles(Pass):
         p = frame.params["hybrid"]
         moving = moving_tiles(longest, p.min_speed)
         active = active_tiles(longest, FINE, 2.0 * max_radius_px(frame), p.tolerance)
+        lists.shape = longest.shape
         lists.moving.set(tile_coords(moving), FINE, frame.size)
         lists.active.set(tile_coords(active), FINE, frame.size)
         frame.host["tile_lists"] = lists
