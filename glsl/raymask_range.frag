@@ -5,8 +5,9 @@
 // whole steps), the pixel is masked. Survivors of the displacement test are masked too. The output is
 // the pixel's object id where masked (0 elsewhere): one read gives mask and own ids.
 // The 3x3 edge tiles around the pixel bound the search (nothing in reach: no search; else
-// no farther than the largest reach there): the result is the same, the cost far lower
-// where everything moves (camera motion) but few edges survive.
+// no farther than the largest reach there), and a coarse look along it at the 16-px
+// tiles with an edge nearby skips it where it would find nothing: the result is the
+// same, the cost far lower where everything moves (camera motion) but few edges survive.
 #include "raymask_common.glsl"
 uniform usampler2D u_displacement_mask;
 uniform usampler2D u_edge;
@@ -14,6 +15,8 @@ uniform usampler2D u_id;
 uniform sampler2D u_velocity;
 uniform sampler2D u_relative;
 uniform sampler2D u_edge_tiles;   // raymask_tiles.frag, MODE 0
+uniform sampler2D u_edge_near;    // y > 0: an edge in this u_fine tile or one next to it
+uniform int u_fine;
 uniform int u_tile;
 uniform float u_min_speed;
 uniform float u_relative_reach;   // search length, in half displacements
@@ -34,6 +37,18 @@ void main() {
     vec2 dir = d / length(d);
     int steps = int(ceil(min(min(u_max_reach, u_relative_reach * half_len),
                              max(half_len, near.x))));
+    // Coarse look first: points every 8 px along the search. A probe lies within 4 px of
+    // one (5 px per axis after flooring, less than a tile), so its tile is within a tile
+    // of that point's: where no point's tile has an edge next to it, no probe sees one.
+    bool any_edge = false;
+    int m_max = (steps + 7) / 8;
+    for (int m = -m_max; m <= m_max; ++m) {
+        if (texelFetch(u_edge_near, probe(x, float(8 * m) * dir, size) / u_fine, 0).y > 0.0) {
+            any_edge = true;
+            break;
+        }
+    }
+    if (!any_edge) return;
     for (int i = 0; i <= steps; ++i) {
         for (int s = -1; s <= 1; s += 2) {
             ivec2 y = probe(x, float(s * i) * dir, size);

@@ -210,3 +210,28 @@ def test_slow_pixels_below_min_speed_are_not_masked(synthetic_frame):
     frame = synthetic_frame((W, H), params(min_speed=10.0))
     upload(frame, *bar_scene())                             # |D| = 9.2 < 10
     assert not run(frame)["ray_mask"].any()
+
+
+@pytest.mark.parametrize("seed", [3, 4])
+def test_sparse_edges_on_a_wide_frame_match_numpy(synthetic_frame, seed):
+    # A wide frame where the background moves too (every pixel searches) and the edges
+    # are few and far apart: the range check's coarse look along each search (16-px
+    # tiles with an edge nearby) must skip exactly the searches that find nothing.
+    rng = np.random.default_rng(seed)
+    w, h = 176, 48
+    frame = synthetic_frame((w, h), params())             # k = 44 px
+    depth = 9.0 + rng.uniform(0, 0.3, (h, w))
+    ids = np.ones((h, w), np.uint32)
+    disp = np.tile([-6.0, 1.5], (h, w, 1))
+    normal = np.tile([0.0, 0.0, 1.0, 0.0], (h, w, 1))
+    for oid, (x0, y0) in enumerate(rng.integers([0, 0], [w - 30, h - 14], (3, 2)), start=2):
+        sl = np.s_[y0:y0 + 14, x0:x0 + 30]
+        depth[sl], ids[sl] = 2.0 + oid, oid
+        disp[sl] = rng.uniform(-30, 30, 2)
+    upload(frame, depth, ids, disp, normal)
+    got = run(frame)
+    dm, rel, edge, mask = numpy_mask(frame, depth, ids, disp, normal)
+    np.testing.assert_array_equal(got["mask_edge"], edge)
+    np.testing.assert_array_equal(got["ray_mask"], mask)
+    # Masked pixels that only the range check finds (not displacement survivors) exist.
+    assert np.count_nonzero((mask > 0) & (dm == 0)) >= 10

@@ -11,7 +11,9 @@ Three fragment passes, after the paper, adapted to the contract's centred exposu
       its displacement; holds the pixel's object id where masked, 0 elsewhere.
 
 mask_edge_tiles and ray_mask_tiles summarise the edges and the mask per k x k tile (k the
-blur limit), so the range check and the composite skip pixels with nothing in reach.
+blur limit), so the range check and the composite skip pixels with nothing in reach;
+mask_edge_near (the 16 x 16 tiles holding an edge, dilated by one tile) lets the range
+check skip, exactly, a search whose probes all lie in edge-free tiles.
 """
 from __future__ import annotations
 
@@ -70,9 +72,9 @@ class MaskTiles(FullscreenPass):
     SOURCE_tiles_x, then 1 x k into SOURCE_tiles."""
     fragment = "raymask_tiles.frag"
 
-    def __init__(self, source: str, mode: str):
-        self.source, self.mode = source, mode
-        self.name = source + "_tiles"
+    def __init__(self, source: str, mode: str, tile=max_radius_px, name: str | None = None):
+        self.source, self.mode, self.tile = source, mode, tile
+        self.name = name or source + "_tiles"
         self.inputs = (source, "mask_relative")
         self.produces = (self.name + "_x", self.name)
 
@@ -81,11 +83,11 @@ class MaskTiles(FullscreenPass):
                 "MOTION_TILES": int(self._stage == 0 and tile_list(frame, "moving") is not None)}
 
     def outputs(self, frame: Frame):
-        k = max_radius_px(frame)
+        k = self.tile(frame)
         return {self.name + "_x": StripSpec(2, "f4", tile=k), self.name: TexSpec(2, "f4", tile=k)}
 
     def execute(self, frame: Frame):
-        k = max_radius_px(frame)
+        k = self.tile(frame)
         self._stage = 0
         textures = {"u_mask": self.source, "u_relative": "mask_relative"}
         uniforms = {"u_tile": k}
@@ -97,11 +99,26 @@ class MaskTiles(FullscreenPass):
         self.draw(frame, (self.name,), {"u_strip": self.name + "_x"}, {"u_tile": k})
 
 
+class DilateTiles(FullscreenPass):
+    """Per channel, the largest of the 3x3 texels around each texel (glsl/dilate3.frag)."""
+    fragment = "dilate3.frag"
+
+    def __init__(self, source: str, output: str, spec: TexSpec):
+        self.name, self.source, self.spec = output, source, spec
+        self.inputs, self.produces = (source,), (output,)
+
+    def outputs(self, frame: Frame):
+        return {self.name: self.spec}
+
+    def execute(self, frame: Frame):
+        self.draw(frame, self.produces, {"u_source": self.source})
+
+
 class RangeCheck(FullscreenPass):
     name = "ray_mask"
     fragment = "raymask_range.frag"
-    inputs = ("mask_displacement", "mask_edge", "mask_edge_tiles", "mask_relative", "id",
-              "velocity")
+    inputs = ("mask_displacement", "mask_edge", "mask_edge_tiles", "mask_edge_near",
+              "mask_relative", "id", "velocity")
     produces = ("ray_mask",)
 
     def outputs(self, frame: Frame):
@@ -112,8 +129,9 @@ class RangeCheck(FullscreenPass):
         self.draw(frame, self.produces,
                   {"u_displacement_mask": "mask_displacement", "u_edge": "mask_edge",
                    "u_id": "id", "u_velocity": "velocity", "u_relative": "mask_relative",
-                   "u_edge_tiles": "mask_edge_tiles"},
+                   "u_edge_tiles": "mask_edge_tiles", "u_edge_near": "mask_edge_near"},
                   {"u_min_speed": float(p.min_speed), "u_tile": max_radius_px(frame),
+                   "u_fine": FINE,
                    "u_relative_reach": float(p.relative_reach),
                    "u_max_reach": float(max_radius_px(frame))},
                   tiles=tile_list(frame, "moving"))
@@ -121,5 +139,7 @@ class RangeCheck(FullscreenPass):
 
 def raymask_passes() -> list:
     """The three mask passes and their tile summaries, after a full G-buffer."""
-    return [DisplacementTest(), EdgeTest(), MaskTiles("mask_edge", "edges"), RangeCheck(),
-            MaskTiles("ray_mask", "mask")]
+    return [DisplacementTest(), EdgeTest(), MaskTiles("mask_edge", "edges"),
+            MaskTiles("mask_edge", "edges", tile=lambda frame: FINE, name="mask_edge_fine"),
+            DilateTiles("mask_edge_fine", "mask_edge_near", TexSpec(2, "f4", tile=FINE)),
+            RangeCheck(), MaskTiles("ray_mask", "mask")]
