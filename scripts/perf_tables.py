@@ -28,10 +28,12 @@ def frame_table(reports) -> str:
         def ms(mode):
             return f"{m[mode]['frame_ms']:.1f}" if mode in m else "-"
         ratios = r.get("ratios", {})
+
+        def ratio(key):
+            return f"{ratios[key]:.2f}" if key in ratios else "-"
         lines.append(f"| {r['scene']} | {r['size'][0]}x{r['size'][1]} | {ms('off')} | "
                      f"{ms('mcguire')} | {ms('ue4')} | {ms('hybrid')} | "
-                     f"{ratios.get('hybrid/mcguire', float('nan')):.2f} | "
-                     f"{ratios.get('ue4/mcguire', float('nan')):.2f} |")
+                     f"{ratio('hybrid/mcguire')} | {ratio('ue4/mcguire')} |")
     return "\n".join(lines)
 
 
