@@ -58,7 +58,7 @@ class HybridParams:
     jitter: float = param(1.0, lo=0.0, hi=1.0,
                           help="per-pixel jitter of the stratified times or taps: 0 = "
                                "fixed (banding), 1 = one random offset per pixel (noise)")
-    seeds: int = param(3, lo=1, hi=9, effect="recompile",
+    seeds: int = param(2, lo=1, hi=9, effect="recompile",
                        help="distinct tile maxima around a pixel whose surfaces are looked "
                             "for at each time sample (what may pass over it)")
     iterations: int = param(3, lo=0, hi=8,
