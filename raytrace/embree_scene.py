@@ -5,8 +5,9 @@ every static object goes into one world-space Embree scene (one geometry each, s
 geometry index names the object), and every moving object gets its own Embree scene in
 its local mesh coordinates. At time t a ray is carried into a moving object's space by
 the inverse of M(t); the direction is NOT renormalised, so Embree's hit parameter is
-still the distance along the unit world direction. The nearest valid hit over all the
-scenes wins.
+still the distance along the unit world direction. Only the rays that meet the moving
+object's world box at t (a slab test on the mesh's local box carried by M(t)) go into its
+scene. The nearest valid hit over all the scenes wins.
 
 embreex's `run` starts every ray at tnear = 0 and takes no tnear, so a ray that must
 start further along (a restart past an excluded static object, a near plane, a deeper
