@@ -144,6 +144,8 @@ void main() {
     // Line 3: the revealed layer blurred along its own motion (merged with the raster
     // where nothing was revealed, so the line may run out of the mask).
     vec3 fill = g_far_count > 0.0 ? g_far_sum / g_far_count : own_colour;
+    vec3 back_all = vec3(0.0);      // the line's background without the time pairing
+    float back_all_w = 0.0;
     if (revealed) {
         fill = back_colour(x);
         float rb = 0.5 * length(bx.xy);
@@ -153,11 +155,36 @@ void main() {
             for (int i = 0; i < n; ++i) {
                 ivec2 y = tap(x, dir, rb, i, n, a, b);
                 vec4 m = back_motion(y);
-                if (m.z >= back_depth * 0.999) add(BACK, back_colour(y), coverage(a, b, length(m.xy)));
+                // The revealed object itself (a slanted one is nearer in places) or
+                // anything behind it; not the own object or others in front.
+                float id = m.w > 0.5 ? m.w - 1.0 : front_motion(y).w;
+                if (id != back_id && m.z < back_depth * 0.999) continue;
+                float len = length(m.xy);
+                float w = coverage(a, b, len);
+                vec3 c = back_colour(y);
+                back_all += w * c;
+                back_all_w += w;
+                // The background seen at x is this fragment at the time u = -s / |m| it
+                // passes x; it counts only if the own object does not cover x then (the
+                // own fragment that would be at x then is at x - u D, frame time). With a
+                // still background every time sees the same fragment: no pairing.
+                if (w > 0.0 && len >= 1e-3) {
+                    float u = clamp(-g_s / len, -0.5, 0.5);
+                    ivec2 q = clamp(ivec2(floor(vec2(x) + 0.5 - u * fx.xy)), ivec2(0), g_size - 1);
+                    if (texelFetch(u_front, q, 0).w == own_id) w = 0.0;
+                }
+                add(BACK, c, w);
             }
         } else {
             add(BACK, fill, 1.0);
         }
+    }
+    // The background's coverage is the whole line's; its colour, the paired taps' mean
+    // (what shows while the own object is away), or the whole line's if none is paired.
+    if (back_all_w > 0.0) {
+        vec3 mean = g_weight[BACK] > 0.0 ? g_sum[BACK] / g_weight[BACK] : back_all / back_all_w;
+        g_weight[BACK] = min(1.0, back_all_w);
+        g_sum[BACK] = mean * g_weight[BACK];
     }
     vec3 c = over(BACK, fill);
     c = over(BETWEEN, c);

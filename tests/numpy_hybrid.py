@@ -354,16 +354,35 @@ def bucket_composite(front, front_color, back, back_color, neighbormax, tile: in
             elif own_line:
                 add(OWN, own_colour, 1.0)
             fill = np.mean(far, axis=0) if far else own_colour
+            back_all, back_all_w = np.zeros(3), 0.0
             if revealed:
                 fill = back_color[y, x]
                 rb = 0.5 * np.hypot(*bx[:2])
                 if rb > 0.5:
                     for a, b, s, p in line(x, y, bx[:2], rb):
                         m = back[p]
-                        if m[2] >= back_depth * 0.999:
-                            add(BACK, back_color[p], coverage(a, b, s, np.hypot(*m[:2])))
+                        mid = m[3] - 1.0 if m[3] > 0.5 else front[p][3]
+                        if mid != back_id and m[2] < back_depth * 0.999:
+                            continue
+                        length = np.hypot(*m[:2])
+                        wt = coverage(a, b, s, length)
+                        back_all += wt * back_color[p]
+                        back_all_w += wt
+                        # Paired with the time u it passes the pixel: not while the own
+                        # object covers it (its fragment then at x - u D, frame time).
+                        if wt > 0.0 and length >= 1e-3:
+                            u = np.clip(-s / length, -0.5, 0.5)
+                            q = np.floor(np.array([x + 0.5, y + 0.5]) - u * fx[:2]).astype(int)
+                            q = np.clip(q, 0, [w - 1, h - 1])
+                            if front[q[1], q[0]][3] == own_id:
+                                wt = 0.0
+                        add(BACK, back_color[p], wt)
                 else:
                     add(BACK, fill, 1.0)
+            if back_all_w > 0.0:
+                mean = sums[BACK] / weights[BACK] if weights[BACK] > 0 else back_all / back_all_w
+                weights[BACK] = min(1.0, back_all_w)
+                sums[BACK] = mean * weights[BACK]
             c = fill
             for k in (BACK, BETWEEN, OWN, NEAR):
                 alpha = min(1.0, weights[k])
