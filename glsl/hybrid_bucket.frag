@@ -32,6 +32,8 @@ out vec4 out_color;
 const int NEAR = 0, OWN = 1, BETWEEN = 2, BACK = 3;
 vec3 g_sum[4];
 float g_weight[4];
+float g_own_id;
+float g_near_free;        // NEAR weight at times the own object is away from the pixel
 vec3 g_far_sum;           // unweighted farther fragments: the fill without a reveal
 float g_far_count;
 
@@ -52,6 +54,16 @@ float coverage(float a, float b, float len) {
     if (abs(g_s) > 0.5 * len + 0.5) return 0.0;
     if (len < 1e-3) return (a <= 0.0 && 0.0 < b) ? 1.0 : 0.0;
     return max(min(b, 0.5 * len) - max(a, -0.5 * len), 0.0) / len;
+}
+
+// Does the own object cover pixel x at the time the tap's fragment (at signed distance
+// g_s along the line, moving len px) passes it, u = -g_s / len? Its own fragment then is
+// the frame-time one at x - u D_own. A (nearly) still own surface covers at every time.
+bool own_covers(ivec2 x, vec2 d_own, float len) {
+    if (len < 1e-3 || length(d_own) < 1e-3) return true;
+    float u = clamp(-g_s / len, -0.5, 0.5);
+    ivec2 q = clamp(ivec2(floor(vec2(x) + 0.5 - u * d_own)), ivec2(0), g_size - 1);
+    return texelFetch(u_front, q, 0).w == g_own_id;
 }
 
 int taps_for(float half_len) {
@@ -94,8 +106,10 @@ void main() {
     for (int k = 0; k < 4; ++k) { g_sum[k] = vec3(0.0); g_weight[k] = 0.0; }
     g_far_sum = vec3(0.0);
     g_far_count = 0.0;
+    g_near_free = 0.0;
     bool revealed = bx.w > 0.5;
     float own_id = fx.w, own_depth = fx.z;
+    g_own_id = own_id;
     float back_depth = revealed ? bx.z : 3.0e38;
     float back_id = revealed ? bx.w - 1.0 : -1.0;
     // The own object has its own line unless it moves like the neighbourhood.
@@ -116,8 +130,10 @@ void main() {
             }
             vec3 c = texelFetch(u_front_color, y, 0).rgb;
             float w = coverage(a, b, length(m.xy));
-            if (m.z < own_depth) add(NEAR, c, w);
-            else if (m.w != back_id && m.z < back_depth) {    // the revealed one: line 3
+            if (m.z < own_depth) {
+                add(NEAR, c, w);
+                if (w > 0.0 && !own_covers(x, fx.xy, length(m.xy))) g_near_free += w;
+            } else if (m.w != back_id && m.z < back_depth) {    // the revealed one: line 3
                 add(BETWEEN, c, w);
                 g_far_sum += c;
                 g_far_count += 1.0;
@@ -168,11 +184,7 @@ void main() {
                 // passes x; it counts only if the own object does not cover x then (the
                 // own fragment that would be at x then is at x - u D, frame time). With a
                 // still background every time sees the same fragment: no pairing.
-                if (w > 0.0 && len >= 1e-3) {
-                    float u = clamp(-g_s / len, -0.5, 0.5);
-                    ivec2 q = clamp(ivec2(floor(vec2(x) + 0.5 - u * fx.xy)), ivec2(0), g_size - 1);
-                    if (texelFetch(u_front, q, 0).w == own_id) w = 0.0;
-                }
+                if (w > 0.0 && len >= 1e-3 && own_covers(x, fx.xy, len)) w = 0.0;
                 add(BACK, c, w);
             }
         } else {
@@ -188,7 +200,17 @@ void main() {
     }
     vec3 c = over(BACK, fill);
     c = over(BETWEEN, c);
-    c = over(OWN, c);
-    c = over(NEAR, c);
+    // Own object and nearer fragments: "over" where the nearer ones pass in front of the
+    // own object, side by side where they cover the pixel while the own object is away
+    // (surfaces sliding together under a moving camera): own shows for a_o of the time
+    // less the nearer ones' time over it, the rest for what neither covers.
+    float a_n = min(1.0, g_weight[NEAR]);
+    float a_o = min(1.0, g_weight[OWN]);
+    float a_free = min(g_near_free, a_n);
+    float vis_own = max(a_o - (a_n - a_free), 0.0);
+    float vis_rest = max(1.0 - a_n - vis_own, 0.0);
+    vec3 near_c = g_weight[NEAR] > 0.0 ? g_sum[NEAR] / g_weight[NEAR] : vec3(0.0);
+    vec3 own_c = g_weight[OWN] > 0.0 ? g_sum[OWN] / g_weight[OWN] : vec3(0.0);
+    c = (a_n * near_c + vis_own * own_c + vis_rest * c) / max(a_n + vis_own + vis_rest, 1e-6);
     out_color = vec4(c, 1.0);
 }

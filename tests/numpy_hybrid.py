@@ -330,6 +330,18 @@ def bucket_composite(front, front_color, back, back_color, neighbormax, tile: in
                 sums[k] += wt * c
                 weights[k] += wt
 
+            def own_covers(s, length):
+                """Does the own object cover the pixel at the time u = -s / length that
+                a fragment s along the line, moving `length` px, passes it?"""
+                if length < 1e-3 or np.hypot(*fx[:2]) < 1e-3:
+                    return True
+                u = np.clip(-s / length, -0.5, 0.5)
+                q = np.floor(np.array([x + 0.5, y + 0.5]) - u * fx[:2]).astype(int)
+                q = np.clip(q, 0, [w - 1, h - 1])
+                return front[q[1], q[0]][3] == own_id
+
+            near_free = 0.0
+
             rn = 0.5 * np.hypot(*vn)
             if rn > 0.5:
                 for a, b, s, p in line(x, y, vn, rn):
@@ -340,6 +352,8 @@ def bucket_composite(front, front_color, back, back_color, neighbormax, tile: in
                             add(OWN, c, wt)
                     elif m[2] < own_depth:
                         add(NEAR, c, wt)
+                        if wt > 0.0 and not own_covers(s, np.hypot(*m[:2])):
+                            near_free += wt
                     elif m[3] != back_id and m[2] < back_depth:
                         add(BETWEEN, c, wt)
                         far.append(c)
@@ -370,12 +384,8 @@ def bucket_composite(front, front_color, back, back_color, neighbormax, tile: in
                         back_all_w += wt
                         # Paired with the time u it passes the pixel: not while the own
                         # object covers it (its fragment then at x - u D, frame time).
-                        if wt > 0.0 and length >= 1e-3:
-                            u = np.clip(-s / length, -0.5, 0.5)
-                            q = np.floor(np.array([x + 0.5, y + 0.5]) - u * fx[:2]).astype(int)
-                            q = np.clip(q, 0, [w - 1, h - 1])
-                            if front[q[1], q[0]][3] == own_id:
-                                wt = 0.0
+                        if wt > 0.0 and length >= 1e-3 and own_covers(s, length):
+                            wt = 0.0
                         add(BACK, back_color[p], wt)
                 else:
                     add(BACK, fill, 1.0)
@@ -384,11 +394,18 @@ def bucket_composite(front, front_color, back, back_color, neighbormax, tile: in
                 weights[BACK] = min(1.0, back_all_w)
                 sums[BACK] = mean * weights[BACK]
             c = fill
-            for k in (BACK, BETWEEN, OWN, NEAR):
+            for k in (BACK, BETWEEN):
                 alpha = min(1.0, weights[k])
                 mean = sums[k] / weights[k] if weights[k] > 0 else np.zeros(3)
                 c = alpha * mean + (1.0 - alpha) * c
-            out[y, x] = c
+            # Nearer fragments over the own object, or beside it while it is away.
+            a_n, a_o = min(1.0, weights[NEAR]), min(1.0, weights[OWN])
+            vis_own = max(a_o - (a_n - min(near_free, a_n)), 0.0)
+            vis_rest = max(1.0 - a_n - vis_own, 0.0)
+            near_c = sums[NEAR] / weights[NEAR] if weights[NEAR] > 0 else np.zeros(3)
+            own_c = sums[OWN] / weights[OWN] if weights[OWN] > 0 else np.zeros(3)
+            out[y, x] = ((a_n * near_c + vis_own * own_c + vis_rest * c)
+                         / max(a_n + vis_own + vis_rest, 1e-6))
     return out
 
 

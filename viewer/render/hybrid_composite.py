@@ -27,20 +27,15 @@ FRAGMENTS = {"time": "hybrid_time.frag", "bucket": "hybrid_bucket.frag"}
 
 
 def composite_kind(frame: Frame) -> str:
-    """"time", "bucket" or "split": the `hybrid.composite` setting, "auto" resolved by
-    whether the camera moves: the bucket where it is still; where it moves, "split": the
-    time-sampled composite near the ray mask and the bucket elsewhere (the bucket
-    misjudges the inner blur of a moving camera's parallax; docs/performance.md)."""
-    kind = frame.params["hybrid"].composite
-    if kind == "auto":
-        return "split" if frame.scene.camera.moving else "bucket"
-    return kind
+    """"bucket", "time" or "split" (the time-sampled composite on the tiles near the ray
+    mask, the bucket on the other active tiles): the `hybrid.composite` setting."""
+    return frame.params["hybrid"].composite
 
 
-# Tiles around the masked ones that get the time-sampled composite under a moving camera.
-# Measured (640x360, FLIP whole / inner / outer, composite ms): pan 0 tiles .036/.044/.053
-# 246 ms, 1 tile .035/.040/.042 376 ms, 5 tiles (all within the blur limit) the same as 1
-# at 507 ms; vase_pan 1 tile = 5 tiles = .042/.059/.054 at 123 and 370 ms.
+# Tiles around the masked ones that get the time-sampled composite in "split". Measured
+# (640x360, FLIP whole / inner / outer, composite ms): pan 0 tiles .036/.044/.053 246 ms,
+# 1 tile .035/.040/.042 376 ms, 5 tiles (all within the blur limit) the same as 1 at
+# 507 ms; vase_pan 1 tile = 5 tiles = .042/.059/.054 at 123 and 370 ms.
 SPLIT_REACH = 1
 
 

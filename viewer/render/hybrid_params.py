@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from ..params import group, param
 
-COMPOSITES = ("auto", "time", "bucket")
+COMPOSITES = ("bucket", "split", "time")
 
 
 @group("hybrid")
@@ -38,14 +38,13 @@ class HybridParams:
     threads: int = param(0, lo=0, hi=64,
                          help="ray-tracing threads for large batches (0 = CPU count)")
     # ---- composite (viewer/render/hybrid_composite.py)
-    composite: str = param("auto", choices=COMPOSITES, effect="recompile",
-                           help="time: per-pixel time samples resolve visibility between "
-                                "the raster and revealed layers; bucket: fragments "
-                                "gathered along lines, sorted by object and depth, "
-                                "combined front to back (both ALGORITHMS.md 4.3); auto: "
-                                "bucket where the camera is still (3-6x cheaper, "
-                                "whole-image FLIP within 0.01 of time's); where it moves, "
-                                "time near the ray mask and bucket elsewhere "
+    composite: str = param("bucket", choices=COMPOSITES, effect="recompile",
+                           help="bucket: fragments gathered along lines, sorted by object "
+                                "and depth, combined front to back, background taps paired "
+                                "with their times (ALGORITHMS.md 4.3; as cheap as McGuire's "
+                                "gather); time: per-pixel time samples resolve visibility "
+                                "between the raster and revealed layers (best, 8-10x "
+                                "costlier); split: time near the ray mask, bucket elsewhere "
                                 "(docs/performance.md)")
     samples_min: int = param(8, lo=1, hi=256,
                              help="time samples per pixel (bucket: taps per line) where "
