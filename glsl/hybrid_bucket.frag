@@ -110,6 +110,8 @@ void main() {
     bool revealed = bx.w > 0.5;
     float own_id = fx.w, own_depth = fx.z;
     g_own_id = own_id;
+    // A (nearly) still own surface covers the pixel at every time: no pairing to do.
+    bool own_moves = dot(fx.xy, fx.xy) >= 1e-6;
     float back_depth = revealed ? bx.z : 3.0e38;
     float back_id = revealed ? bx.w - 1.0 : -1.0;
     // The own object has its own line unless it moves like the neighbourhood.
@@ -132,7 +134,8 @@ void main() {
             float w = coverage(a, b, length(m.xy));
             if (m.z < own_depth) {
                 add(NEAR, c, w);
-                if (w > 0.0 && !own_covers(x, fx.xy, length(m.xy))) g_near_free += w;
+                if (own_moves && w > 0.0 && !own_covers(x, fx.xy, length(m.xy)))
+                    g_near_free += w;
             } else if (m.w != back_id && m.z < back_depth) {    // the revealed one: line 3
                 add(BETWEEN, c, w);
                 g_far_sum += c;
@@ -184,7 +187,7 @@ void main() {
                 // passes x; it counts only if the own object does not cover x then (the
                 // own fragment that would be at x then is at x - u D, frame time). With a
                 // still background every time sees the same fragment: no pairing.
-                if (w > 0.0 && len >= 1e-3 && own_covers(x, fx.xy, len)) w = 0.0;
+                if (own_moves && w > 0.0 && len >= 1e-3 && own_covers(x, fx.xy, len)) w = 0.0;
                 add(BACK, c, w);
             }
         } else {
