@@ -15,7 +15,8 @@ uniform usampler2D u_id;
 uniform sampler2D u_velocity;
 uniform sampler2D u_relative;
 uniform sampler2D u_edge_tiles;   // raymask_tiles.frag, MODE 0
-uniform sampler2D u_edge_near;    // y > 0: an edge in this u_fine tile or one next to it
+uniform usampler2D u_edge_near;   // bit (id mod 32): an edge of that object in this
+                                  // u_fine tile or one next to it (edge_ids.frag)
 uniform int u_fine;
 uniform int u_tile;
 uniform float u_min_speed;
@@ -39,11 +40,14 @@ void main() {
                              max(half_len, near.x))));
     // Coarse look first: points every 8 px along the search. A probe lies within 4 px of
     // one (5 px per axis after flooring, less than a tile), so its tile is within a tile
-    // of that point's: where no point's tile has an edge next to it, no probe sees one.
+    // of that point's: where no point's tile has an edge of the own object next to it, no
+    // probe sees one.
+    uint own_bit = 1u << (own % 32u);
     bool any_edge = false;
     int m_max = (steps + 7) / 8;
     for (int m = -m_max; m <= m_max; ++m) {
-        if (texelFetch(u_edge_near, probe(x, float(8 * m) * dir, size) / u_fine, 0).y > 0.0) {
+        if ((texelFetch(u_edge_near, probe(x, float(8 * m) * dir, size) / u_fine, 0).x
+             & own_bit) != 0u) {
             any_edge = true;
             break;
         }

@@ -12,8 +12,8 @@ Three fragment passes, after the paper, adapted to the contract's centred exposu
 
 mask_edge_tiles and ray_mask_tiles summarise the edges and the mask per k x k tile (k the
 blur limit), so the range check and the composite skip pixels with nothing in reach;
-mask_edge_near (the 16 x 16 tiles holding an edge, dilated by one tile) lets the range
-check skip, exactly, a search whose probes all lie in edge-free tiles.
+mask_edge_near (per 16 x 16 tile, which objects have an edge within a tile of it) lets the
+range check skip, exactly, a search whose probes all lie far from its own object's edges.
 """
 from __future__ import annotations
 
@@ -99,19 +99,28 @@ class MaskTiles(FullscreenPass):
         self.draw(frame, (self.name,), {"u_strip": self.name + "_x"}, {"u_tile": k})
 
 
-class DilateTiles(FullscreenPass):
-    """Per channel, the largest of the 3x3 texels around each texel (glsl/dilate3.frag)."""
-    fragment = "dilate3.frag"
+class EdgeIdTiles(FullscreenPass):
+    """Per FINE tile, a bitmask of the objects (id mod 32) with edge pixels there, then
+    spread to the 3x3 tiles around (glsl/edge_ids.frag): mask_edge_near."""
+    name = "mask_edge_near"
+    fragment = "edge_ids.frag"
+    inputs = ("mask_edge", "id")
+    produces = ("mask_edge_ids_x", "mask_edge_ids", "mask_edge_near")
 
-    def __init__(self, source: str, output: str, spec: TexSpec):
-        self.name, self.source, self.spec = output, source, spec
-        self.inputs, self.produces = (source,), (output,)
+    def defines(self, frame: Frame):
+        return {"STAGE": self._stage}
 
     def outputs(self, frame: Frame):
-        return {self.name: self.spec}
+        return {"mask_edge_ids_x": StripSpec(1, "u4", tile=FINE),
+                "mask_edge_ids": TexSpec(1, "u4", tile=FINE),
+                "mask_edge_near": TexSpec(1, "u4", tile=FINE)}
 
     def execute(self, frame: Frame):
-        self.draw(frame, self.produces, {"u_source": self.source})
+        steps = ((0, {"u_source": "mask_edge", "u_id": "id"}, "mask_edge_ids_x"),
+                 (1, {"u_source": "mask_edge_ids_x"}, "mask_edge_ids"),
+                 (2, {"u_source": "mask_edge_ids"}, "mask_edge_near"))
+        for self._stage, textures, out in steps:
+            self.draw(frame, (out,), textures, {"u_tile": FINE})
 
 
 class RangeCheck(FullscreenPass):
@@ -140,6 +149,4 @@ class RangeCheck(FullscreenPass):
 def raymask_passes() -> list:
     """The three mask passes and their tile summaries, after a full G-buffer."""
     return [DisplacementTest(), EdgeTest(), MaskTiles("mask_edge", "edges"),
-            MaskTiles("mask_edge", "edges", tile=lambda frame: FINE, name="mask_edge_fine"),
-            DilateTiles("mask_edge_fine", "mask_edge_near", TexSpec(2, "f4", tile=FINE)),
-            RangeCheck(), MaskTiles("ray_mask", "mask")]
+            EdgeIdTiles(), RangeCheck(), MaskTiles("ray_mask", "mask")]
