@@ -409,6 +409,14 @@ def bucket_composite(front, front_color, back, back_color, neighbormax, tile: in
     return out
 
 
+def time_average(width: int, n: int, colour_at) -> np.ndarray:
+    """Mean over n stratified times u in [-1/2, 1/2] of colour_at(u, x) ((rows, 3): what
+    column x shows at time u), for every column x: an analytic scene's exposure."""
+    cols = [np.mean([colour_at((k + 0.5) / n - 0.5, x) for k in range(n)], axis=0)
+            for x in range(width)]
+    return np.stack(cols, axis=1)
+
+
 def box_shutter_bar(fg, bg, x0: int, x1: int, d: float, n: int) -> np.ndarray:
     """Analytic: one row of a bar covering pixel centres x0..x1-1 at the frame time,
     translating by d px over the exposure over a static background; the mean of n

@@ -504,17 +504,12 @@ def test_numpy_bucket_inner_blur_over_a_moving_background_follows_the_time_avera
                                          ids, rev_ids)
     tiles = nm.tilemax(disp.astype(np.float32), 20)
     got = nh.bucket_composite(front, fc, back, bc, nm.neighbormax(tiles), 20, 40.0, 32, 32, 0.5)
-    n = 64
-    want = np.zeros((h, w, 3))
-    for k in range(n):
-        u = (k + 0.5) / n - 0.5
-        for x in range(w):
-            pb = x + 0.5 - u * d_bar
-            if x0 <= pb < x1:
-                want[:, x] += bar[:, int(np.floor(pb))]
-            else:
-                want[:, x] += wall[:, int(np.clip(np.floor(x + 0.5 - u * d_wall), 0, w - 1))]
-    want /= n
+    def seen(u, x):
+        pb = x + 0.5 - u * d_bar
+        if x0 <= pb < x1:
+            return bar[:, int(np.floor(pb))]
+        return wall[:, int(np.clip(np.floor(x + 0.5 - u * d_wall), 0, w - 1))]
+    want = nh.time_average(w, 64, seen)
     inner = list(range(x0, x0 + 4)) + list(range(x1 - 4, x1))
     assert np.abs(got[:, inner] - want[:, inner]).max() <= 0.03
 
@@ -539,11 +534,6 @@ def test_numpy_bucket_surfaces_sliding_together_blur_like_the_translated_image()
     front, fc, back, bc = nh.pack_layers(tex, depth, disp, *none, 40.0, ids, np.zeros((h, w)))
     tiles = nm.tilemax(disp.astype(np.float32), 20)
     got = nh.bucket_composite(front, fc, back, bc, nm.neighbormax(tiles), 20, 40.0, 20, 20, 1.0)
-    n = 64
-    want = np.zeros((h, w, 3))
-    for k in range(n):
-        u = (k + 0.5) / n - 0.5
-        for x in range(w):
-            want[:, x] += tex[:, int(np.clip(np.floor(x + 0.5 - u * d), 0, w - 1))]
-    want /= n
+    want = nh.time_average(w, 64, lambda u, x: tex[:, int(np.clip(np.floor(x + 0.5 - u * d),
+                                                                  0, w - 1))])
     assert np.abs(got[:, 14:34] - want[:, 14:34]).max() <= 0.03
