@@ -49,13 +49,6 @@ class Hits:
         return self.object_id != 0
 
 
-def apply3(m3: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """Rows of p (n, 3) times the 3x3 m3 (p @ m3.T), without BLAS: OpenBLAS spreads an
-    (n, 3) @ (3, 3) product over its own threads, which on a busy machine (or beside our
-    ray threads) runs ten times slower than this."""
-    return np.einsum("nj,ij->ni", p, m3)
-
-
 def transform_points(m: np.ndarray, p: np.ndarray, w: float = 1.0) -> np.ndarray:
     """Rows of p (n, 3) through the 4x4 m (column vectors), in p's dtype, column by
     column: no BLAS (OpenBLAS spreads an (n, 3) x (3, 3) product over its threads, ten
@@ -122,7 +115,7 @@ class RayScene:
             self._static = rtcs.EmbreeScene(self._device)
             for o in static:
                 m = o.matrix(0.0)    # a static object's matrix does not depend on t
-                world = apply3(m[:3, :3], o.mesh.vertices) + m[:3, 3]
+                world = transform_points(m, np.asarray(o.mesh.vertices, np.float64))
                 TriangleMesh(self._static, world.astype(np.float32),
                              o.mesh.faces.astype(np.int32))
 

@@ -23,7 +23,7 @@ from viewer.render.hybrid_composite import composite_kind, composite_passes
 from viewer.render.modes import MODES
 from viewer.render.raymask import RAY_MASK, RELATIVE, MaskTiles
 from viewer.render.renderer import Renderer
-from viewer.render.reveal_pass import LAYER_SPECS, PACKED, layer_names, packed_names
+from viewer.render.reveal_pass import LAYER_SPECS, PACKED, packed_names
 from viewer.scene_loader import load_scene
 
 SMALL = (160, 90)

@@ -10,14 +10,14 @@
 """
 from __future__ import annotations
 
+import numpy as np
+from scipy.ndimage import maximum_filter
+
 from .blur_common import max_radius_px
 from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass
 from .pool import TexSpec
-import numpy as np
-from scipy.ndimage import maximum_filter
-
 from .tile_lists import FINE, tile_coords, tile_list
 from .tiles import tile_passes
 

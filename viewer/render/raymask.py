@@ -72,9 +72,9 @@ class MaskTiles(FullscreenPass):
     SOURCE_tiles_x, then 1 x k into SOURCE_tiles."""
     fragment = "raymask_tiles.frag"
 
-    def __init__(self, source: str, mode: str, tile=max_radius_px, name: str | None = None):
-        self.source, self.mode, self.tile = source, mode, tile
-        self.name = name or source + "_tiles"
+    def __init__(self, source: str, mode: str):
+        self.source, self.mode = source, mode
+        self.name = source + "_tiles"
         self.inputs = (source, "mask_relative")
         self.produces = (self.name + "_x", self.name)
 
@@ -83,11 +83,11 @@ class MaskTiles(FullscreenPass):
                 "MOTION_TILES": int(self._stage == 0 and tile_list(frame, "moving") is not None)}
 
     def outputs(self, frame: Frame):
-        k = self.tile(frame)
+        k = max_radius_px(frame)
         return {self.name + "_x": StripSpec(2, "f4", tile=k), self.name: TexSpec(2, "f4", tile=k)}
 
     def execute(self, frame: Frame):
-        k = self.tile(frame)
+        k = max_radius_px(frame)
         self._stage = 0
         textures = {"u_mask": self.source, "u_relative": "mask_relative"}
         uniforms = {"u_tile": k}

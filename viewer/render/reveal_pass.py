@@ -24,7 +24,7 @@ import numpy as np
 
 from raytrace import RayScene
 
-from ..conventions import BACKGROUND_DEPTH, glsl_defines, to_image
+from ..conventions import BACKGROUND_DEPTH, to_image
 from .blur_common import max_radius_px
 from .frame import Frame
 from .gpu_scene import MAX_LIGHTS, set_uniform
