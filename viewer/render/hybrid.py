@@ -10,7 +10,8 @@ background behind them, shades it like the raster layer, and resolves both layer
           tiles                                              (viewer/render/raymask.py)
           -> reveal (CPU rays) -> reveal_shade (revealed_*, hybrid_back*)
                                                              (viewer/render/reveal_pass.py)
-          -> hybrid tiles -> hybrid_composite (bucketed; time-sampled or split by setting), on the active tiles
+          -> hybrid tiles -> hybrid_composite (bucketed; time-sampled or split by
+          setting), on the active tiles
                                                              (viewer/render/hybrid_composite.py)
 
 Parameters: the `hybrid` group (viewer/render/hybrid_params.py) and the shared `blur` limit.
