@@ -9,6 +9,12 @@ still the distance along the unit world direction. Only the rays that meet the m
 object's world box at t (a slab test on the mesh's local box carried by M(t)) go into its
 scene. The nearest valid hit over all the scenes wins.
 
+A ray must pass its own object (the masked pixel's surface). A moving one is simply not
+traced. A static one lives in the shared static scene, so the ray is traced instead in an
+"exclusion scene", the static objects but that one, built the first time a ray needs it
+(static geometry only, so once per scene, within a triangle budget); past the budget, or
+where asked, the ray restarts just past each hit on its own object.
+
 embreex's `run` starts every ray at tnear = 0 and takes no tnear, so a ray that must
 start further along (a restart past an excluded static object, a near plane, a deeper
 layer) has its origin moved forward instead, and the offset is added back to the
@@ -26,6 +32,10 @@ from embreex.mesh_construction import TriangleMesh
 from viewer.scene import Scene, SceneObject
 
 from .attributes import SurfaceTable
+
+# Triangles that the exclusion scenes of one RayScene may hold together: a static scene of
+# 100 k triangles gets ~10 of them (Embree's BVH ~ 100 bytes a triangle: ~100 MB).
+EXCLUSION_BUDGET = 1_000_000
 
 
 @dataclass
@@ -98,8 +108,14 @@ def _embree_run(scene: rtcs.EmbreeScene, origins: np.ndarray, dirs: np.ndarray,
 class RayScene:
     """The Embree side of one loaded scene: built once, traced at any time t."""
 
-    def __init__(self, scene: Scene, restart_eps: float = 1e-5):
+    def __init__(self, scene: Scene, restart_eps: float = 1e-5,
+                 exclusion_budget: int = EXCLUSION_BUDGET):
+        """exclusion_budget: triangles all exclusion scenes may hold together (0: pass
+        static own objects by restarts only)."""
         self.scene = scene
+        self.exclusion_budget = int(exclusion_budget)
+        self._without: dict[int, tuple[rtcs.EmbreeScene, np.ndarray] | None] = {}
+        self._without_triangles = 0
         # A restart moves the origin past the excluded hit by restart_eps * (1 + |p|_max):
         # about a hundred float32 ulps of the hit point's coordinates, so the same face
         # is not found again, and far thinner than any wall of a real mesh.
@@ -110,14 +126,11 @@ class RayScene:
 
         static = [o for o in scene.objects if not o.moving and len(o.mesh.faces)]
         self.static_ids = np.array([o.id for o in static], dtype=np.uint32)  # geomID -> id
-        self._static = None
-        if static:
-            self._static = rtcs.EmbreeScene(self._device)
-            for o in static:
-                m = o.matrix(0.0)    # a static object's matrix does not depend on t
-                world = transform_points(m, np.asarray(o.mesh.vertices, np.float64))
-                TriangleMesh(self._static, world.astype(np.float32),
-                             o.mesh.faces.astype(np.int32))
+        # World-space triangles of each static object (its matrix does not depend on t).
+        self._static_meshes = {
+            o.id: (transform_points(o.matrix(0.0), np.asarray(o.mesh.vertices, np.float64))
+                   .astype(np.float32), o.mesh.faces.astype(np.int32)) for o in static}
+        self._static = self._static_scene(self.static_ids) if static else None
 
         self.moving: list[tuple[SceneObject, rtcs.EmbreeScene]] = []
         for o in scene.objects:
@@ -128,6 +141,26 @@ class RayScene:
         # The corners of each moving mesh's local bounding box: at time t their world
         # box culls the rays that cannot hit the object before any Embree call.
         self._corners = {o.id: _box_corners(o.mesh.vertices) for o, _ in self.moving}
+
+    def _static_scene(self, ids: np.ndarray) -> rtcs.EmbreeScene:
+        """One Embree scene of the static objects `ids`, geometry k = ids[k]."""
+        es = rtcs.EmbreeScene(self._device)
+        for i in ids:
+            TriangleMesh(es, *self._static_meshes[int(i)])
+        return es
+
+    def exclusion_scene(self, own: int):
+        """(Embree scene, geomID + 1 -> object id) of the static objects but `own`, built
+        on first use; None past the triangle budget (the caller restarts instead)."""
+        if own not in self._without:
+            ids = self.static_ids[self.static_ids != own]
+            size = sum(len(self._static_meshes[int(i)][1]) for i in ids)
+            if not len(ids) or self._without_triangles + size > self.exclusion_budget:
+                self._without[own] = None
+            else:
+                self._without_triangles += size
+                self._without[own] = (self._static_scene(ids), np.r_[np.uint32(0), ids])
+        return self._without[own]
 
     def reveal(self, camera, t: float, pixels_ij, own_ids, layers: int = 1, max_depth: int = 8,
                threads: int | None = None, **kw):
@@ -211,14 +244,32 @@ class RayScene:
             best[w] = dist[hit]
 
         restarts = unresolved = 0
-        if self._static is not None:
+        rows = None                   # the rays left for the static scene; None = all
+        if self._static is not None and excl.any():
+            # Rays whose own object is static: into the scene without it, where one exists.
+            static_own = np.isin(excl, self.static_ids)
+            passed = np.zeros(n, dtype=bool)
+            for own_id in np.unique(excl[static_own]):
+                ex = self.exclusion_scene(int(own_id))
+                if ex is None:
+                    continue
+                es, ex_ids = ex
+                sel = np.flatnonzero(excl == own_id)
+                s0 = start[sel]
+                r = _embree_run(es, o32[sel], d32[sel], best[sel] - s0)
+                queries += sel.size
+                keep(sel, ex_ids[r["geomID"] + 1], r, s0 + r["tfar"])
+                passed[sel] = True
+            if passed.any():
+                rows = np.flatnonzero(~passed)
+        if self._static is not None and (rows is None or rows.size):
             # geomID + 1 -> object id, with geomID -1 (a miss) -> 0.
             id_of = np.r_[np.uint32(0), self.static_ids]
-            rows, org, offset = None, o_start, start.copy()
+            org, offset = (o_start if rows is None else o_start[rows]), start.copy()
             for depth in range(max_restarts + 1):
                 s0 = take(offset, rows)
                 r = _embree_run(self._static, o32 if rows is None else org,
-                                d32 if rows is None else d[rows], take(best, rows) - s0)
+                                d32 if rows is None else d32[rows], take(best, rows) - s0)
                 queries += len(s0)
                 ids = id_of[r["geomID"] + 1]
                 dist = s0 + r["tfar"]

@@ -234,7 +234,7 @@ def test_moving_own_object_reveals_the_static_wall_behind():
 
 
 def test_static_own_object_is_passed_by_restarts():
-    rs = RayScene(wall_scene())
+    rs = RayScene(wall_scene(), exclusion_budget=0)
     o, d = down_z(3)
     hits = rs.intersect(o, d, 0.0, exclude_ids=A([1, 2, 0]))
     assert hits.object_id.tolist() == [2, 1, 1]
@@ -244,8 +244,51 @@ def test_static_own_object_is_passed_by_restarts():
     assert hits.queries == 3 + 2
 
 
-def test_restarts_are_bounded_by_max_restarts():
+def test_static_own_object_is_passed_in_its_exclusion_scene():
     rs = RayScene(wall_scene())
+    o, d = down_z(3)
+    hits = rs.intersect(o, d, 0.0, exclude_ids=A([1, 2, 0]))
+    assert hits.object_id.tolist() == [2, 1, 1]
+    np.testing.assert_allclose(hits.distance, [7.9, 2.9, 2.9], rtol=1e-6)
+    # One query per ray: rays 0 and 1 in the scenes without objects 1 and 2, ray 2 in the
+    # whole static scene; no restarts, and each exclusion scene is built once.
+    assert hits.restarts == 0 and hits.queries == 3
+    assert rs.exclusion_scene(1) is rs.exclusion_scene(1)
+    assert rs.exclusion_scene(1)[1].tolist() == [0, 2]      # geomID + 1 -> object id
+
+
+def test_exclusion_scenes_stop_at_the_triangle_budget():
+    # Each exclusion scene of the wall scene holds the other object's 12 triangles: a
+    # budget of 12 builds the first one asked for; the other object is passed by restarts.
+    rs = RayScene(wall_scene(), exclusion_budget=12)
+    assert rs.exclusion_scene(2) is not None and rs.exclusion_scene(1) is None
+    hits = rs.intersect(*down_z(2), t=0.0, exclude_ids=A([1, 2]))
+    assert hits.object_id.tolist() == [2, 1]
+    np.testing.assert_allclose(hits.distance, [7.9, 2.9], rtol=1e-6)
+    assert hits.restarts == 2          # ray 0 leaves its own slab (object 1) by restarts
+
+
+def test_exclusion_scenes_and_restarts_find_the_same_hits():
+    """Random rays through a busy scene, every ray's own object drawn at random: the
+    exclusion scenes give the restarts' hits, and distances within the restart offset."""
+    s = busy_scene()
+    rng = np.random.default_rng(3)
+    n = 4000
+    o = np.tile([0.0, 0.0, 0.0], (n, 1)) + rng.normal(0, 0.3, (n, 3))
+    d = np.c_[rng.uniform(-0.6, 0.6, (n, 2)), -np.ones(n)]
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    own = rng.integers(0, 5, n).astype(np.uint32)
+    a = RayScene(s).intersect(o, d, 0.05, exclude_ids=own)
+    b = RayScene(s, exclusion_budget=0).intersect(o, d, 0.05, exclude_ids=own)
+    assert b.restarts > 100 and a.restarts == 0 and a.queries < b.queries
+    np.testing.assert_array_equal(a.object_id, b.object_id)
+    np.testing.assert_array_equal(a.prim_id, b.prim_id)
+    hit = a.object_id != 0
+    np.testing.assert_allclose(a.distance[hit], b.distance[hit], rtol=1e-5)
+
+
+def test_restarts_are_bounded_by_max_restarts():
+    rs = RayScene(wall_scene(), exclusion_budget=0)
     hits = rs.intersect(*down_z(1), t=0.0, exclude_ids=A([1]), max_restarts=1)
     assert hits.object_id.tolist() == [0] and hits.unresolved == 1 and hits.restarts == 1
 
@@ -255,10 +298,13 @@ def test_static_own_restart_stops_at_a_nearer_moving_object():
     s = scene_of([obj(1, box([20, 20, 1.0]), position=[0, 0, -3]),
                   obj(2, box([20, 20, 0.2]), position=[0, 0, -8]),
                   obj(3, box([1, 1, 0.1]), position=[0, 0, -3], velocity=[0, 1, 0])])
-    hits = RayScene(s).intersect(*down_z(1), t=0.0, exclude_ids=A([1]))
-    assert hits.object_id.tolist() == [3]
-    assert hits.distance[0] == pytest.approx(2.95, rel=1e-6)
-    assert hits.restarts == 1          # the front face only; the moving hit bounds the rest
+    for budget, restarts in ((0, 1), (10**6, 0)):
+        hits = RayScene(s, exclusion_budget=budget).intersect(*down_z(1), t=0.0,
+                                                             exclude_ids=A([1]))
+        assert hits.object_id.tolist() == [3]
+        assert hits.distance[0] == pytest.approx(2.95, rel=1e-6)
+        # Restarts: the front face only, the moving hit bounds the rest.
+        assert hits.restarts == restarts
 
 
 def same_colour_pair():
@@ -373,12 +419,14 @@ def test_threads_give_the_single_threaded_result():
     pix = np.c_[ii.ravel(), jj.ravel()]
     rng = np.random.default_rng(1)
     own = rng.integers(0, 5, len(pix))
+    rs_restarts = RayScene(s, exclusion_budget=0)
+    assert reveal(rs_restarts, cam, 0.05, pix, own, layers=2, threads=1).restarts > 0
     single = reveal(rs, cam, 0.05, pix, own, layers=2, threads=1)
     # 1920 pixels in 12 chunks of 160 over 3 threads.
     multi = reveal(rs, cam, 0.05, pix, own, layers=2, threads=3, min_chunk=50)
     again = reveal(rs, cam, 0.05, pix, own, layers=2, threads=3, min_chunk=50)
     serial = reveal(rs, cam, 0.05, pix, own, layers=2, threads=1, max_chunk=333)
-    assert single.restarts > 0 and single.layers[1].traced.any()
+    assert single.layers[1].traced.any()
     for r in (multi, again, serial):
         for name in ("rays", "queries", "restarts", "unresolved", "pixels_hit"):
             assert getattr(r, name) == getattr(single, name), name
@@ -472,11 +520,14 @@ def test_reveal_equals_casting_the_scene_without_the_own_object():
     w, h, t = 160, 90, 0.01
     cam = Camera(s.camera, w, h)
     pix = all_pixels(w, h)
-    rs = RayScene(s)
-    own = reveal(rs, cam, t, pix, np.zeros(len(pix)), threads=1).layers[0].object_id
-    res = reveal(rs, cam, t, pix, own, threads=1)
-    got = res.layers[0]
-    assert res.restarts > 0 and res.unresolved == 0
+    own = reveal(RayScene(s), cam, t, pix, np.zeros(len(pix)), threads=1).layers[0].object_id
+    for budget in (0, 10**6):            # restarts, exclusion scenes
+        res = reveal(RayScene(s, exclusion_budget=budget), cam, t, pix, own, threads=1)
+        assert (res.restarts > 0) == (budget == 0) and res.unresolved == 0
+        check_passes_own_object(s, cam, t, pix, own, res.layers[0])
+
+
+def check_passes_own_object(s, cam, t, pix, own, got):
     for k in np.unique(own[own > 0]):
         rows = own == k
         without = Scene(s.name, None, s.camera, objects=[o for o in s.objects if o.id != k])
