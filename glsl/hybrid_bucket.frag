@@ -119,6 +119,8 @@ void main() {
     float a, b;
 
     // Line 1: the neighbourhood's largest displacement: what passes over the pixel.
+    // (llvmpipe runs both sides of a branch for every pixel: each tap fetches its colour
+    // once, unconditionally, and every bucket takes it with a weight of 0 or w.)
     float rn = 0.5 * length(vn);
     if (rn > 0.5) {
         vec2 dir = vn / length(vn);
@@ -126,21 +128,18 @@ void main() {
         for (int i = 0; i < n; ++i) {
             ivec2 y = tap(x, dir, rn, i, n, a, b);
             vec4 m = texelFetch(u_front, y, 0);
-            if (m.w == own_id) {
-                if (!own_line) add(OWN, texelFetch(u_front_color, y, 0).rgb, coverage(a, b, length(m.xy)));
-                continue;
-            }
             vec3 c = texelFetch(u_front_color, y, 0).rgb;
-            float w = coverage(a, b, length(m.xy));
-            if (m.z < own_depth) {
-                add(NEAR, c, w);
-                if (own_moves && w > 0.0 && !own_covers(x, fx.xy, length(m.xy)))
-                    g_near_free += w;
-            } else if (m.w != back_id && m.z < back_depth) {    // the revealed one: line 3
-                add(BETWEEN, c, w);
-                g_far_sum += c;
-                g_far_count += 1.0;
-            }
+            float len = length(m.xy);
+            float w = coverage(a, b, len);
+            bool own = m.w == own_id;
+            bool near = !own && m.z < own_depth;
+            bool between = !own && !near && m.w != back_id && m.z < back_depth;
+            add(OWN, c, own && !own_line ? w : 0.0);
+            add(NEAR, c, near ? w : 0.0);
+            if (own_moves && near && w > 0.0 && !own_covers(x, fx.xy, len)) g_near_free += w;
+            add(BETWEEN, c, between ? w : 0.0);
+            g_far_sum += between ? c : vec3(0.0);
+            g_far_count += between ? 1.0 : 0.0;
         }
     }
     // Line 2: the pixel's own displacement: its own object's coverage and colour.
@@ -151,11 +150,12 @@ void main() {
         for (int i = 0; i < n; ++i) {
             ivec2 y = tap(x, dir, ro, i, n, a, b);
             vec4 m = texelFetch(u_front, y, 0);
-            if (m.w == own_id) add(OWN, texelFetch(u_front_color, y, 0).rgb, coverage(a, b, length(m.xy)));
-            else if (m.z >= own_depth) {
-                g_far_sum += texelFetch(u_front_color, y, 0).rgb;
-                g_far_count += 1.0;
-            }
+            vec3 c = texelFetch(u_front_color, y, 0).rgb;
+            bool own = m.w == own_id;
+            add(OWN, c, own ? coverage(a, b, length(m.xy)) : 0.0);
+            bool far = !own && m.z >= own_depth;
+            g_far_sum += far ? c : vec3(0.0);
+            g_far_count += far ? 1.0 : 0.0;
         }
     } else if (own_line) {
         add(OWN, own_colour, 1.0);            // the own object (nearly) still
@@ -173,14 +173,19 @@ void main() {
             int n = taps_for(rb);
             for (int i = 0; i < n; ++i) {
                 ivec2 y = tap(x, dir, rb, i, n, a, b);
-                vec4 m = back_motion(y);
+                // The back layer there, or where nothing was revealed the front one
+                // (back_motion and back_colour, with the front fetched once).
+                vec4 f = front_motion(y);
+                vec4 m = texelFetch(u_back, y, 0);
+                vec4 cb = texelFetch(u_back_color, y, 0);
+                vec3 c = cb.a > 0.5 ? cb.rgb : front_colour(y);
                 // The revealed object itself (a slanted one is nearer in places) or
                 // anything behind it; not the own object or others in front.
-                float id = m.w > 0.5 ? m.w - 1.0 : front_motion(y).w;
+                float id = m.w > 0.5 ? m.w - 1.0 : f.w;
+                m = m.w > 0.5 ? m : vec4(f.xyz, 0.0);
                 if (id != back_id && m.z < back_depth * 0.999) continue;
                 float len = length(m.xy);
                 float w = coverage(a, b, len);
-                vec3 c = back_colour(y);
                 back_all += w * c;
                 back_all_w += w;
                 // The background seen at x is this fragment at the time u = -s / |m| it

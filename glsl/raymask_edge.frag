@@ -3,16 +3,23 @@
 // Sobel kernel on log depth or on the world normal exceeds its threshold: the moving
 // silhouettes (and creases next to them). The kernel is divided by 4, so a one-pixel step
 // of size s reads as s.
+// Second target, for the range check's inner loop (one fetch per probe): (half the
+// relative displacement, the object id) at an edge pixel, (0, 0) elsewhere (id 0 is the
+// sky, never a searching pixel's own).
 uniform usampler2D u_displacement_mask;
+uniform usampler2D u_id;
+uniform sampler2D u_relative;
 uniform sampler2D u_depth;
 uniform sampler2D u_normal;
 uniform float u_edge_depth;
 uniform float u_edge_normal;
-out uint out_edge;
+layout(location = 0) out uint out_edge;
+layout(location = 1) out vec2 out_probe;
 
 void main() {
     ivec2 x = ivec2(gl_FragCoord.xy);
     out_edge = 0u;
+    out_probe = vec2(0.0);
     if (texelFetch(u_displacement_mask, x, 0).x == 0u) return;
     ivec2 size = textureSize(u_depth, 0);
     vec2 gz = vec2(0.0);
@@ -32,5 +39,9 @@ void main() {
     }
     float g_depth = 0.25 * length(gz);
     float g_normal = 0.25 * sqrt(dot(gnx, gnx) + dot(gny, gny));
-    if (g_depth > u_edge_depth || g_normal > u_edge_normal) out_edge = 1u;
+    if (g_depth > u_edge_depth || g_normal > u_edge_normal) {
+        out_edge = 1u;
+        out_probe = vec2(0.5 * length(texelFetch(u_relative, x, 0).xy),
+                         float(texelFetch(u_id, x, 0).x));
+    }
 }

@@ -10,10 +10,9 @@
 // same, the cost far lower where everything moves (camera motion) but few edges survive.
 #include "raymask_common.glsl"
 uniform usampler2D u_displacement_mask;
-uniform usampler2D u_edge;
+uniform sampler2D u_edge_probe;   // raymask_edge.frag: (half |relative D|, id) at edges
 uniform usampler2D u_id;
 uniform sampler2D u_velocity;
-uniform sampler2D u_relative;
 uniform sampler2D u_edge_tiles;   // raymask_tiles.frag, MODE 0
 uniform usampler2D u_edge_near;   // bit (id mod 32): an edge of that object in this
                                   // u_fine tile or one next to it (edge_ids.frag)
@@ -53,12 +52,14 @@ void main() {
         }
     }
     if (!any_edge) return;
+    float own_f = float(own);
     for (int i = 0; i <= steps; ++i) {
         for (int s = -1; s <= 1; s += 2) {
-            ivec2 y = probe(x, float(s * i) * dir, size);
-            if (texelFetch(u_edge, y, 0).x == 0u || texelFetch(u_id, y, 0).x != own) continue;
-            float reach = max(half_len, 0.5 * length(texelFetch(u_relative, y, 0).xy));
-            if (float(i) <= min(reach, u_max_reach)) { out_mask = own; return; }
+            vec2 e = texelFetch(u_edge_probe, probe(x, float(s * i) * dir, size), 0).xy;
+            if (e.y == own_f && float(i) <= min(max(half_len, e.x), u_max_reach)) {
+                out_mask = own;
+                return;
+            }
         }
     }
 }

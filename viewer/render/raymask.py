@@ -28,6 +28,7 @@ from .tiles import StripSpec
 MASK = TexSpec(1, "u1")
 RAY_MASK = TexSpec(1, "u4")         # own object id where masked
 RELATIVE = TexSpec(2, "f4")
+EDGE_PROBE = TexSpec(2, "f4")       # (half |relative D|, object id) at edge pixels, else 0
 
 
 class DisplacementTest(FullscreenPass):
@@ -49,19 +50,20 @@ class DisplacementTest(FullscreenPass):
 
 
 class EdgeTest(FullscreenPass):
+    """The edge test; also mask_edge_probe, what the range check reads per probe."""
     name = "mask_edge"
     fragment = "raymask_edge.frag"
-    inputs = ("mask_displacement", "depth", "normal")
-    produces = ("mask_edge",)
+    inputs = ("mask_displacement", "mask_relative", "depth", "normal", "id")
+    produces = ("mask_edge", "mask_edge_probe")
 
     def outputs(self, frame: Frame):
-        return {"mask_edge": MASK}
+        return {"mask_edge": MASK, "mask_edge_probe": EDGE_PROBE}
 
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
         self.draw(frame, self.produces,
                   {"u_displacement_mask": "mask_displacement", "u_depth": "depth",
-                   "u_normal": "normal"},
+                   "u_normal": "normal", "u_id": "id", "u_relative": "mask_relative"},
                   {"u_edge_depth": float(p.edge_depth), "u_edge_normal": float(p.edge_normal)},
                   tiles=tile_list(frame, "moving"))
 
@@ -126,8 +128,8 @@ class EdgeIdTiles(FullscreenPass):
 class RangeCheck(FullscreenPass):
     name = "ray_mask"
     fragment = "raymask_range.frag"
-    inputs = ("mask_displacement", "mask_edge", "mask_edge_tiles", "mask_edge_near",
-              "mask_relative", "id", "velocity")
+    inputs = ("mask_displacement", "mask_edge_probe", "mask_edge_tiles", "mask_edge_near",
+              "id", "velocity")
     produces = ("ray_mask",)
 
     def outputs(self, frame: Frame):
@@ -136,8 +138,8 @@ class RangeCheck(FullscreenPass):
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
         self.draw(frame, self.produces,
-                  {"u_displacement_mask": "mask_displacement", "u_edge": "mask_edge",
-                   "u_id": "id", "u_velocity": "velocity", "u_relative": "mask_relative",
+                  {"u_displacement_mask": "mask_displacement", "u_edge_probe": "mask_edge_probe",
+                   "u_id": "id", "u_velocity": "velocity",
                    "u_edge_tiles": "mask_edge_tiles", "u_edge_near": "mask_edge_near"},
                   {"u_min_speed": float(p.min_speed), "u_tile": max_radius_px(frame),
                    "u_fine": FINE,
