@@ -7,14 +7,27 @@
 // lies within half the RELATIVE displacement D - D_bg of the silhouette: the first probe
 // that sees the background gives D_bg, and X +- (D - D_bg)/2 is tested as well.
 // Outputs: the test's result and the relative displacement (D where no background was seen).
+//
+// Ray mask, step 2, in the same pass (it needs nothing but this pixel's step 1): the edge
+// test. Survivors of the displacement test are kept where a Sobel kernel on log depth or
+// on the world normal exceeds its threshold: the moving silhouettes (and creases next to
+// them). The kernel is divided by 4, so a one-pixel step of size s reads as s.
+// Outputs: the edge flag, and for the range check's inner loop (one fetch per probe)
+// (half the relative displacement, the object id) at an edge pixel, (0, 0) elsewhere (id
+// 0 is the sky, never a searching pixel's own).
 #include "raymask_common.glsl"
 uniform sampler2D u_depth;
 uniform usampler2D u_id;
 uniform sampler2D u_velocity;
+uniform sampler2D u_normal;
 uniform float u_min_speed;          // px over the exposure
 uniform float u_depth_threshold;    // relative
+uniform float u_edge_depth;
+uniform float u_edge_normal;
 layout(location = 0) out uint out_mask;
 layout(location = 1) out vec2 out_relative;
+layout(location = 2) out uint out_edge;
+layout(location = 3) out vec2 out_probe;
 
 uint own_id;
 float own_depth;
@@ -27,6 +40,28 @@ bool uncovers(ivec2 x, vec2 offset, ivec2 size, out vec2 v) {
         && texelFetch(u_depth, y, 0).x > own_depth * (1.0 + u_depth_threshold);
 }
 
+// Step 2 at x: is it on a depth or normal edge?
+bool on_edge(ivec2 x, ivec2 size) {
+    vec2 gz = vec2(0.0);
+    vec3 gnx = vec3(0.0), gny = vec3(0.0);
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            if (dx == 0 && dy == 0) continue;
+            ivec2 p = clamp(x + ivec2(dx, dy), ivec2(0), size - 1);
+            // Sobel weights: 2 on the axis, 1 on the diagonals; sign by side.
+            vec2 w = vec2(float(dx) * (dy == 0 ? 2.0 : 1.0), float(dy) * (dx == 0 ? 2.0 : 1.0));
+            float z = log(max(texelFetch(u_depth, p, 0).x, 1e-6));
+            vec3 n = texelFetch(u_normal, p, 0).xyz;
+            gz += w * z;
+            gnx += w.x * n;
+            gny += w.y * n;
+        }
+    }
+    float g_depth = 0.25 * length(gz);
+    float g_normal = 0.25 * sqrt(dot(gnx, gnx) + dot(gny, gny));
+    return g_depth > u_edge_depth || g_normal > u_edge_normal;
+}
+
 void main() {
     ivec2 x = ivec2(gl_FragCoord.xy);
     ivec2 size = textureSize(u_depth, 0);
@@ -35,6 +70,8 @@ void main() {
     own_depth = texelFetch(u_depth, x, 0).x;
     out_mask = 0u;
     out_relative = d;
+    out_edge = 0u;
+    out_probe = vec2(0.0);
     if (own_id == 0u || length(d) < u_min_speed) return;   // the sky hides nothing
     vec2 vb;
     bool found = false;
@@ -48,5 +85,9 @@ void main() {
         for (int s = -1; s <= 1; s += 2) {
             if (uncovers(x, 0.5 * float(s) * out_relative, size, vb)) out_mask = 1u;
         }
+    }
+    if (out_mask != 0u && on_edge(x, size)) {
+        out_edge = 1u;
+        out_probe = vec2(0.5 * length(out_relative), float(own_id));
     }
 }

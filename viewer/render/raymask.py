@@ -1,12 +1,13 @@
 """The hybrid mode's ray mask (ALGORITHMS.md 4.1-4.2): which pixels get a ray.
 
-Three fragment passes, after the paper, adapted to the contract's centred exposure:
+The paper's three steps, adapted to the contract's centred exposure, in two fragment
+passes (the first two steps read nothing but the pixel's own neighbourhood):
 
   mask_displacement (+ mask_relative): a moving pixel whose displaced position, looking
       both ways along half its displacement (and half the relative displacement to the
       background seen there), lands on a different, farther object;
-  mask_edge: the survivors where a Sobel kernel on log depth or normal exceeds a threshold
-      (the moving silhouettes);
+  mask_edge (same pass, + mask_edge_probe): the survivors where a Sobel kernel on log
+      depth or normal exceeds a threshold (the moving silhouettes);
   ray_mask: every moving pixel with an edge pixel of its own object within reach along
       its displacement; holds the pixel's object id where masked, 0 elsewhere.
 
@@ -31,40 +32,27 @@ RELATIVE = TexSpec(2, "f4")
 EDGE_PROBE = TexSpec(2, "f4")       # (half |relative D|, object id) at edge pixels, else 0
 
 
-class DisplacementTest(FullscreenPass):
+class SurfaceTests(FullscreenPass):
+    """The displacement test and, on its survivors, the edge test, in one pass
+    (glsl/raymask_displacement.frag); also mask_edge_probe, what the range check reads
+    per probe."""
     name = "mask_displacement"
     fragment = "raymask_displacement.frag"
-    inputs = ("depth", "id", "velocity")
-    produces = ("mask_displacement", "mask_relative")
+    inputs = ("depth", "id", "velocity", "normal")
+    produces = ("mask_displacement", "mask_relative", "mask_edge", "mask_edge_probe")
 
     def outputs(self, frame: Frame):
-        return {"mask_displacement": MASK, "mask_relative": RELATIVE}
+        return {"mask_displacement": MASK, "mask_relative": RELATIVE, "mask_edge": MASK,
+                "mask_edge_probe": EDGE_PROBE}
 
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
         self.draw(frame, self.produces,
-                  {"u_depth": "depth", "u_id": "id", "u_velocity": "velocity"},
+                  {"u_depth": "depth", "u_id": "id", "u_velocity": "velocity",
+                   "u_normal": "normal"},
                   {"u_min_speed": float(p.min_speed),
-                   "u_depth_threshold": float(p.depth_threshold)},
-                  tiles=tile_list(frame, "moving"))
-
-
-class EdgeTest(FullscreenPass):
-    """The edge test; also mask_edge_probe, what the range check reads per probe."""
-    name = "mask_edge"
-    fragment = "raymask_edge.frag"
-    inputs = ("mask_displacement", "mask_relative", "depth", "normal", "id")
-    produces = ("mask_edge", "mask_edge_probe")
-
-    def outputs(self, frame: Frame):
-        return {"mask_edge": MASK, "mask_edge_probe": EDGE_PROBE}
-
-    def execute(self, frame: Frame):
-        p = frame.params["hybrid"]
-        self.draw(frame, self.produces,
-                  {"u_displacement_mask": "mask_displacement", "u_depth": "depth",
-                   "u_normal": "normal", "u_id": "id", "u_relative": "mask_relative"},
-                  {"u_edge_depth": float(p.edge_depth), "u_edge_normal": float(p.edge_normal)},
+                   "u_depth_threshold": float(p.depth_threshold),
+                   "u_edge_depth": float(p.edge_depth), "u_edge_normal": float(p.edge_normal)},
                   tiles=tile_list(frame, "moving"))
 
 
@@ -150,5 +138,5 @@ class RangeCheck(FullscreenPass):
 
 def raymask_passes() -> list:
     """The three mask passes and their tile summaries, after a full G-buffer."""
-    return [DisplacementTest(), EdgeTest(), MaskTiles("mask_edge", "edges"),
+    return [SurfaceTests(), MaskTiles("mask_edge", "edges"),
             EdgeIdTiles(), RangeCheck(), MaskTiles("ray_mask", "mask")]
