@@ -19,7 +19,7 @@ void main() {
     vec3 n = normalize(u_normal_matrix * v_normal_local);
     if (dot(n, u_eye - v_world) < 0.0) n = -n;
     vec3 color = shade(v_world, n, v_local, v_uv, u_eye);
-#if GBUFFER_FULL
+#if GBUFFER_MOTION
     vec2 velocity = displacement_between(v_view_open, v_view_close, v_view);
 #else
     vec2 velocity = vec2(0.0);

@@ -1,8 +1,11 @@
 // G-buffer render targets. GBUFFER_LAYOUT picks which are written (viewer/render/gbuffer.py
 // keeps the same table): 0 = all, 1 = colour, depth and id (reference sub-frames that record
-// visibility), 2 = colour only (plain reference sub-frames), 3 = all plus the hybrid
-// composite's packed front layer (so no separate pass has to pack it).
-#define GBUFFER_FULL (GBUFFER_LAYOUT == 0 || GBUFFER_LAYOUT == 3)
+// visibility), 2 = colour only (plain reference sub-frames), 3 = the hybrid mode's: colour,
+// normal and the packed front layer (D, depth, id) that every hybrid pass reads, one fetch
+// for all three (writing depth, id and D once each costs ~2.5 ms a frame at 640x360 on
+// llvmpipe).
+#define GBUFFER_FULL (GBUFFER_LAYOUT == 0)
+#define GBUFFER_MOTION (GBUFFER_LAYOUT == 0 || GBUFFER_LAYOUT == 3)    // D is written
 layout(location = 0) out vec4 out_color;         // linear, unclamped
 #if GBUFFER_FULL
 layout(location = 1) out float out_depth;        // linear view depth
@@ -12,11 +15,11 @@ layout(location = 4) out vec2 out_velocity;      // pixels over the exposure, GL
 #elif GBUFFER_LAYOUT == 1
 layout(location = 1) out float out_depth;
 layout(location = 2) out uint out_id;
-#endif
-#if GBUFFER_LAYOUT == 3
-// (D.xy clamped to |D| <= u_max_disp, depth, id): glsl/hybrid_layers.glsl's front layer.
-layout(location = 5) out vec4 out_hybrid_front;
-uniform float u_max_disp;
+#elif GBUFFER_LAYOUT == 3
+layout(location = 1) out vec4 out_normal;
+// (D.xy, depth, id): glsl/hybrid_layers.glsl's front layer (D not clamped: its readers
+// clamp it to the blur limit where they need to).
+layout(location = 2) out vec4 out_hybrid_front;
 #endif
 
 void write_gbuffer(vec3 color, float depth, vec3 normal, uint id, vec2 velocity) {
@@ -29,10 +32,8 @@ void write_gbuffer(vec3 color, float depth, vec3 normal, uint id, vec2 velocity)
 #elif GBUFFER_LAYOUT == 1
     out_depth = depth;
     out_id = id;
-#endif
-#if GBUFFER_LAYOUT == 3
-    float l = length(velocity);
-    vec2 d = l > u_max_disp ? velocity * (u_max_disp / l) : velocity;
-    out_hybrid_front = vec4(d, depth, float(id));    // ids are exact as floats below 2^24
+#elif GBUFFER_LAYOUT == 3
+    out_normal = vec4(normal, 0.0);
+    out_hybrid_front = vec4(velocity, depth, float(id));   // ids are exact as floats below 2^24
 #endif
 }

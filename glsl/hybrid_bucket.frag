@@ -22,7 +22,6 @@
 #include "hybrid_layers.glsl"
 uniform sampler2D u_neighbormax;
 uniform int u_tile;
-uniform float u_max_disp;
 uniform int u_samples_min;
 uniform int u_samples_max;
 uniform float u_spacing;
@@ -95,7 +94,7 @@ void main() {
     ivec2 x = ivec2(gl_FragCoord.xy);
     g_size = textureSize(u_front, 0);
     vec3 own_colour = texelFetch(u_front_color, x, 0).rgb;
-    vec4 fx = texelFetch(u_front, x, 0);
+    vec4 fx = front_motion(x);
     vec4 bx = back_motion(x);
     vec2 vn = clamp_length(texelFetch(u_neighbormax, x / u_tile, 0).xy);
     if (max(length(vn), max(length(fx.xy), length(bx.xy))) <= 1.0) {
@@ -127,9 +126,9 @@ void main() {
         int n = taps_for(rn);
         for (int i = 0; i < n; ++i) {
             ivec2 y = tap(x, dir, rn, i, n, a, b);
-            vec4 m = texelFetch(u_front, y, 0);
+            vec4 m = texelFetch(u_front, y, 0);       // only |D| is needed: clamp that
             vec3 c = texelFetch(u_front_color, y, 0).rgb;
-            float len = length(m.xy);
+            float len = min(length(m.xy), u_max_disp);
             float w = coverage(a, b, len);
             bool own = m.w == own_id;
             bool near = !own && m.z < own_depth;
@@ -152,7 +151,7 @@ void main() {
             vec4 m = texelFetch(u_front, y, 0);
             vec3 c = texelFetch(u_front_color, y, 0).rgb;
             bool own = m.w == own_id;
-            add(OWN, c, own ? coverage(a, b, length(m.xy)) : 0.0);
+            add(OWN, c, own ? coverage(a, b, min(length(m.xy), u_max_disp)) : 0.0);
             bool far = !own && m.z >= own_depth;
             g_far_sum += far ? c : vec3(0.0);
             g_far_count += far ? 1.0 : 0.0;

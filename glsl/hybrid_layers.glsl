@@ -1,6 +1,7 @@
 // The layers the hybrid composites resolve (viewer/render/hybrid_composite.py).
 // front: the G-buffer's hybrid_front, (D.xy, depth, object id), D the displacement over the
-//     exposure clamped to the blur limit (|D| <= 2k);
+//     exposure, read through front_motion() which clamps it to the blur limit u_max_disp
+//     (|D| <= 2k);
 // back (and back2): written by reveal_shade where a ray was cast, (D.xy, depth, 1 + the
 //     revealed object's id), and cleared to 0 elsewhere: there a layer reads the one in
 //     front of it (back -> front, back2 -> back) with w = 0, "nothing revealed here", so
@@ -14,7 +15,13 @@ uniform sampler2D u_back2_color;
 uniform sampler2D u_back2;
 #endif
 
-vec4 front_motion(ivec2 p) { return texelFetch(u_front, p, 0); }
+uniform float u_max_disp;
+
+vec4 front_motion(ivec2 p) {
+    vec4 f = texelFetch(u_front, p, 0);
+    float l = length(f.xy);
+    return l > u_max_disp ? vec4(f.xy * (u_max_disp / l), f.zw) : f;
+}
 vec3 front_colour(ivec2 p) { return texelFetch(u_front_color, p, 0).rgb; }
 
 vec4 back_motion(ivec2 p) {

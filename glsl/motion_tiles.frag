@@ -1,6 +1,6 @@
 #version 330 core
 // The longest displacement |D| (px over the exposure) in each u_tile x u_tile tile of the
-// G-buffer's velocity, for the host's tile lists (viewer/render/tile_lists.py), in two
+// G-buffer's hybrid_front (.xy: D), for the host's tile lists (viewer/render/tile_lists.py), in two
 // separable steps so the reads spread over many fragments: STAGE 0 over u_tile texels
 // along x (full size -> strip), STAGE 1 over u_tile strip texels along y. length() is the
 // one the ray mask passes compare with hybrid.min_speed, so a tile holds a moving pixel

@@ -16,9 +16,7 @@
 // (half the relative displacement, the object id) at an edge pixel, (0, 0) elsewhere (id
 // 0 is the sky, never a searching pixel's own).
 #include "raymask_common.glsl"
-uniform sampler2D u_depth;
-uniform usampler2D u_id;
-uniform sampler2D u_velocity;
+uniform sampler2D u_front;          // the G-buffer's hybrid_front: (D, depth, id)
 uniform sampler2D u_normal;
 uniform float u_min_speed;          // px over the exposure
 uniform float u_depth_threshold;    // relative
@@ -29,15 +27,14 @@ layout(location = 1) out vec2 out_relative;
 layout(location = 2) out uint out_edge;
 layout(location = 3) out vec2 out_probe;
 
-uint own_id;
+float own_id;
 float own_depth;
 
 // Does the pixel at x + offset show another object farther than x? Its velocity in v.
 bool uncovers(ivec2 x, vec2 offset, ivec2 size, out vec2 v) {
-    ivec2 y = probe(x, offset, size);
-    v = texelFetch(u_velocity, y, 0).xy;
-    return texelFetch(u_id, y, 0).x != own_id
-        && texelFetch(u_depth, y, 0).x > own_depth * (1.0 + u_depth_threshold);
+    vec4 f = texelFetch(u_front, probe(x, offset, size), 0);
+    v = f.xy;
+    return f.w != own_id && f.z > own_depth * (1.0 + u_depth_threshold);
 }
 
 // Step 2 at x: is it on a depth or normal edge?
@@ -50,7 +47,7 @@ bool on_edge(ivec2 x, ivec2 size) {
             ivec2 p = clamp(x + ivec2(dx, dy), ivec2(0), size - 1);
             // Sobel weights: 2 on the axis, 1 on the diagonals; sign by side.
             vec2 w = vec2(float(dx) * (dy == 0 ? 2.0 : 1.0), float(dy) * (dx == 0 ? 2.0 : 1.0));
-            float z = log(max(texelFetch(u_depth, p, 0).x, 1e-6));
+            float z = log(max(texelFetch(u_front, p, 0).z, 1e-6));
             vec3 n = texelFetch(u_normal, p, 0).xyz;
             gz += w * z;
             gnx += w.x * n;
@@ -64,15 +61,16 @@ bool on_edge(ivec2 x, ivec2 size) {
 
 void main() {
     ivec2 x = ivec2(gl_FragCoord.xy);
-    ivec2 size = textureSize(u_depth, 0);
-    vec2 d = texelFetch(u_velocity, x, 0).xy;
-    own_id = texelFetch(u_id, x, 0).x;
-    own_depth = texelFetch(u_depth, x, 0).x;
+    ivec2 size = textureSize(u_front, 0);
+    vec4 f = texelFetch(u_front, x, 0);
+    vec2 d = f.xy;
+    own_id = f.w;
+    own_depth = f.z;
     out_mask = 0u;
     out_relative = d;
     out_edge = 0u;
     out_probe = vec2(0.0);
-    if (own_id == 0u || length(d) < u_min_speed) return;   // the sky hides nothing
+    if (own_id == 0.0 || length(d) < u_min_speed) return;   // the sky hides nothing
     vec2 vb;
     bool found = false;
     for (int s = -1; s <= 1; s += 2) {
@@ -88,6 +86,6 @@ void main() {
     }
     if (out_mask != 0u && on_edge(x, size)) {
         out_edge = 1u;
-        out_probe = vec2(0.5 * length(out_relative), float(own_id));
+        out_probe = vec2(0.5 * length(out_relative), own_id);
     }
 }

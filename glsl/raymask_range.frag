@@ -11,8 +11,7 @@
 #include "raymask_common.glsl"
 uniform usampler2D u_displacement_mask;
 uniform sampler2D u_edge_probe;   // raymask_edge.frag: (half |relative D|, id) at edges
-uniform usampler2D u_id;
-uniform sampler2D u_velocity;
+uniform sampler2D u_front;        // the G-buffer's hybrid_front: (D, depth, id)
 uniform sampler2D u_edge_tiles;   // raymask_tiles.frag, MODE 0
 uniform usampler2D u_edge_near;   // bit (id mod 32): an edge of that object in this
                                   // u_fine tile or one next to it (edge_ids.frag)
@@ -25,9 +24,10 @@ out uint out_mask;
 
 void main() {
     ivec2 x = ivec2(gl_FragCoord.xy);
-    ivec2 size = textureSize(u_id, 0);
-    uint own = texelFetch(u_id, x, 0).x;
-    vec2 d = texelFetch(u_velocity, x, 0).xy;
+    ivec2 size = textureSize(u_front, 0);
+    vec4 f = texelFetch(u_front, x, 0);
+    uint own = uint(f.w);
+    vec2 d = f.xy;
     out_mask = 0u;
     if (own == 0u || length(d) < u_min_speed) return;
     if (texelFetch(u_displacement_mask, x, 0).x != 0u) { out_mask = own; return; }

@@ -378,19 +378,24 @@ def test_deterministic(ctx):
 
 
 def test_stored_layers_are_the_packed_g_buffer_and_revealed_layer(ctx):
-    # The G-buffer's hybrid_front and reveal_shade's hybrid_back are what the composite's
-    # numpy model packs from the plain buffers (tests/numpy_hybrid.py pack_layers).
+    # The hybrid G-buffer's hybrid_front is the full G-buffer's (D, depth, id), and
+    # reveal_shade's hybrid_back is what the composite's numpy model packs from the plain
+    # buffers (tests/numpy_hybrid.py pack_layers), D clamped to the blur limit.
     scene = load_scene(CONFORMANCE / "basic.toml")
     p = ParamSet()
     p.set("blur.max_radius", 0.05)            # k = 8 px: some displacements get clamped
     res, bufs = render(ctx, scene, "hybrid", 0.0, p)
+    _, full = render(ctx, scene, "mcguire", 0.0, p)      # the full G-buffer layout
+    assert not {"depth", "id", "velocity"} & set(bufs)   # the hybrid layout packs them
     k = 8
+    np.testing.assert_array_equal(
+        bufs["hybrid_front"], np.dstack([full["velocity"], full["depth"], full["id"]]))
+    np.testing.assert_array_equal(bufs["color"], full["color"])
     rev = bufs["revealed_color"]
-    front, _, back, back_color = nh.pack_layers(
-        bufs["color"], bufs["depth"], bufs["velocity"], rev, bufs["revealed_depth"],
-        bufs["revealed_velocity"], 2.0 * k, bufs["id"], bufs["revealed_id"])
-    assert np.linalg.norm(bufs["velocity"], axis=-1).max() > 2.0 * k
-    np.testing.assert_allclose(bufs["hybrid_front"], front, rtol=1e-6, atol=1e-5)
+    _, _, back, back_color = nh.pack_layers(
+        full["color"], full["depth"], full["velocity"], rev, bufs["revealed_depth"],
+        bufs["revealed_velocity"], 2.0 * k, full["id"], bufs["revealed_id"])
+    assert np.linalg.norm(full["velocity"], axis=-1).max() > 2.0 * k
     motion, colour = nh.stored_back(back, back_color)
     assert res.stats["revealed_pixels"] > 0
     np.testing.assert_allclose(bufs["hybrid_back"], motion, rtol=1e-6, atol=1e-5)

@@ -29,11 +29,12 @@ def params(**hy):
 
 
 def upload(frame, depth, ids, disp, normal):
-    for name, a in (("depth", depth), ("id", ids), ("velocity", disp), ("normal", normal)):
-        spec = GBUFFER[name]
-        frame.pool.texture(name, spec)
-        dtype = np.uint32 if spec.dtype == "u4" else np.float32
-        frame.write(name, to_image(np.asarray(a, dtype)))
+    """The hybrid G-buffer's targets: hybrid_front (D, depth, id) and the normal."""
+    front = np.dstack([np.asarray(disp, np.float32), np.asarray(depth, np.float32),
+                       np.asarray(ids, np.float32)])
+    for name, a in (("hybrid_front", front), ("normal", normal)):
+        frame.pool.texture(name, GBUFFER[name])
+        frame.write(name, to_image(np.asarray(a, np.float32)))
 
 
 def run(frame):

@@ -5,7 +5,6 @@ from __future__ import annotations
 import moderngl
 
 from ..conventions import glsl_defines
-from .blur_common import max_radius_px
 from .frame import Frame
 from .gpu_scene import MAX_LIGHTS, set_uniform
 from .passes import Pass
@@ -17,7 +16,7 @@ GBUFFER = {
     "normal": TexSpec(4, "f2"),
     "id": TexSpec(1, "u4"),
     "velocity": TexSpec(2, "f4"),
-    "hybrid_front": TexSpec(4, "f4"),    # (D clamped to the blur limit, depth, id)
+    "hybrid_front": TexSpec(4, "f4"),    # (D, depth, id): the hybrid mode's packed layer
 }
 
 
@@ -26,7 +25,7 @@ LAYOUTS = {
     "full": (0, ("color", "depth", "normal", "id", "velocity")),
     "visibility": (1, ("color", "depth", "id")),
     "color": (2, ("color",)),
-    "hybrid": (3, ("color", "depth", "normal", "id", "velocity", "hybrid_front")),
+    "hybrid": (3, ("color", "normal", "hybrid_front")),
 }
 
 
@@ -55,9 +54,6 @@ class GBufferPass(Pass):
         # Background first, without depth test: fills every target where nothing is hit.
         bg = frame.programs.get("fullscreen.vert", "background.frag", defines)
         set_uniform(bg, "u_background", frame.scene.background)
-        extra = {"u_max_disp": 2.0 * max_radius_px(frame)} if self.layout_id == 3 else {}
-        for k, v in extra.items():
-            set_uniform(bg, k, v)
         ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE | moderngl.BLEND)
         frame.programs.empty_vao(bg).render(moderngl.TRIANGLES, vertices=3)
 
@@ -66,8 +62,6 @@ class GBufferPass(Pass):
         prog = frame.programs.get("gbuffer.vert", "gbuffer.frag", defines)
         gpu.bind_camera(prog, cam, t, t_open, t_close, frame.size)
         gpu.bind_lights(prog)
-        for k, v in extra.items():
-            set_uniform(prog, k, v)
         for obj in gpu.front_to_back(cam.eye(t), t):
             gpu.bind_object(prog, obj, t, t_open, t_close)
             gpu.vao(prog, obj).render(moderngl.TRIANGLES)

@@ -114,4 +114,4 @@ class Composite(FullscreenPass):
 
 def composite_passes() -> list:
     """The displacement tiles and the composite, after the reveal."""
-    return [*tile_passes("velocity", "hybrid"), Composite()]
+    return [*tile_passes("hybrid_front", "hybrid"), Composite()]

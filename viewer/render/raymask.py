@@ -38,7 +38,7 @@ class SurfaceTests(FullscreenPass):
     per probe."""
     name = "mask_displacement"
     fragment = "raymask_displacement.frag"
-    inputs = ("depth", "id", "velocity", "normal")
+    inputs = ("hybrid_front", "normal")
     produces = ("mask_displacement", "mask_relative", "mask_edge", "mask_edge_probe")
 
     def outputs(self, frame: Frame):
@@ -48,8 +48,7 @@ class SurfaceTests(FullscreenPass):
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
         self.draw(frame, self.produces,
-                  {"u_depth": "depth", "u_id": "id", "u_velocity": "velocity",
-                   "u_normal": "normal"},
+                  {"u_front": "hybrid_front", "u_normal": "normal"},
                   {"u_min_speed": float(p.min_speed),
                    "u_depth_threshold": float(p.depth_threshold),
                    "u_edge_depth": float(p.edge_depth), "u_edge_normal": float(p.edge_normal)},
@@ -94,7 +93,7 @@ class EdgeIdTiles(FullscreenPass):
     spread to the 3x3 tiles around (glsl/edge_ids.frag): mask_edge_near."""
     name = "mask_edge_near"
     fragment = "edge_ids.frag"
-    inputs = ("mask_edge", "id")
+    inputs = ("mask_edge_probe",)
     produces = ("mask_edge_ids_x", "mask_edge_ids", "mask_edge_near")
 
     def defines(self, frame: Frame):
@@ -106,7 +105,7 @@ class EdgeIdTiles(FullscreenPass):
                 "mask_edge_near": TexSpec(1, "u4", tile=FINE)}
 
     def execute(self, frame: Frame):
-        steps = ((0, {"u_source": "mask_edge", "u_id": "id"}, "mask_edge_ids_x"),
+        steps = ((0, {"u_probe": "mask_edge_probe"}, "mask_edge_ids_x"),
                  (1, {"u_source": "mask_edge_ids_x"}, "mask_edge_ids"),
                  (2, {"u_source": "mask_edge_ids"}, "mask_edge_near"))
         for self._stage, textures, out in steps:
@@ -117,7 +116,7 @@ class RangeCheck(FullscreenPass):
     name = "ray_mask"
     fragment = "raymask_range.frag"
     inputs = ("mask_displacement", "mask_edge_probe", "mask_edge_tiles", "mask_edge_near",
-              "id", "velocity")
+              "hybrid_front")
     produces = ("ray_mask",)
 
     def outputs(self, frame: Frame):
@@ -127,7 +126,7 @@ class RangeCheck(FullscreenPass):
         p = frame.params["hybrid"]
         self.draw(frame, self.produces,
                   {"u_displacement_mask": "mask_displacement", "u_edge_probe": "mask_edge_probe",
-                   "u_id": "id", "u_velocity": "velocity",
+                   "u_front": "hybrid_front",
                    "u_edge_tiles": "mask_edge_tiles", "u_edge_near": "mask_edge_near"},
                   {"u_min_speed": float(p.min_speed), "u_tile": max_radius_px(frame),
                    "u_fine": FINE,

@@ -207,7 +207,7 @@ def tile_coords(selected: np.ndarray) -> np.ndarray:
 class MotionTiles(FullscreenPass):
     name = "motion_tiles"
     fragment = "motion_tiles.frag"
-    inputs = ("velocity",)
+    inputs = ("hybrid_front",)          # .xy: the displacement D
     produces = ("motion_tiles_x", "motion_tiles")
 
     def defines(self, frame: Frame):
@@ -218,7 +218,7 @@ class MotionTiles(FullscreenPass):
                 "motion_tiles": TexSpec(1, "f4", tile=FINE)}
 
     def execute(self, frame: Frame):
-        for self._stage, src, dst in ((0, "velocity", "motion_tiles_x"),
+        for self._stage, src, dst in ((0, "hybrid_front", "motion_tiles_x"),
                                       (1, "motion_tiles_x", "motion_tiles")):
             self.draw(frame, (dst,), {"u_source": src}, {"u_tile": FINE})
 
