@@ -183,7 +183,7 @@ void main() {
                 float id = m.w > 0.5 ? m.w - 1.0 : f.w;
                 m = m.w > 0.5 ? m : vec4(f.xyz, 0.0);
                 if (id != back_id && m.z < back_depth * 0.999) continue;
-                float len = length(m.xy);
+                float len = min(length(m.xy), u_max_disp);
                 float w = coverage(a, b, len);
                 back_all += w * c;
                 back_all_w += w;

@@ -5,7 +5,8 @@
 // back (and back2): written by reveal_shade where a ray was cast, (D.xy, depth, 1 + the
 //     revealed object's id), and cleared to 0 elsewhere: there a layer reads the one in
 //     front of it (back -> front, back2 -> back) with w = 0, "nothing revealed here", so
-//     a back-layer walk that leaves the mask reads the visible surface.
+//     a back-layer walk that leaves the mask reads the visible surface. D clamped on read,
+//     as the front's.
 uniform sampler2D u_front_color;
 uniform sampler2D u_front;
 uniform sampler2D u_back_color;
@@ -17,16 +18,17 @@ uniform sampler2D u_back2;
 
 uniform float u_max_disp;
 
-vec4 front_motion(ivec2 p) {
-    vec4 f = texelFetch(u_front, p, 0);
+vec4 clamp_motion(vec4 f) {
     float l = length(f.xy);
     return l > u_max_disp ? vec4(f.xy * (u_max_disp / l), f.zw) : f;
 }
+
+vec4 front_motion(ivec2 p) { return clamp_motion(texelFetch(u_front, p, 0)); }
 vec3 front_colour(ivec2 p) { return texelFetch(u_front_color, p, 0).rgb; }
 
 vec4 back_motion(ivec2 p) {
     vec4 b = texelFetch(u_back, p, 0);
-    return b.w > 0.5 ? b : vec4(front_motion(p).xyz, 0.0);
+    return b.w > 0.5 ? clamp_motion(b) : vec4(front_motion(p).xyz, 0.0);
 }
 vec3 back_colour(ivec2 p) {
     vec4 c = texelFetch(u_back_color, p, 0);
@@ -35,7 +37,7 @@ vec3 back_colour(ivec2 p) {
 #if LAYERS >= 2
 vec4 back2_motion(ivec2 p) {
     vec4 b = texelFetch(u_back2, p, 0);
-    return b.w > 0.5 ? b : back_motion(p);
+    return b.w > 0.5 ? clamp_motion(b) : back_motion(p);
 }
 vec3 back2_colour(ivec2 p) {
     vec4 c = texelFetch(u_back2_color, p, 0);

@@ -7,9 +7,9 @@
 // (face row, Embree u, v) is turned into mesh-space position, normal and uv here, from the
 // face's three corners in u_faces, with the weights (1 - u - v, u, v).
 // u_miss draws the rays that left the scene: the background colour, as the G-buffer's
-// background pass writes it. Alpha 1 marks "revealed" (cleared targets hold alpha 0).
-// The last two targets hold the same packed for the composite (glsl/hybrid_layers.glsl):
-// (D clamped to u_max_disp, depth, 1 + id) and (colour, 1).
+// background pass writes it. The targets are packed for the composite
+// (glsl/hybrid_layers.glsl): (D, depth, 1 + id) and (colour, 1); cleared ones hold 0,
+// "nothing revealed here".
 #include "shading.glsl"
 #include "motion.glsl"
 
@@ -25,21 +25,9 @@ uniform vec3 u_eye;
 uniform uint u_object_id;
 uniform bool u_miss;
 uniform vec3 u_background;
-uniform float u_max_disp;
 
-layout(location = 0) out vec4 out_color;
-layout(location = 1) out float out_depth;
-layout(location = 2) out uint out_id;
-layout(location = 3) out vec2 out_velocity;
-layout(location = 4) out vec4 out_packed;
-layout(location = 5) out vec4 out_packed_color;
-
-void pack() {
-    float l = length(out_velocity);
-    vec2 d = l > u_max_disp ? out_velocity * (u_max_disp / l) : out_velocity;
-    out_packed = vec4(d, out_depth, 1.0 + float(out_id));
-    out_packed_color = out_color;
-}
+layout(location = 0) out vec4 out_packed;
+layout(location = 1) out vec4 out_packed_color;
 
 vec4 face_texel(int i) {
     int w = textureSize(u_faces, 0).x;
@@ -50,11 +38,8 @@ void main() {
     vec4 hit = texelFetch(u_hits, ivec2(floor(v_record)), 0);
     if (hit.w != u_key) discard;
     if (u_miss) {
-        out_color = vec4(u_background, 1.0);
-        out_depth = BACKGROUND_DEPTH;
-        out_id = 0u;
-        out_velocity = vec2(0.0);
-        pack();
+        out_packed = vec4(0.0, 0.0, BACKGROUND_DEPTH, 1.0);     // id 0: the sky
+        out_packed_color = vec4(u_background, 1.0);
         return;
     }
     float weight[3] = float[3](1.0 - hit.y - hit.z, hit.y, hit.z);
@@ -72,9 +57,7 @@ void main() {
     vec4 view_now = u_view * world;
     vec3 n = normalize(u_normal_matrix * normal_local);
     if (dot(n, u_eye - world.xyz) < 0.0) n = -n;
-    out_color = vec4(shade(world.xyz, n, local, uv, u_eye), 1.0);
-    out_depth = -view_now.z;
-    out_id = u_object_id;
-    out_velocity = exposure_displacement(local, view_now);
-    pack();
+    out_packed = vec4(exposure_displacement(local, view_now), -view_now.z,
+                      1.0 + float(u_object_id));
+    out_packed_color = vec4(shade(world.xyz, n, local, uv, u_eye), 1.0);
 }

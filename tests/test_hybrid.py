@@ -23,7 +23,7 @@ from viewer.render.hybrid_composite import composite_kind, composite_passes
 from viewer.render.modes import MODES
 from viewer.render.raymask import RAY_MASK, RELATIVE, MaskTiles
 from viewer.render.renderer import Renderer
-from viewer.render.reveal_pass import LAYER_SPECS, PACKED, packed_names
+from viewer.render.reveal_pass import PACKED, packed_names
 from viewer.scene_loader import load_scene
 
 SMALL = (160, 90)
@@ -57,16 +57,22 @@ def without(scene, ids):
     return dataclasses.replace(scene, objects=objects)
 
 
-def assert_layer_matches(bufs, prefix, oracle, sel):
-    """The revealed layer at the selected pixels is the oracle's G-buffer there."""
+def revealed(bufs, k=0):
+    """Revealed layer k's (id, depth, D, colour with alpha) unpacked from hybrid_back*:
+    packed (D, depth, 1 + id) and (colour, 1), 0 where nothing was revealed (id -1)."""
+    motion, colour = (bufs[n] for n in packed_names(k))
+    return motion[..., 3] - 1.0, motion[..., 2], motion[..., :2], colour
+
+
+def assert_layer_matches(bufs, k, oracle, sel):
+    """Revealed layer k at the selected pixels is the oracle's G-buffer there."""
     assert sel.any()
-    np.testing.assert_array_equal(bufs[prefix + "id"][sel], oracle["id"][sel])
-    np.testing.assert_allclose(bufs[prefix + "depth"][sel], oracle["depth"][sel], rtol=2e-6)
-    np.testing.assert_allclose(bufs[prefix + "color"][sel][:, :3], oracle["color"][sel][:, :3],
-                               atol=1e-5)
-    np.testing.assert_allclose(bufs[prefix + "velocity"][sel], oracle["velocity"][sel],
-                               atol=1e-3)
-    assert np.all(bufs[prefix + "color"][sel][:, 3] == 1.0)
+    ids, depth, disp, colour = revealed(bufs, k)
+    np.testing.assert_array_equal(ids[sel], oracle["id"][sel])
+    np.testing.assert_allclose(depth[sel], oracle["depth"][sel], rtol=2e-6)
+    np.testing.assert_allclose(colour[sel][:, :3], oracle["color"][sel][:, :3], atol=1e-5)
+    np.testing.assert_allclose(disp[sel], oracle["velocity"][sel], atol=1e-3)
+    assert np.all(colour[sel][:, 3] == 1.0)
 
 
 # ---- the reveal against the raster oracle -------------------------------------------------------
@@ -82,12 +88,12 @@ def test_reveal_equals_raster_without_the_own_object(ctx, name, t):
     assert len(owners) >= 2
     for oid in owners:
         _, oracle = render(ctx, without(scene, {oid}), "off", t)
-        assert_layer_matches(bufs, "revealed_", oracle, mask == oid)
+        assert_layer_matches(bufs, 0, oracle, mask == oid)
     # The tile-bounded read found exactly the masked pixels (one revealed point each).
-    assert res.stats["masked_pixels"] == np.count_nonzero(bufs["revealed_color"][..., 3])
-    # Unmasked pixels reveal nothing (alpha 0, id 0).
-    assert np.all(bufs["revealed_color"][mask == 0][:, 3] == 0.0)
-    assert not bufs["revealed_id"][mask == 0].any()
+    assert res.stats["masked_pixels"] == np.count_nonzero(bufs["hybrid_back_color"][..., 3])
+    # Unmasked pixels reveal nothing (every packed channel 0).
+    assert not bufs["hybrid_back_color"][mask == 0].any()
+    assert not bufs["hybrid_back"][mask == 0].any()
     assert res.stats["masked_pixels"] == np.count_nonzero(mask)
     assert res.stats["rays"] >= res.stats["masked_pixels"]
 
@@ -135,32 +141,32 @@ def test_two_overlapping_objects_of_the_same_colour_reveal_the_right_one(ctx, tm
     res, bufs = render(ctx, scene, "hybrid", 0.0)
     front = bufs["ray_mask"] == 2
     _, oracle = render(ctx, without(scene, {2}), "off", 0.0)
-    assert_layer_matches(bufs, "revealed_", oracle, front)
+    assert_layer_matches(bufs, 0, oracle, front)
     # Behind the front box lie both the middle box (same colour) and the wall.
-    revealed = bufs["revealed_id"][front]
-    assert np.count_nonzero(revealed == 3) > 50 and np.count_nonzero(revealed == 1) > 50
+    ids = revealed(bufs)[0][front]
+    assert np.count_nonzero(ids == 3) > 50 and np.count_nonzero(ids == 1) > 50
 
 
 def test_second_layer_reveals_what_lies_behind_a_revealed_moving_object(ctx, tmp_path):
     scene = same_colour_scene(tmp_path)
     res, bufs = render(ctx, scene, "hybrid", 0.0, params(layers=2))
     front = bufs["ray_mask"] == 2
-    behind_middle = front & (bufs["revealed_id"] == 3)
+    behind_middle = front & (revealed(bufs)[0] == 3)
     _, oracle = render(ctx, without(scene, {2, 3}), "off", 0.0)
-    assert_layer_matches(bufs, "revealed2_", oracle, behind_middle)
+    assert_layer_matches(bufs, 1, oracle, behind_middle)
     # Layer 2 is traced only behind revealed moving objects; elsewhere it is empty.
-    assert np.all(bufs["revealed2_color"][~behind_middle][:, 3] == 0.0)
+    assert not bufs["hybrid_back2_color"][~behind_middle].any()
     assert res.stats["rays"] == res.stats["masked_pixels"] + np.count_nonzero(behind_middle)
     # With one layer, the second stays cleared.
     _, one = render(ctx, scene, "hybrid", 0.0, params(layers=1))
-    assert not one["revealed2_color"].any()
+    assert not one["hybrid_back2_color"].any() and not one["hybrid_back2"].any()
 
 
 def test_trace_off_leaves_the_revealed_layer_empty(ctx):
     scene = load_scene(CONFORMANCE / "basic.toml")
     res, bufs = render(ctx, scene, "hybrid", 0.0, params(trace=False))
     assert res.stats["masked_pixels"] == np.count_nonzero(bufs["ray_mask"]) > 0
-    assert res.stats["rays"] == 0 and not bufs["revealed_color"].any()
+    assert res.stats["rays"] == 0 and not bufs["hybrid_back_color"].any()
 
 
 # ---- the composite on synthetic buffers ---------------------------------------------------------
@@ -169,8 +175,7 @@ W, H = 40, 4
 
 
 def upload(frame, name, a):
-    spec = GBUFFER.get(name) or (PACKED if name.startswith("hybrid_back")
-                                 else LAYER_SPECS[name.split("_", 1)[1]])
+    spec = GBUFFER.get(name) or PACKED
     frame.pool.texture(name, spec)
     frame.write(name, to_image(np.asarray(a, np.uint32 if spec.dtype == "u4" else np.float32)))
 
@@ -372,18 +377,19 @@ def test_deterministic(ctx):
     a, ba = render(ctx, scene, "hybrid", 0.0, seed=5)
     b, bb = render(ctx, scene, "hybrid", 0.0, seed=5)
     assert a.image.tobytes() == b.image.tobytes()
-    for name in ("ray_mask", "revealed_color", "revealed_velocity", "hybrid"):
+    for name in ("ray_mask", "hybrid_back", "hybrid_back_color", "hybrid"):
         assert ba[name].tobytes() == bb[name].tobytes()
     assert a.stats["rays"] == b.stats["rays"] > 0
 
 
 def test_stored_layers_are_the_packed_g_buffer_and_revealed_layer(ctx):
-    # The hybrid G-buffer's hybrid_front is the full G-buffer's (D, depth, id), and
-    # reveal_shade's hybrid_back is what the composite's numpy model packs from the plain
-    # buffers (tests/numpy_hybrid.py pack_layers), D clamped to the blur limit.
+    # The hybrid G-buffer's hybrid_front is the full G-buffer's (D, depth, id), D not
+    # clamped (the composite clamps on read); reveal_shade's hybrid_back likewise holds
+    # (D, depth, 1 + id) and (colour, 1) where revealed, 0 elsewhere (its values against
+    # the raster oracle: test_reveal_equals_raster_without_the_own_object).
     scene = load_scene(CONFORMANCE / "basic.toml")
     p = ParamSet()
-    p.set("blur.max_radius", 0.05)            # k = 8 px: some displacements get clamped
+    p.set("blur.max_radius", 0.05)            # k = 8 px: some displacements exceed 2k
     res, bufs = render(ctx, scene, "hybrid", 0.0, p)
     _, full = render(ctx, scene, "mcguire", 0.0, p)      # the full G-buffer layout
     assert not {"depth", "id", "velocity"} & set(bufs)   # the hybrid layout packs them
@@ -391,15 +397,12 @@ def test_stored_layers_are_the_packed_g_buffer_and_revealed_layer(ctx):
     np.testing.assert_array_equal(
         bufs["hybrid_front"], np.dstack([full["velocity"], full["depth"], full["id"]]))
     np.testing.assert_array_equal(bufs["color"], full["color"])
-    rev = bufs["revealed_color"]
-    _, _, back, back_color = nh.pack_layers(
-        full["color"], full["depth"], full["velocity"], rev, bufs["revealed_depth"],
-        bufs["revealed_velocity"], 2.0 * k, full["id"], bufs["revealed_id"])
     assert np.linalg.norm(full["velocity"], axis=-1).max() > 2.0 * k
-    motion, colour = nh.stored_back(back, back_color)
-    assert res.stats["revealed_pixels"] > 0
-    np.testing.assert_allclose(bufs["hybrid_back"], motion, rtol=1e-6, atol=1e-5)
-    np.testing.assert_allclose(bufs["hybrid_back_color"], colour, rtol=1e-6, atol=1e-6)
+    motion, colour = bufs["hybrid_back"], bufs["hybrid_back_color"]
+    hit = colour[..., 3] == 1.0
+    assert res.stats["revealed_pixels"] == np.count_nonzero(hit) > 0
+    assert np.all(motion[hit, 3] >= 1.0) and np.all(motion[hit, 2] > 0.0)
+    assert not motion[~hit].any() and not colour[~hit].any()
     assert not bufs["hybrid_back2"].any()      # one layer traced
 
 
@@ -411,7 +414,7 @@ def test_static_scene_traces_nothing_and_equals_off(ctx):
     res, bufs = render(ctx, still, "hybrid", 0.0, timing=True)
     off, _ = render(ctx, still, "off", 0.0)
     assert res.stats["masked_pixels"] == 0 and res.stats["rays"] == 0
-    assert not bufs["ray_mask"].any() and not bufs["revealed_color"].any()
+    assert not bufs["ray_mask"].any() and not bufs["hybrid_back_color"].any()
     assert res.image.tobytes() == off.image.tobytes()
     assert {"reveal", "reveal_shade", "hybrid_composite"} <= set(res.pass_ms)
     assert res.stats["reveal_ms"] >= 0.0

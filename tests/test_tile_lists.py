@@ -84,8 +84,8 @@ def test_partial_clears_leave_nothing_of_the_last_frame(ctx):
     # Frames at two times on one renderer: the second one's mask, revealed layers and image
     # equal those of a fresh renderer, though only the boxes written last were cleared.
     scene = load_scene(str(CONFORMANCE / "basic.toml"))
-    names = ("mask_displacement", "mask_edge", "ray_mask", "revealed_color", "revealed_depth",
-             "hybrid_back", "hybrid_back_color", "hybrid")
+    names = ("mask_displacement", "mask_edge", "ray_mask", "hybrid_back", "hybrid_back_color",
+             "hybrid")
     r = Renderer(ctx, scene, SIZE)
     fresh = Renderer(ctx, scene, SIZE)
     try:
@@ -97,7 +97,7 @@ def test_partial_clears_leave_nothing_of_the_last_frame(ctx):
             assert r.pool.get(n).read() == fresh.pool.get(n).read(), n
         assert second.image.tobytes() == want.image.tobytes()
         # Clears are partial: after the frame, only the last points' box is marked.
-        x0, y0, x1, y1 = r.pool._written["revealed_color"]
+        x0, y0, x1, y1 = r.pool._written["hybrid_back_color"]
         assert 0 < (x1 - x0) * (y1 - y0) < SIZE[0] * SIZE[1]
     finally:
         r.release()
@@ -140,7 +140,7 @@ def test_resize_between_frames_gives_a_fresh_renderers_frame(ctx):
         want = fresh.render("hybrid", 0.25, ParamSet())
         assert got.stats["masked_pixels"] == want.stats["masked_pixels"] > 0
         assert got.image.tobytes() == want.image.tobytes()
-        for n in ("ray_mask", "revealed_color", "hybrid_back"):
+        for n in ("ray_mask", "hybrid_back_color", "hybrid_back"):
             assert r.pool.get(n).read() == fresh.pool.get(n).read(), n
     finally:
         r.release()

@@ -8,7 +8,7 @@ background behind them, shades it like the raster layer, and resolves both layer
           any motion reaches)                                (viewer/render/tile_lists.py)
           -> mask_displacement -> mask_edge (+ tiles) -> ray_mask (+ tiles), on the moving
           tiles                                              (viewer/render/raymask.py)
-          -> reveal (CPU rays) -> reveal_shade (revealed_*, hybrid_back*)
+          -> reveal (CPU rays) -> reveal_shade (hybrid_back*: packed D, depth, id, colour)
                                                              (viewer/render/reveal_pass.py)
           -> hybrid tiles -> hybrid_composite (bucketed; time-sampled or split by
           setting), on the active tiles

@@ -10,9 +10,10 @@ shade what they reveal on the GPU exactly as the raster layer is shaded.
   reveal_shade (GPU): a fragment pass over the tiles holding those pixels, one draw per
       revealed object with that object's GpuScene uniforms: it interpolates the face's
       corners (a texture of every mesh's faces, uploaded once) and shades with the same
-      glsl/shading.glsl and glsl/motion.glsl as the G-buffer, into revealed_color /
-      _depth / _id / _velocity (revealed2_* for a second layer) and the composite's packed
-      hybrid_back* (a fragment pass, because llvmpipe draws one point per pixel at ~1.5 us).
+      glsl/shading.glsl and glsl/motion.glsl as the G-buffer, into the composite's packed
+      layers hybrid_back (D, depth, 1 + id) and hybrid_back_color (colour, 1), hybrid_back2*
+      for a second layer (a fragment pass, because llvmpipe draws one point per pixel at
+      ~1.5 us; two packed targets, because each target written costs on llvmpipe).
 """
 from __future__ import annotations
 
@@ -24,7 +25,7 @@ import numpy as np
 
 from raytrace import RayScene
 
-from ..conventions import BACKGROUND_DEPTH, to_image
+from ..conventions import to_image
 from .blur_common import max_radius_px
 from .frame import Frame
 from .gpu_scene import MAX_LIGHTS, set_uniform
@@ -34,19 +35,8 @@ from .pool import TexSpec
 from .tile_lists import TileList
 
 PACKED = TexSpec(4, "f4")
-LAYER_SPECS = {"color": TexSpec(4, "f4"), "depth": TexSpec(1, "f4"),
-               "id": TexSpec(1, "u4"), "velocity": TexSpec(2, "f4")}
 MAX_LAYERS = 2
 STATE_KEY = "hybrid_reveal"
-
-
-def layer_prefix(k: int) -> str:
-    """Texture prefix of revealed layer k (0-based): revealed_, revealed2_, ..."""
-    return "revealed_" if k == 0 else f"revealed{k + 1}_"
-
-
-def layer_names(k: int) -> tuple[str, ...]:
-    return tuple(layer_prefix(k) + n for n in LAYER_SPECS)
 
 
 FACE_TEXTURE_WIDTH = 4096
@@ -252,15 +242,15 @@ class ClearTiles(FullscreenPass):
 
 
 class RevealShade(FullscreenPass):
-    """GPU side: the revealed layers' colour, depth, id and displacement at the masked
-    pixels, everything else cleared to 'nothing revealed' (alpha 0, the background's
-    depth, id 0); and the same packed for the composite (packed_names). Every layer up to
-    MAX_LAYERS is produced (the deeper ones stay cleared when fewer are traced), so the
-    pipeline's textures do not depend on the `hybrid.layers` setting."""
+    """GPU side: the revealed layers' displacement, depth, id and colour at the masked
+    pixels, packed for the composite (packed_names), everything else cleared to 0,
+    'nothing revealed'. Every layer up to MAX_LAYERS is produced (the deeper ones stay
+    cleared when fewer are traced), so the pipeline's textures do not depend on the
+    `hybrid.layers` setting."""
     name = "reveal_shade"
     fragment = "reveal_shade.frag"
     inputs = ("reveal_hits",)
-    produces = tuple(n for k in range(MAX_LAYERS) for n in (*layer_names(k), *packed_names(k)))
+    produces = tuple(n for k in range(MAX_LAYERS) for n in packed_names(k))
 
     def __init__(self):
         self.clear_tiles = ClearTiles()
@@ -269,18 +259,7 @@ class RevealShade(FullscreenPass):
         return {"MAX_LIGHTS": MAX_LIGHTS}
 
     def outputs(self, frame: Frame):
-        out = {}
-        for k in range(MAX_LAYERS):
-            out.update({n: LAYER_SPECS[n.split("_", 1)[1]] for n in layer_names(k)})
-            out.update({n: PACKED for n in packed_names(k)})
-        return out
-
-    @staticmethod
-    def clear(frame: Frame, names: tuple[str, ...]):
-        """Clear where the last frame drew (ResourcePool.clear): everything to 0, the depth
-        (names[1]) to the background's."""
-        frame.pool.clear(names[:1] + names[2:])
-        frame.pool.clear(names[1:2], (BACKGROUND_DEPTH, 0.0, 0.0, 0.0))
+        return {n: PACKED for n in self.produces}
 
     def execute(self, frame: Frame):
         cam, gpu = frame.camera, frame.gpu
@@ -288,7 +267,7 @@ class RevealShade(FullscreenPass):
         t = frame.time
         t_open, t_close = frame.exposure
         for k in range(MAX_LAYERS):
-            names = (*layer_names(k), *packed_names(k))
+            names = packed_names(k)
             tl = st.tile_list(k)
             if tl.count and all(frame.pool.written_box(n) == tl.box for n in names):
                 # Only last frame's draws wrote here: undo them tile by tile (a thin
@@ -296,7 +275,7 @@ class RevealShade(FullscreenPass):
                 self.clear_tiles.draw(frame, names, {}, tiles=tl, clear=False)
                 frame.pool.mark_clean(names)
             else:
-                self.clear(frame, names)
+                frame.pool.clear(names)     # where the last frame drew (ResourcePool.clear)
             hits = st.layers[k] if k < len(st.layers) else None
             if hits is None:
                 tl.set(np.zeros((0, 2)), SHADE_TILE, frame.size, BLOCKS_PER_ROW)
@@ -309,7 +288,6 @@ class RevealShade(FullscreenPass):
             prog = self.program(frame, tl.vertex_shader)
             gpu.bind_camera(prog, cam, t, t_open, t_close, frame.size)
             set_uniform(prog, "u_background", frame.scene.background)
-            set_uniform(prog, "u_max_disp", 2.0 * max_radius_px(frame))
             gpu.bind_lights(prog)
             st.face_texture().use(FACE_UNIT)      # draw() binds its textures from unit 0
             set_uniform(prog, "u_faces", FACE_UNIT)
