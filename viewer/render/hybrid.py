@@ -4,10 +4,10 @@ Post-process blur cannot know the background a moving object hides, which its bl
 partly uncovers (inner blur). The hybrid mode finds those pixels, ray-traces the true
 background behind them, shades it like the raster layer, and resolves both layers:
 
-  gbuffer (+ hybrid_front) -> motion_tiles -> select_tiles (host: which tiles move, which
-          any motion reaches)                                (viewer/render/tile_lists.py)
-          -> mask_displacement -> mask_edge (+ tiles) -> ray_mask (+ tiles), on the moving
-          tiles                                              (viewer/render/raymask.py)
+  gbuffer (colour, normal, hybrid_front = D, depth, id) -> motion_tiles -> select_tiles
+          (host: which tiles move, which any motion reaches) (viewer/render/tile_lists.py)
+          -> mask_displacement (+ the edge test) -> mask_edge tiles -> ray_mask (+ tiles),
+          on the moving tiles                                (viewer/render/raymask.py)
           -> reveal (CPU rays) -> reveal_shade (hybrid_back*: packed D, depth, id, colour)
                                                              (viewer/render/reveal_pass.py)
           -> hybrid tiles -> hybrid_composite (bucketed; time-sampled or split by
