@@ -86,7 +86,8 @@ def _slab(o: np.ndarray, inv_d: np.ndarray, lo: np.ndarray, hi: np.ndarray,
           t0: np.ndarray, t1: np.ndarray) -> np.ndarray:
     """Which rays o + s d meet the box [lo, hi] for some s in [t0, t1] (the slab test;
     a zero direction component gives infinities, and the NaN of 0 * inf is ignored by
-    fmin/fmax, so a ray along a face counts as meeting it)."""
+    fmin/fmax, so a ray along a face counts as meeting it). o may be one row that every
+    ray shares (then lo - o is a scalar per axis)."""
     near, far = t0.astype(np.float32), t1.astype(np.float32)
     with np.errstate(invalid="ignore"):
         for k in range(3):
@@ -220,9 +221,9 @@ class RayScene:
             pad = 1e-4 * float(np.ptp(world, axis=0).max()) + 1e-6
             # Rays that may hit the object's world box within [start, best]; a moving
             # excluded object is not traced at all.
-            rows = np.flatnonzero(_slab(o32, inv_d, world.min(axis=0) - pad,
-                                        world.max(axis=0) + pad, start, best)
-                                  & (excl != obj.id))
+            meets = _slab(o32[:1] if shared else o32, inv_d, world.min(axis=0) - pad,
+                          world.max(axis=0) + pad, start, best)
+            rows = np.flatnonzero(meets & (excl != obj.id))
             if not rows.size:
                 continue
             inv = np.linalg.inv(m).astype(np.float32)

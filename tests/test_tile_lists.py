@@ -145,3 +145,15 @@ def test_resize_between_frames_gives_a_fresh_renderers_frame(ctx):
     finally:
         r.release()
         fresh.release()
+
+
+@pytest.mark.parametrize("top", [50, 10**8])
+def test_cell_compaction_is_np_unique(top):
+    # reveal_shade's (object, tile) cells: the presence-table compaction, and its np.unique
+    # fallback for sparse large values, give np.unique's cells and inverse.
+    from viewer.render.reveal_pass import _compact
+    values = np.random.default_rng(top).integers(0, top, 3000)
+    cells, inverse = _compact(values)
+    want_cells, want_inverse = np.unique(values, return_inverse=True)
+    np.testing.assert_array_equal(cells, want_cells)
+    np.testing.assert_array_equal(inverse, want_inverse)

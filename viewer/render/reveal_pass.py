@@ -154,6 +154,20 @@ def read_masked_pixels(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
 BLOCKS_PER_ROW = 256     # record blocks (SHADE_TILE x SHADE_TILE) per row of the texture
 
 
+def _compact(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """np.unique(values, return_inverse=True) for small non-negative ints, without sorting
+    the values: a presence table over 0..max and its running count (O(n + max); the
+    (object, tile) cells number tens of thousands, the pixels up to a few hundred
+    thousand). Falls back to np.unique where the table would be large."""
+    top = int(values.max()) + 1
+    if top > 4 * len(values) + (1 << 20):
+        return np.unique(values, return_inverse=True)
+    present = np.zeros(top, bool)
+    present[values] = True
+    rank = np.cumsum(present, dtype=np.int64)
+    return np.flatnonzero(present), rank[values] - 1
+
+
 def layer_hits(pixels: np.ndarray, layer, height: int) -> LayerHits | None:
     """The traced rows of a layer as hit records (face row, u, v, 1 + object id), one
     SHADE_TILE x SHADE_TILE block per (object, screen tile) holding its pixels, blocks in
@@ -174,7 +188,7 @@ def layer_hits(pixels: np.ndarray, layer, height: int) -> LayerHits | None:
     tx, ty = gx // SHADE_TILE, gy // SHADE_TILE
     cols = int(tx.max()) + 1
     cells_per_key = cols * (int(ty.max()) + 1)
-    cells, block = np.unique(ids * cells_per_key + ty * cols + tx, return_inverse=True)
+    cells, block = _compact(ids * cells_per_key + ty * cols + tx)
     key_of, cell = np.divmod(cells, cells_per_key)
     tiles = np.stack([cell % cols, cell // cols], axis=1)
     keys, first, count = np.unique(key_of, return_index=True, return_counts=True)
