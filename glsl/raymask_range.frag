@@ -4,19 +4,18 @@
 // (half the larger of the pixel's displacement and that edge's relative displacement, in
 // whole steps), the pixel is masked. Survivors of the displacement test are masked too. The output is
 // the pixel's object id where masked (0 elsewhere): one read gives mask and own ids.
-// The 3x3 edge tiles around the pixel bound the search (nothing in reach: no search; else
-// no farther than the largest reach there), and a coarse look along it at the 16-px
-// tiles with an edge nearby skips it where it would find nothing: the result is the
-// same, the cost far lower where everything moves (camera motion) but few edges survive.
+// A coarse look along the search at the 16-px tiles with an edge nearby (edge_ids.frag)
+// skips it where it would find nothing, and bounds it by the largest reach of the edges
+// it passes: the result is the same, the cost far lower where everything moves (camera
+// motion) but few edges survive.
 #include "raymask_common.glsl"
 uniform usampler2D u_displacement_mask;
 uniform sampler2D u_edge_probe;   // raymask_edge.frag: (half |relative D|, id) at edges
 uniform sampler2D u_front;        // the G-buffer's hybrid_front: (D, depth, id)
-uniform sampler2D u_edge_tiles;   // raymask_tiles.frag, MODE 0
-uniform usampler2D u_edge_near;   // bit (id mod 32): an edge of that object in this
-                                  // u_fine tile or one next to it (edge_ids.frag)
+uniform usampler2D u_edge_near;   // .x bit (id mod 32): an edge of that object in this
+                                  // u_fine tile or one next to it; .y the bits of the
+                                  // largest reach of an edge there (edge_ids.frag)
 uniform int u_fine;
-uniform int u_tile;
 uniform float u_min_speed;
 uniform float u_relative_reach;   // search length, in half displacements
 uniform float u_max_reach;        // the blur limit k, px per side
@@ -31,27 +30,26 @@ void main() {
     out_mask = 0u;
     if (own == 0u || length(d) < u_min_speed) return;
     if (texelFetch(u_displacement_mask, x, 0).x != 0u) { out_mask = own; return; }
-    vec2 near = neighbourhood(u_edge_tiles, x, u_tile);
-    if (near.y == 0.0) return;
     float half_len = 0.5 * length(d);
     vec2 dir = d / length(d);
-    int steps = int(ceil(min(min(u_max_reach, u_relative_reach * half_len),
-                             max(half_len, near.x))));
+    float full = min(u_max_reach, u_relative_reach * half_len);
     // Coarse look first: points every 8 px along the search. A probe lies within 4 px of
     // one (5 px per axis after flooring, less than a tile), so its tile is within a tile
     // of that point's: where no point's tile has an edge of the own object next to it, no
-    // probe sees one.
+    // probe sees one; and an edge a probe accepts has a reach no larger than the largest
+    // those points see.
     uint own_bit = 1u << (own % 32u);
     bool any_edge = false;
-    int m_max = (steps + 7) / 8;
+    float reach_seen = 0.0;
+    int m_max = (int(ceil(full)) + 7) / 8;
     for (int m = -m_max; m <= m_max; ++m) {
-        if ((texelFetch(u_edge_near, probe(x, float(8 * m) * dir, size) / u_fine, 0).x
-             & own_bit) != 0u) {
-            any_edge = true;
-            break;
-        }
+        uvec2 t = texelFetch(u_edge_near, probe(x, float(8 * m) * dir, size) / u_fine, 0).xy;
+        bool own_edge = (t.x & own_bit) != 0u;
+        any_edge = any_edge || own_edge;
+        reach_seen = max(reach_seen, own_edge ? uintBitsToFloat(t.y) : 0.0);
     }
     if (!any_edge) return;
+    int steps = int(ceil(min(full, max(half_len, reach_seen))));
     float own_f = float(own);
     for (int i = 0; i <= steps; ++i) {
         for (int s = -1; s <= 1; s += 2) {

@@ -4,8 +4,7 @@
 // around a pixel's own). Two separable steps, so the work spreads over many fragments
 // (one fragment per tile would run k*k texel reads serially in one raster bin):
 // STAGE 0, over u_tile texels along x (full size -> ceil(W/k) x H strip), of the mask:
-//   MODE 0, over mask_edge: (largest half relative displacement of an edge pixel, 1 if
-//   any edge); MODE 1, over ray_mask: (0, 1 if anything is masked);
+//   (0, 1 if anything is masked);
 // STAGE 1, over u_tile strip texels along y (strip -> tiles): the largest per channel.
 // Texels past the screen's edge (a partial last tile) are skipped. With MOTION_TILES a
 // strip texel whose pixels lie in no moving 16 x 16 tile (viewer/render/tile_lists.py)
@@ -14,7 +13,6 @@ uniform int u_tile;
 out vec2 out_summary;
 #if STAGE == 0
 uniform usampler2D u_mask;
-uniform sampler2D u_relative;
 #if MOTION_TILES
 uniform sampler2D u_motion_tiles;
 uniform int u_fine;
@@ -38,12 +36,7 @@ void main() {
     if (!any_moving(x0, x1, y)) { out_summary = s; return; }
 #endif
     for (int x = x0; x < x1; ++x) {
-        if (texelFetch(u_mask, ivec2(x, y), 0).x == 0u) continue;
-#if MODE == 0
-        s = max(s, vec2(0.5 * length(texelFetch(u_relative, ivec2(x, y), 0).xy), 1.0));
-#else
-        s.y = 1.0;
-#endif
+        if (texelFetch(u_mask, ivec2(x, y), 0).x != 0u) s.y = 1.0;
     }
     out_summary = s;
 }

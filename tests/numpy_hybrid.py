@@ -125,19 +125,15 @@ def range_check(dmask, edge, ids, disp, rel, min_speed: float, relative_reach: f
     return out
 
 
-def tile_summary(mask, rel, tile: int, edges: bool) -> np.ndarray:
-    """raymask_tiles.frag: per k x k tile (GL origin), (largest 0.5 |relative| over masked
-    pixels if `edges` else 0, 1 if any pixel is masked)."""
+def tile_summary(mask, tile: int) -> np.ndarray:
+    """raymask_tiles.frag: per k x k tile (GL origin), (0, 1 if any pixel is masked)."""
     h, w = mask.shape
     th, tw = -(-h // tile), -(-w // tile)
     out = np.zeros((th, tw, 2), np.float32)
     for ty in range(th):
         for tx in range(tw):
-            m = mask[ty * tile:(ty + 1) * tile, tx * tile:(tx + 1) * tile] != 0
-            if m.any():
-                r = rel[ty * tile:(ty + 1) * tile, tx * tile:(tx + 1) * tile][m].astype(F32)
-                reach = 0.5 * np.sqrt(r[:, 0] * r[:, 0] + r[:, 1] * r[:, 1])
-                out[ty, tx] = (reach.max() if edges else 0.0, 1.0)
+            if mask[ty * tile:(ty + 1) * tile, tx * tile:(tx + 1) * tile].any():
+                out[ty, tx, 1] = 1.0
     return out
 
 

@@ -21,7 +21,7 @@ from viewer.render.blur_common import max_radius_px
 from viewer.render.gbuffer import GBUFFER
 from viewer.render.hybrid_composite import composite_kind, composite_passes
 from viewer.render.modes import MODES
-from viewer.render.raymask import RAY_MASK, RELATIVE, MaskTiles
+from viewer.render.raymask import RAY_MASK, MaskTiles
 from viewer.render.renderer import Renderer
 from viewer.render.reveal_pass import PACKED, packed_names
 from viewer.scene_loader import load_scene
@@ -209,7 +209,6 @@ def run_composite(frame, b):
     """The composite on the layers as the G-buffer and reveal_shade store them."""
     ones = np.ones((H, W, 1))
     upload(frame, "color", np.concatenate([b["colour"], ones], -1))
-    upload(frame, "velocity", b["disp"])
     front, _, back, back_color = nh.pack_layers(
         b["colour"], b["depth"], b["disp"], b["rev_c"], b["rev_d"], b["rev_v"],
         2.0 * max_radius_px(frame), b["ids"], b["rev_ids"])
@@ -222,9 +221,7 @@ def run_composite(frame, b):
     # The mask the revealed pixels came from, summarised per tile for the composite.
     frame.pool.texture("ray_mask", RAY_MASK)
     frame.write("ray_mask", to_image(np.where(b["rev_c"][..., 3] > 0, b["ids"], 0).astype(np.uint32)))
-    frame.pool.texture("mask_relative", RELATIVE)
-    frame.write("mask_relative", np.zeros((H, W, 2), np.float32))
-    for p in [MaskTiles("ray_mask", "mask"), *composite_passes()]:
+    for p in [MaskTiles("ray_mask"), *composite_passes()]:
         p.allocate(frame)
         p.execute(frame)
     return to_image(frame.read("hybrid"))[..., :3].astype(np.float64)

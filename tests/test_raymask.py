@@ -43,7 +43,7 @@ def run(frame):
         p.execute(frame)
     return {n: to_image(frame.read(n))
             for n in ("mask_displacement", "mask_relative", "mask_edge", "ray_mask",
-                      "mask_edge_tiles", "ray_mask_tiles")}
+                      "ray_mask_tiles")}
 
 
 def bar_scene(bar_disp=(9.2, 0.0), bg_disp=(0.0, 0.0), bar=BAR):
@@ -121,9 +121,7 @@ def test_bar_over_static_wall(synthetic_frame):
     np.testing.assert_array_equal(got["ray_mask"], mask)
     np.testing.assert_allclose(got["mask_relative"], rel, rtol=1e-6, atol=1e-6)
     assert columns(got["ray_mask"][3]) == [12, 13, 14, 15, 16, 19, 20, 21, 22, 23]
-    # 10-px tiles: the edges (columns 12 and 23, reach 4.6) lie in tiles 1 and 2.
-    np.testing.assert_allclose(got["mask_edge_tiles"][0], [[0, 0], [4.6, 1], [4.6, 1], [0, 0]],
-                               rtol=1e-6)
+    # 10-px tiles: the masked pixels lie in tiles 1 and 2.
     np.testing.assert_array_equal(got["ray_mask_tiles"][0, :, 1], [0, 1, 1, 0])
 
 
@@ -193,9 +191,7 @@ def test_random_layers_match_numpy(synthetic_frame, seed):
     np.testing.assert_allclose(got["mask_relative"], rel, atol=1e-5)
     assert np.count_nonzero(mask == 2) > 10 and np.count_nonzero(mask == 3) > 5
     k = max_radius_px(frame)
-    np.testing.assert_allclose(got["mask_edge_tiles"], nh.tile_summary(edge, rel, k, True),
-                               rtol=1e-6)
-    np.testing.assert_array_equal(got["ray_mask_tiles"], nh.tile_summary(mask, rel, k, False))
+    np.testing.assert_array_equal(got["ray_mask_tiles"], nh.tile_summary(mask, k))
     assert not np.any(mask[bufs[1] == 0])                   # the sky is never traced
 
 

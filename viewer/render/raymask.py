@@ -11,10 +11,11 @@ passes (the first two steps read nothing but the pixel's own neighbourhood):
   ray_mask: every moving pixel with an edge pixel of its own object within reach along
       its displacement; holds the pixel's object id where masked, 0 elsewhere.
 
-mask_edge_tiles and ray_mask_tiles summarise the edges and the mask per k x k tile (k the
-blur limit), so the range check and the composite skip pixels with nothing in reach;
-mask_edge_near (per 16 x 16 tile, which objects have an edge within a tile of it) lets the
-range check skip, exactly, a search whose probes all lie far from its own object's edges.
+mask_edge_near (per 16 x 16 tile, which objects have an edge within a tile of it, and the
+largest reach of those edges) lets the range check skip, exactly, a search whose probes
+all lie far from its own object's edges, and bound the others. ray_mask_tiles summarises
+the mask per k x k tile (k the blur limit): where to read it back, where the time-sampled
+composite looks for revealed layers.
 """
 from __future__ import annotations
 
@@ -56,19 +57,18 @@ class SurfaceTests(FullscreenPass):
 
 
 class MaskTiles(FullscreenPass):
-    """Per-tile summary of `source`: mode "edges" (largest reach, any edge) or "mask"
-    (anything masked), in two separable steps (glsl/raymask_tiles.frag): k x 1 into
-    SOURCE_tiles_x, then 1 x k into SOURCE_tiles."""
+    """Per-tile summary of `source`, (0, 1 if anything is masked), in two separable steps
+    (glsl/raymask_tiles.frag): k x 1 into SOURCE_tiles_x, then 1 x k into SOURCE_tiles."""
     fragment = "raymask_tiles.frag"
 
-    def __init__(self, source: str, mode: str):
-        self.source, self.mode = source, mode
+    def __init__(self, source: str):
+        self.source = source
         self.name = source + "_tiles"
-        self.inputs = (source, "mask_relative")
+        self.inputs = (source,)
         self.produces = (self.name + "_x", self.name)
 
     def defines(self, frame: Frame):
-        return {"MODE": 0 if self.mode == "edges" else 1, "STAGE": self._stage,
+        return {"STAGE": self._stage,
                 "MOTION_TILES": int(self._stage == 0 and tile_list(frame, "moving") is not None)}
 
     def outputs(self, frame: Frame):
@@ -78,7 +78,7 @@ class MaskTiles(FullscreenPass):
     def execute(self, frame: Frame):
         k = max_radius_px(frame)
         self._stage = 0
-        textures = {"u_mask": self.source, "u_relative": "mask_relative"}
+        textures = {"u_mask": self.source}
         uniforms = {"u_tile": k}
         if tile_list(frame, "moving") is not None:
             textures["u_motion_tiles"] = "motion_tiles"
@@ -89,8 +89,9 @@ class MaskTiles(FullscreenPass):
 
 
 class EdgeIdTiles(FullscreenPass):
-    """Per FINE tile, a bitmask of the objects (id mod 32) with edge pixels there, then
-    spread to the 3x3 tiles around (glsl/edge_ids.frag): mask_edge_near."""
+    """Per FINE tile, a bitmask of the objects (id mod 32) with edge pixels there and the
+    largest reach of those edges, then spread to the 3x3 tiles around
+    (glsl/edge_ids.frag): mask_edge_near."""
     name = "mask_edge_near"
     fragment = "edge_ids.frag"
     inputs = ("mask_edge_probe",)
@@ -100,9 +101,9 @@ class EdgeIdTiles(FullscreenPass):
         return {"STAGE": self._stage}
 
     def outputs(self, frame: Frame):
-        return {"mask_edge_ids_x": StripSpec(1, "u4", tile=FINE),
-                "mask_edge_ids": TexSpec(1, "u4", tile=FINE),
-                "mask_edge_near": TexSpec(1, "u4", tile=FINE)}
+        return {"mask_edge_ids_x": StripSpec(2, "u4", tile=FINE),
+                "mask_edge_ids": TexSpec(2, "u4", tile=FINE),
+                "mask_edge_near": TexSpec(2, "u4", tile=FINE)}
 
     def execute(self, frame: Frame):
         steps = ((0, {"u_probe": "mask_edge_probe"}, "mask_edge_ids_x"),
@@ -115,8 +116,7 @@ class EdgeIdTiles(FullscreenPass):
 class RangeCheck(FullscreenPass):
     name = "ray_mask"
     fragment = "raymask_range.frag"
-    inputs = ("mask_displacement", "mask_edge_probe", "mask_edge_tiles", "mask_edge_near",
-              "hybrid_front")
+    inputs = ("mask_displacement", "mask_edge_probe", "mask_edge_near", "hybrid_front")
     produces = ("ray_mask",)
 
     def outputs(self, frame: Frame):
@@ -127,9 +127,8 @@ class RangeCheck(FullscreenPass):
         self.draw(frame, self.produces,
                   {"u_displacement_mask": "mask_displacement", "u_edge_probe": "mask_edge_probe",
                    "u_front": "hybrid_front",
-                   "u_edge_tiles": "mask_edge_tiles", "u_edge_near": "mask_edge_near"},
-                  {"u_min_speed": float(p.min_speed), "u_tile": max_radius_px(frame),
-                   "u_fine": FINE,
+                   "u_edge_near": "mask_edge_near"},
+                  {"u_min_speed": float(p.min_speed), "u_fine": FINE,
                    "u_relative_reach": float(p.relative_reach),
                    "u_max_reach": float(max_radius_px(frame))},
                   tiles=tile_list(frame, "moving"))
@@ -137,5 +136,4 @@ class RangeCheck(FullscreenPass):
 
 def raymask_passes() -> list:
     """The three mask passes and their tile summaries, after a full G-buffer."""
-    return [SurfaceTests(), MaskTiles("mask_edge", "edges"),
-            EdgeIdTiles(), RangeCheck(), MaskTiles("ray_mask", "mask")]
+    return [SurfaceTests(), EdgeIdTiles(), RangeCheck(), MaskTiles("ray_mask")]
