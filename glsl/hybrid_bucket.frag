@@ -18,6 +18,8 @@
 // revealed object seen beside the pixel's own object belong to line 3 only. Without a
 // revealed background, the farther fragments' plain mean fills instead (the mirrored
 // background of post-process filters).
+// BACK_LAYER 0 compiles the variant for tiles without a revealed pixel (line 3 never runs
+// there; llvmpipe would still pay for it, both sides of every branch, one pass of every loop).
 #include "noise.glsl"
 #include "hybrid_layers.glsl"
 uniform sampler2D u_neighbormax;
@@ -95,7 +97,11 @@ void main() {
     g_size = textureSize(u_front, 0);
     vec3 own_colour = texelFetch(u_front_color, x, 0).rgb;
     vec4 fx = front_motion(x);
+#if BACK_LAYER
     vec4 bx = back_motion(x);
+#else
+    vec4 bx = vec4(fx.xyz, 0.0);        // nothing revealed in this tile
+#endif
     vec2 vn = clamp_length(texelFetch(u_neighbormax, x / u_tile, 0).xy);
     if (max(length(vn), max(length(fx.xy), length(bx.xy))) <= 1.0) {
         out_color = vec4(own_colour, 1.0);
@@ -164,6 +170,7 @@ void main() {
     vec3 fill = g_far_count > 0.0 ? g_far_sum / g_far_count : own_colour;
     vec3 back_all = vec3(0.0);      // the line's background without the time pairing
     float back_all_w = 0.0;
+#if BACK_LAYER
     if (revealed) {
         fill = back_colour(x);
         float rb = 0.5 * length(bx.xy);
@@ -198,6 +205,7 @@ void main() {
             add(BACK, fill, 1.0);
         }
     }
+#endif
     // The background's coverage is the whole line's; its colour, the paired taps' mean
     // (what shows while the own object is away), or the whole line's if none is paired.
     if (back_all_w > 0.0) {

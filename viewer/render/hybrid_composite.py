@@ -59,6 +59,7 @@ class Composite(FullscreenPass):
 
     def __init__(self):
         self._kind = "time"
+        self._back = 1
 
     def program(self, frame: Frame, vertex: str = "fullscreen.vert"):
         self.fragment = FRAGMENTS[self._kind]
@@ -67,7 +68,7 @@ class Composite(FullscreenPass):
     def defines(self, frame: Frame):
         p = frame.params["hybrid"]
         return {"LAYERS": int(p.layers), "MAX_SEEDS": int(p.seeds),
-                "JITTER_STREAM": f"{JITTER_STREAM}u"}
+                "JITTER_STREAM": f"{JITTER_STREAM}u", "BACK_LAYER": self._back}
 
     def outputs(self, frame: Frame):
         return {"hybrid": TexSpec(4, "f4")}
@@ -79,25 +80,29 @@ class Composite(FullscreenPass):
             # Outside the active tiles nothing reaches a pixel: its sharp colour stands.
             frame.ctx.copy_framebuffer(frame.pool.framebuffer(("hybrid",)),
                                        frame.pool.framebuffer(("color",)))
-        if kind != "split":
-            return self._draw(frame, kind, tiles)
-        if tiles is None:            # no tile lists (a pass run on its own): all time
-            return self._draw(frame, "time", None)
+        if tiles is None or kind == "time":    # (no tile lists: a pass run on its own)
+            return self._draw(frame, "time" if kind == "split" else kind, tiles)
         lists = frame.host["tile_lists"]
         active = np.zeros(lists.shape, bool)
         active[tiles.tiles[:, 1], tiles.tiles[:, 0]] = True
-        near, far = split_tiles(active, frame.host.get("masked_pixels", np.zeros((0, 2), int)),
-                                frame.size[1], SPLIT_REACH)
-        for which, selected in (("time", near), ("bucket", far)):
-            tl = lists.extra(which)
+        masked = frame.host.get("masked_pixels", np.zeros((0, 2), int))
+        if kind == "split":
+            near, far = split_tiles(active, masked, frame.size[1], SPLIT_REACH)
+            parts = (("time", near, 1), ("bucket", far, 0))
+            frame.stats["time_tiles"] = int(near.sum())
+        else:
+            # Only tiles holding a masked pixel have a revealed layer to blur (line 3).
+            revealed, plain = split_tiles(active, masked, frame.size[1], 0)
+            parts = (("bucket", revealed, 1), ("bucket", plain, 0))
+        for which, selected, back in parts:
+            tl = lists.extra(f"{which}{back}")
             tl.set(tile_coords(selected), FINE, frame.size)
-            self._draw(frame, which, tl)
-        frame.stats["time_tiles"] = int(near.sum())
+            self._draw(frame, which, tl, back)
 
-    def _draw(self, frame: Frame, kind: str, tiles):
+    def _draw(self, frame: Frame, kind: str, tiles, back: int = 1):
         p = frame.params["hybrid"]
         k = max_radius_px(frame)
-        self._kind = kind
+        self._kind, self._back = kind, back
         self.draw(frame, self.produces,
                   {"u_front_color": "color", "u_front": "hybrid_front",
                    "u_back_color": "hybrid_back_color", "u_back": "hybrid_back",
