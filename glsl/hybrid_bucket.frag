@@ -19,7 +19,9 @@
 // revealed background, the farther fragments' plain mean fills instead (the mirrored
 // background of post-process filters).
 // BACK_LAYER 0 compiles the variant for tiles without a revealed pixel (line 3 never runs
-// there; llvmpipe would still pay for it, both sides of every branch, one pass of every loop).
+// there), OWN_STILL 1 the one for tiles where no pixel moves (|D| < 1e-3: no own line, no
+// time pairing): llvmpipe would still pay for them, both sides of every branch, one pass
+// of every loop.
 #include "noise.glsl"
 #include "hybrid_layers.glsl"
 uniform sampler2D u_neighbormax;
@@ -116,7 +118,11 @@ void main() {
     float own_id = fx.w, own_depth = fx.z;
     g_own_id = own_id;
     // A (nearly) still own surface covers the pixel at every time: no pairing to do.
+#if OWN_STILL
+    const bool own_moves = false;
+#else
     bool own_moves = dot(fx.xy, fx.xy) >= 1e-6;
+#endif
     float back_depth = revealed ? bx.z : 3.0e38;
     float back_id = revealed ? bx.w - 1.0 : -1.0;
     // The own object has its own line unless it moves like the neighbourhood.
@@ -149,6 +155,7 @@ void main() {
     }
     // Line 2: the pixel's own displacement: its own object's coverage and colour.
     float ro = 0.5 * length(fx.xy);
+#if !OWN_STILL
     if (own_line && ro > 0.5) {
         vec2 dir = fx.xy / length(fx.xy);
         int n = taps_for(ro);
@@ -162,7 +169,9 @@ void main() {
             g_far_sum += far ? c : vec3(0.0);
             g_far_count += far ? 1.0 : 0.0;
         }
-    } else if (own_line) {
+    } else
+#endif
+    if (own_line) {
         add(OWN, own_colour, 1.0);            // the own object (nearly) still
     }
     // Line 3: the revealed layer blurred along its own motion (merged with the raster

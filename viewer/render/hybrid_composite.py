@@ -37,6 +37,10 @@ def composite_kind(frame: Frame) -> str:
 # 1 tile .035/.040/.042 376 ms, 5 tiles (all within the blur limit) the same as 1 at
 # 507 ms; vase_pan 1 tile = 5 tiles = .042/.059/.054 at 123 and 370 ms.
 SPLIT_REACH = 1
+# Tiles whose longest |D| is below this get the OWN_STILL variant: half of
+# glsl/hybrid_bucket.frag's "own surface moves" test (dot(D, D) >= 1e-6, |D| >= 1e-3 px),
+# so float rounding cannot put a pixel on the wrong side.
+STILL_PX = 5e-4
 
 
 def split_tiles(active: np.ndarray, masked_ij: np.ndarray, height: int, reach: int):
@@ -59,7 +63,7 @@ class Composite(FullscreenPass):
 
     def __init__(self):
         self._kind = "time"
-        self._back = 1
+        self._back, self._still = 1, 0
 
     def program(self, frame: Frame, vertex: str = "fullscreen.vert"):
         self.fragment = FRAGMENTS[self._kind]
@@ -68,7 +72,8 @@ class Composite(FullscreenPass):
     def defines(self, frame: Frame):
         p = frame.params["hybrid"]
         return {"LAYERS": int(p.layers), "MAX_SEEDS": int(p.seeds),
-                "JITTER_STREAM": f"{JITTER_STREAM}u", "BACK_LAYER": self._back}
+                "JITTER_STREAM": f"{JITTER_STREAM}u", "BACK_LAYER": self._back,
+                "OWN_STILL": self._still}
 
     def outputs(self, frame: Frame):
         return {"hybrid": TexSpec(4, "f4")}
@@ -86,23 +91,26 @@ class Composite(FullscreenPass):
         active = np.zeros(lists.shape, bool)
         active[tiles.tiles[:, 1], tiles.tiles[:, 0]] = True
         masked = frame.host.get("masked_pixels", np.zeros((0, 2), int))
+        # Only tiles holding a masked pixel have a revealed layer to blur (line 3); in
+        # tiles where nothing moves (own D < 1e-3 px) the own surface needs no line.
         if kind == "split":
-            near, far = split_tiles(active, masked, frame.size[1], SPLIT_REACH)
-            parts = (("time", near, 1), ("bucket", far, 0))
+            near, plain = split_tiles(active, masked, frame.size[1], SPLIT_REACH)
+            first = ("time", near, 1, 0)
             frame.stats["time_tiles"] = int(near.sum())
         else:
-            # Only tiles holding a masked pixel have a revealed layer to blur (line 3).
             revealed, plain = split_tiles(active, masked, frame.size[1], 0)
-            parts = (("bucket", revealed, 1), ("bucket", plain, 0))
-        for which, selected, back in parts:
-            tl = lists.extra(f"{which}{back}")
+            first = ("bucket", revealed, 1, 0)
+        still = plain & (lists.longest < STILL_PX)
+        parts = (first, ("bucket", plain & ~still, 0, 0), ("bucket", still, 0, 1))
+        for which, selected, back, own_still in parts:
+            tl = lists.extra(f"{which}{back}{own_still}")
             tl.set(tile_coords(selected), FINE, frame.size)
-            self._draw(frame, which, tl, back)
+            self._draw(frame, which, tl, back, own_still)
 
-    def _draw(self, frame: Frame, kind: str, tiles, back: int = 1):
+    def _draw(self, frame: Frame, kind: str, tiles, back: int = 1, own_still: int = 0):
         p = frame.params["hybrid"]
         k = max_radius_px(frame)
-        self._kind, self._back = kind, back
+        self._kind, self._back, self._still = kind, back, own_still
         self.draw(frame, self.produces,
                   {"u_front_color": "color", "u_front": "hybrid_front",
                    "u_back_color": "hybrid_back_color", "u_back": "hybrid_back",
