@@ -9,9 +9,9 @@ import sys
 from pathlib import Path
 
 SHOWN_PASSES = {
-    "hybrid": ("gbuffer", "motion_tiles", "select_tiles", "mask_displacement", "mask_edge",
-               "mask_edge_tiles", "ray_mask", "ray_mask_tiles", "reveal", "reveal_shade",
-               "hybrid_tilemax_x", "hybrid_composite"),
+    "hybrid": ("gbuffer", "motion_tiles", "select_tiles", "mask_displacement", "mask_edge_near",
+               "ray_mask", "ray_mask_tiles", "reveal", "reveal_shade", "hybrid_tilemax_x",
+               "hybrid_composite"),
 }
 
 

@@ -21,9 +21,9 @@ from viewer.render.blur_common import max_radius_px
 from viewer.render.gbuffer import GBUFFER
 from viewer.render.hybrid_composite import composite_kind, composite_passes
 from viewer.render.modes import MODES
-from viewer.render.raymask import RAY_MASK, MaskTiles
+from viewer.render.pool import TexSpec
 from viewer.render.renderer import Renderer
-from viewer.render.reveal_pass import PACKED, packed_names
+from viewer.render.reveal_pass import PACKED, mask_tiles, packed_names
 from viewer.scene_loader import load_scene
 
 SMALL = (160, 90)
@@ -219,9 +219,11 @@ def run_composite(frame, b):
         for name, a in zip(packed_names(k), layer):
             upload(frame, name, a)
     # The mask the revealed pixels came from, summarised per tile for the composite.
-    frame.pool.texture("ray_mask", RAY_MASK)
-    frame.write("ray_mask", to_image(np.where(b["rev_c"][..., 3] > 0, b["ids"], 0).astype(np.uint32)))
-    for p in [MaskTiles("ray_mask"), *composite_passes()]:
+    k = max_radius_px(frame)
+    jj, ii = np.nonzero(to_image(b["rev_c"][..., 3] > 0))
+    frame.pool.texture("ray_mask_tiles", TexSpec(2, "f4", tile=k))
+    frame.write("ray_mask_tiles", mask_tiles(np.c_[ii, jj], (W, H), k))
+    for p in composite_passes():
         p.allocate(frame)
         p.execute(frame)
     return to_image(frame.read("hybrid"))[..., :3].astype(np.float64)

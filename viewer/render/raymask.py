@@ -13,9 +13,7 @@ passes (the first two steps read nothing but the pixel's own neighbourhood):
 
 mask_edge_near (per 16 x 16 tile, which objects have an edge within a tile of it, and the
 largest reach of those edges) lets the range check skip, exactly, a search whose probes
-all lie far from its own object's edges, and bound the others. ray_mask_tiles summarises
-the mask per k x k tile (k the blur limit): where to read it back, where the time-sampled
-composite looks for revealed layers.
+all lie far from its own object's edges, and bound the others.
 """
 from __future__ import annotations
 
@@ -24,7 +22,7 @@ from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass
 from .pool import TexSpec
-from .tile_lists import FINE, moving_threshold, tile_list
+from .tile_lists import FINE, tile_list
 from .tiles import StripSpec
 
 MASK = TexSpec(1, "u1")
@@ -54,38 +52,6 @@ class SurfaceTests(FullscreenPass):
                    "u_depth_threshold": float(p.depth_threshold),
                    "u_edge_depth": float(p.edge_depth), "u_edge_normal": float(p.edge_normal)},
                   tiles=tile_list(frame, "moving"))
-
-
-class MaskTiles(FullscreenPass):
-    """Per-tile summary of `source`, (0, 1 if anything is masked), in two separable steps
-    (glsl/raymask_tiles.frag): k x 1 into SOURCE_tiles_x, then 1 x k into SOURCE_tiles."""
-    fragment = "raymask_tiles.frag"
-
-    def __init__(self, source: str):
-        self.source = source
-        self.name = source + "_tiles"
-        self.inputs = (source,)
-        self.produces = (self.name + "_x", self.name)
-
-    def defines(self, frame: Frame):
-        return {"STAGE": self._stage,
-                "MOTION_TILES": int(self._stage == 0 and tile_list(frame, "moving") is not None)}
-
-    def outputs(self, frame: Frame):
-        k = max_radius_px(frame)
-        return {self.name + "_x": StripSpec(2, "f4", tile=k), self.name: TexSpec(2, "f4", tile=k)}
-
-    def execute(self, frame: Frame):
-        k = max_radius_px(frame)
-        self._stage = 0
-        textures = {"u_mask": self.source}
-        uniforms = {"u_tile": k}
-        if tile_list(frame, "moving") is not None:
-            textures["u_motion_tiles"] = "motion_tiles"
-            uniforms.update(u_fine=FINE, u_min_speed=moving_threshold(frame))
-        self.draw(frame, (self.name + "_x",), textures, uniforms)
-        self._stage = 1
-        self.draw(frame, (self.name,), {"u_strip": self.name + "_x"}, {"u_tile": k})
 
 
 class EdgeIdTiles(FullscreenPass):
@@ -136,4 +102,4 @@ class RangeCheck(FullscreenPass):
 
 def raymask_passes() -> list:
     """The three mask passes and their tile summaries, after a full G-buffer."""
-    return [SurfaceTests(), EdgeIdTiles(), RangeCheck(), MaskTiles("ray_mask")]
+    return [SurfaceTests(), EdgeIdTiles(), RangeCheck()]

@@ -32,7 +32,7 @@ from .gpu_scene import MAX_LIGHTS, set_uniform
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
-from .tile_lists import TileList
+from .tile_lists import TileList, tile_list
 
 PACKED = TexSpec(4, "f4")
 MAX_LAYERS = 2
@@ -132,23 +132,26 @@ def masked_pixels(ray_mask: np.ndarray, origin=(0, 0)) -> tuple[np.ndarray, np.n
 
 
 def read_masked_pixels(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
-    """The masked pixels and own ids, reading back only the bounding box of the tiles that
-    hold any (`ray_mask_tiles`, a few hundred texels), not the whole id-sized mask."""
-    tiles = frame.read("ray_mask_tiles")[..., 1]           # image orientation
-    rows, cols = np.nonzero(tiles)
-    if not len(rows):
-        return np.zeros((0, 2), np.int64), np.zeros(0, np.uint32)
-    k = max_radius_px(frame)                                # the tile size
+    """The masked pixels and own ids, reading back only the box around the moving tiles
+    (the mask passes run nowhere else), or the whole mask without tile lists."""
     w, h = frame.size
-    i0, i1 = cols.min() * k, min((cols.max() + 1) * k, w)
-    # Tiles count from the GL origin (bottom-left): image row r of tiles covers GL rows
-    # [(T - 1 - r) k, (T - r) k), cut at the top of the screen.
-    t = tiles.shape[0]
-    y0, y1 = (t - 1 - rows.max()) * k, min((t - rows.min()) * k, h)
+    moving = tile_list(frame, "moving")
+    if moving is not None and not moving.count:
+        return np.zeros((0, 2), np.int64), np.zeros(0, np.uint32)
+    i0, y0, i1, y1 = moving.box if moving is not None else (0, 0, w, h)   # GL pixels
     fbo = frame.pool.framebuffer(("ray_mask",))
     data = fbo.read(viewport=(i0, y0, i1 - i0, y1 - y0), components=1, dtype="u4")
     window = to_image(np.frombuffer(data, np.uint32).reshape(y1 - y0, i1 - i0))
     return masked_pixels(window, origin=(i0, h - y1))
+
+
+def mask_tiles(pixels: np.ndarray, size: tuple[int, int], tile: int) -> np.ndarray:
+    """Per tile x tile tile (image orientation), (0, 1 if it holds a masked pixel): the
+    ray mask's tile summary, for the time-sampled composite."""
+    w, h = size
+    out = np.zeros((-(-h // tile), -(-w // tile), 2), np.float32)
+    out[pixels[:, 1] // tile, pixels[:, 0] // tile, 1] = 1.0
+    return out
 
 
 BLOCKS_PER_ROW = 256     # record blocks (SHADE_TILE x SHADE_TILE) per row of the texture
@@ -208,16 +211,21 @@ def layer_hits(pixels: np.ndarray, layer, height: int) -> LayerHits | None:
 
 
 class RevealTrace(Pass):
-    """Host side: mask read-back, ray casting, and the hit records of every layer."""
+    """Host side: mask read-back, ray casting, and the hit records of every layer; also
+    the mask's tile summary (ray_mask_tiles), made from the pixels read back."""
     name = "reveal"
-    inputs = ("ray_mask", "ray_mask_tiles")
-    produces = ("reveal_hits",)          # host-side: RevealState.layers
+    inputs = ("ray_mask",)
+    produces = ("reveal_hits", "ray_mask_tiles")    # reveal_hits: RevealState.layers
+
+    def outputs(self, frame: Frame):
+        return {"ray_mask_tiles": TexSpec(2, "f4", tile=max_radius_px(frame))}
 
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
         t0 = time.perf_counter()
         st = reveal_state(frame)
         pixels, own = read_masked_pixels(frame)
+        frame.write("ray_mask_tiles", mask_tiles(pixels, frame.size, max_radius_px(frame)))
         t1 = time.perf_counter()
         result = None
         if len(pixels) and p.trace:
