@@ -22,7 +22,7 @@ from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass
 from .pool import TexSpec
-from .tile_lists import FINE, tile_list
+from .tile_lists import FINE, moving_threshold, tile_list
 from .tiles import StripSpec
 
 MASK = TexSpec(1, "u1")
@@ -63,8 +63,14 @@ class EdgeIdTiles(FullscreenPass):
     inputs = ("mask_edge_probe",)
     produces = ("mask_edge_ids_x", "mask_edge_ids", "mask_edge_near")
 
+    @staticmethod
+    def _motion_tiles(frame: Frame) -> bool:
+        """With tile lists, motion_tiles says which strips can hold an edge."""
+        return tile_list(frame, "moving") is not None
+
     def defines(self, frame: Frame):
-        return {"STAGE": self._stage}
+        return {"STAGE": self._stage,
+                "MOTION_TILES": int(self._stage == 0 and self._motion_tiles(frame))}
 
     def outputs(self, frame: Frame):
         return {"mask_edge_ids_x": StripSpec(2, "u4", tile=FINE),
@@ -72,11 +78,16 @@ class EdgeIdTiles(FullscreenPass):
                 "mask_edge_near": TexSpec(2, "u4", tile=FINE)}
 
     def execute(self, frame: Frame):
-        steps = ((0, {"u_probe": "mask_edge_probe"}, "mask_edge_ids_x"),
+        first = {"u_probe": "mask_edge_probe"}
+        uniforms = {"u_tile": FINE}
+        if self._motion_tiles(frame):
+            first["u_motion_tiles"] = "motion_tiles"
+            uniforms["u_min_speed"] = moving_threshold(frame)
+        steps = ((0, first, "mask_edge_ids_x"),
                  (1, {"u_source": "mask_edge_ids_x"}, "mask_edge_ids"),
                  (2, {"u_source": "mask_edge_ids"}, "mask_edge_near"))
         for self._stage, textures, out in steps:
-            self.draw(frame, (out,), textures, {"u_tile": FINE})
+            self.draw(frame, (out,), textures, uniforms)
 
 
 class RangeCheck(FullscreenPass):

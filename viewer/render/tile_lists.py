@@ -175,6 +175,11 @@ def _threshold(min_speed: float) -> np.float32:
     return np.float32(min_speed) * np.float32(1.0 - 1e-6)
 
 
+def moving_threshold(frame: Frame) -> float:
+    """The longest |D| from which a tile counts as moving (for shaders that test tiles)."""
+    return float(_threshold(frame.params["hybrid"].min_speed))
+
+
 def active_tiles(longest: np.ndarray, tile: int, max_disp: float, tolerance: float) -> np.ndarray:
     """Tiles that any moving surface can reach: tile T is active when some tile T' with
     longest displacement m' > 0 lies within min(m', max_disp) / 2 + tolerance + MARGIN px
