@@ -126,7 +126,7 @@ def masked_pixels(ray_mask: np.ndarray, origin=(0, 0)) -> tuple[np.ndarray, np.n
     their own object ids, from (a window of) `ray_mask` in image orientation whose top-left
     pixel is image pixel `origin`."""
     flat = ray_mask.reshape(-1)
-    idx = np.flatnonzero(flat)
+    idx = np.flatnonzero(flat != 0)     # numpy's nonzero is ~5x faster on booleans
     w = ray_mask.shape[1]
     return np.stack([idx % w + origin[0], idx // w + origin[1]], axis=1), flat[idx]
 

@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# The benchmark set of docs/performance.md: every real-time mode on the built-in and the
+# conformance scenes at 640x360 and 1280x720, JSON into docs/perf/, then the tables.
+# About 6 minutes on 2 cores. Run after scripts/setup.sh (or `bash scripts/test.sh`).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+H=.venv/bin/hmblur
+out=docs/perf
+mkdir -p "$out"
+C=tests/conformance
+$H bench living_room --size 640x360 --frames 30 --speeds 0.25,0.5,1,2 --json $out/living_room_640x360.json
+$H bench living_room --size 1280x720 --frames 12 --speeds 0.5,1,2 --json $out/living_room_1280x720.json
+for s in spinner thin pan $C/basic.toml $C/vase_pan.toml; do
+  n=$(basename "$s" .toml)
+  $H bench "$s" --size 640x360 --frames 15 --json "$out/${n}_640x360.json"
+done
+for s in spinner $C/basic.toml $C/vase_pan.toml; do
+  n=$(basename "$s" .toml)
+  $H bench "$s" --size 1280x720 --frames 8 --modes mcguire,hybrid --json "$out/${n}_1280x720.json"
+done
+.venv/bin/python scripts/perf_tables.py $out/*.json
