@@ -248,3 +248,27 @@ def test_resize_reallocates(ctx, tmp_path):
         assert r.pool.get("color").size == (33, 17)
     finally:
         r.release()
+
+
+def test_camera_rays_from_the_still_pose_cache_equal_direct_ones():
+    # A still camera answers rays by lookup from the second call at one pose: the same
+    # directions bit for bit; a new pose (or field of view) recomputes.
+    import dataclasses
+    from viewer.camera import Camera
+    from viewer.scene_loader import load_scene
+    spec = load_scene("living_room").camera
+    rng = np.random.default_rng(2)
+    i, j = rng.integers(0, 64, 500), rng.integers(0, 40, 500)
+    cam = Camera(spec, 64, 40)
+    first = cam.rays(0.0, i, j)
+    again = cam.rays(0.0, i, j)                    # the pose repeats: lookup
+    assert "grid" in cam._ray_cache
+    fresh = Camera(spec, 64, 40)._directions(*spec.pose(0.0), i, j)
+    for o, d in (first, again):
+        np.testing.assert_array_equal(d, fresh)
+        np.testing.assert_array_equal(o, np.broadcast_to(spec.pose(0.0)[0], o.shape))
+    wide = dataclasses.replace(spec, fov_y=spec.fov_y * 1.5)
+    cam.spec = wide
+    got = cam.rays(0.0, i, j)[1]
+    np.testing.assert_array_equal(got, Camera(wide, 64, 40)._directions(*wide.pose(0.0), i, j))
+    assert not np.array_equal(got, fresh)

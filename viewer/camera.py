@@ -35,8 +35,26 @@ class Camera:
         return self.spec.pose(t)[0]
 
     def rays(self, t: float, i, j) -> tuple[np.ndarray, np.ndarray]:
-        """Origins and unit directions of the rays through the centres of image pixels (i, j)."""
+        """Origins and unit directions of the rays through the centres of image pixels (i, j).
+
+        A camera seen at the same pose twice in a row (a still camera, frame after frame)
+        keeps every pixel's direction and answers by lookup; the values are the same."""
         eye, fwd, up = self.spec.pose(t)
+        pose = (np.concatenate([eye, fwd, up]).tobytes(), self.spec.fov_y, self.width,
+                self.height)
+        cache = self.__dict__.setdefault("_ray_cache", {})
+        if cache.get("pose") == pose:
+            if "grid" not in cache:
+                jj, ii = np.mgrid[0:self.height, 0:self.width]
+                cache["grid"] = self._directions(eye, fwd, up, ii.ravel(), jj.ravel())
+            d = cache["grid"][np.asarray(j) * self.width + np.asarray(i)]
+        else:
+            cache.clear()
+            cache["pose"] = pose
+            d = self._directions(eye, fwd, up, i, j)
+        return np.broadcast_to(eye, d.shape).copy(), d
+
+    def _directions(self, eye, fwd, up, i, j) -> np.ndarray:
         right = np.cross(fwd, up)
         right /= np.linalg.norm(right)
         true_up = np.cross(right, fwd)
@@ -49,7 +67,7 @@ class Camera:
             d[:, k] = fwd[k] + sx * right[k] + sy * true_up[k]
         inv_len = 1.0 / np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])
         d *= inv_len[:, None]
-        return np.broadcast_to(eye, d.shape).copy(), d
+        return d
 
     def project(self, t: float, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """World points -> (GL window pixel coordinates x right / y up, view depth)."""
