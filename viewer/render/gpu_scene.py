@@ -35,9 +35,9 @@ def mat(m: np.ndarray) -> bytes:
 
 
 def set_uniform(prog: moderngl.Program, name: str, value):
-    if name not in prog:
+    u = prog.get(name, None)     # (`name in prog` would walk every member: no __contains__)
+    if u is None:
         return  # the compiler removed an unused uniform
-    u = prog[name]
     if isinstance(value, np.ndarray) and value.ndim == 2:
         u.write(mat(value))
     elif isinstance(value, np.ndarray):
@@ -80,7 +80,7 @@ class GpuScene:
             # Attributes the compiler dropped are skipped in the layout ("12x" = 3 floats).
             fmt, names = [], []
             for name, n in (("in_position", 3), ("in_normal", 3), ("in_uv", 2)):
-                if name in prog:
+                if prog.get(name, None) is not None:
                     fmt.append(f"{n}f")
                     names.append(name)
                 else:
@@ -109,7 +109,7 @@ class GpuScene:
         cols = np.zeros((MAX_LIGHTS, 3), np.float32)
         for k, light in enumerate(s.lights):
             dirs[k], cols[k] = light.direction, light.color
-        if "u_light_dir" in prog:
+        if prog.get("u_light_dir", None) is not None:
             prog["u_light_dir"].write(dirs.tobytes())
             prog["u_light_color"].write(cols.tobytes())
 

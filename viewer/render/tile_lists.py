@@ -99,7 +99,7 @@ class TileList:
         if vao is None:
             if not self.blocks_per_row:
                 layout = (self.buffer, "2f", "in_corner")
-            elif "in_record" in prog:
+            elif prog.get("in_record", None) is not None:
                 layout = (self.buffer, "2f 2f", "in_corner", "in_record")
             else:
                 layout = (self.buffer, "2f 8x", "in_corner")
