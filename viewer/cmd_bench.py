@@ -50,7 +50,10 @@ def summary(values) -> dict:
 
 def time_modes(r: Renderer, modes: list[str], s, frames: int, warmup: int, progress) -> dict:
     """Every mode timed round-robin, frame by frame, so that a slow spell of a shared
-    machine falls on all of them alike and the ratios compare like with like."""
+    machine falls on all of them alike and the ratios compare like with like. Each timed
+    frame follows an untimed frame of the same mode, as in a real-time loop: the caches
+    then hold what that mode uses, not what the mode before it in the round-robin (or the
+    bare-Embree timing) left behind, which favoured whichever mode followed a light one."""
     ctx = r.ctx
     for mode in modes:
         for _ in range(warmup):
@@ -60,6 +63,7 @@ def time_modes(r: Renderer, modes: list[str], s, frames: int, warmup: int, progr
     stats = {m: [] for m in modes}
     for k in range(frames):
         for mode in modes:
+            r.render(mode, s.time, s.params, seed=s.seed, read_image=False)
             # Frame time: one finish() at the end only, so passes overlap as they would.
             ctx.finish()
             t0 = time.perf_counter()
