@@ -21,8 +21,18 @@ class Camera:
         return self.width / self.height
 
     def view(self, t: float) -> np.ndarray:
+        """World-to-view at time t (a read-only array: the same pose gives the same one,
+        kept, because building it costs ~0.1 ms and a frame asks for it several times)."""
         eye, fwd, up = self.spec.pose(t)
-        return tf.look_at(eye, fwd, up)
+        key = np.concatenate([eye, fwd, up]).tobytes()
+        views = self.__dict__.setdefault("_views", {})
+        v = views.get(key)
+        if v is None:
+            if len(views) >= 8:
+                views.clear()
+            v = views[key] = tf.look_at(eye, fwd, up)
+            v.flags.writeable = False
+        return v
 
     def projection(self) -> np.ndarray:
         s = self.spec
