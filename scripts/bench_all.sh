@@ -10,7 +10,8 @@ mkdir -p "$out"
 C=tests/conformance
 $H bench living_room --size 640x360 --frames 30 --speeds 0.25,0.5,1,2 --json $out/living_room_640x360.json
 $H bench living_room --size 1280x720 --frames 12 --speeds 0.5,1,2 --json $out/living_room_1280x720.json
-for s in spinner thin pan $C/basic.toml $C/vase_pan.toml; do
+$H bench spinner --size 640x360 --frames 15 --speeds 0.25,0.5,1,2 --json $out/spinner_640x360.json
+for s in thin pan $C/basic.toml $C/vase_pan.toml; do
   n=$(basename "$s" .toml)
   $H bench "$s" --size 640x360 --frames 15 --json "$out/${n}_640x360.json"
 done

@@ -10,8 +10,7 @@ from pathlib import Path
 
 SHOWN_PASSES = {
     "hybrid": ("gbuffer", "motion_tiles", "select_tiles", "mask_displacement", "mask_edge_near",
-               "ray_mask", "ray_mask_tiles", "reveal", "reveal_shade", "hybrid_tilemax_x",
-               "hybrid_composite"),
+               "ray_mask", "reveal", "reveal_shade", "hybrid_tilemax_x", "hybrid_composite"),
 }
 
 
