@@ -21,7 +21,9 @@
 // BACK_LAYER 0 compiles the variant for tiles without a revealed pixel (line 3 never runs
 // there), OWN_STILL 1 the one for tiles where no pixel moves (|D| < 1e-3: no own line, no
 // time pairing): llvmpipe would still pay for them, both sides of every branch, one pass
-// of every loop.
+// of every loop. SIMPLE 1 compiles the one for tiles with no ray-mask edge (moving
+// silhouette) within the blur's reach: every fragment around belongs to the own surface,
+// so the neighbourhood's line runs only where it is the own line.
 #include "noise.glsl"
 #include "hybrid_layers.glsl"
 uniform sampler2D u_neighbormax;
@@ -132,7 +134,11 @@ void main() {
     // Line 1: the neighbourhood's largest displacement: what passes over the pixel.
     // (llvmpipe runs both sides of a branch for every pixel: each tap fetches its colour
     // once, unconditionally, and every bucket takes it with a weight of 0 or w.)
+#if SIMPLE
+    float rn = own_line ? 0.0 : 0.5 * length(vn);
+#else
     float rn = 0.5 * length(vn);
+#endif
     if (rn > 0.5) {
         vec2 dir = vn / length(vn);
         int n = taps_for(rn);

@@ -447,8 +447,9 @@ def test_split_composite_is_time_near_the_mask_and_bucket_elsewhere(ctx):
     try:
         split = r.render("hybrid", 0.0, params(composite="split"))
         lists = r._host_passes["tile_lists"]
-        time_tiles = lists.extra("time10").tiles.copy()
-        bucket_tiles = np.concatenate([lists.extra(n).tiles for n in ("bucket00", "bucket01")])
+        time_tiles = lists.extra("time100").tiles.copy()
+        bucket_tiles = np.concatenate([lists.extra(n).tiles
+                                       for n in ("bucket000", "bucket001", "bucket010")])
         mask = r.pool.get("ray_mask").read()
         t = r.render("hybrid", 0.0, params(composite="time"))
         b = r.render("hybrid", 0.0, params(composite="bucket"))

@@ -157,3 +157,24 @@ def test_cell_compaction_is_np_unique(top):
     want_cells, want_inverse = np.unique(values, return_inverse=True)
     np.testing.assert_array_equal(cells, want_cells)
     np.testing.assert_array_equal(inverse, want_inverse)
+
+
+def test_simple_tiles_change_nothing_where_no_edge_is_in_reach(ctx, monkeypatch):
+    # A moving camera at 320x180: tiles with no ray-mask edge within the blur's reach draw
+    # the composite's SIMPLE variant (the neighbourhood line only where it is the own
+    # line); the image equals the full-screen composite's, which never uses it.
+    scene = load_scene(str(CONFORMANCE / "vase_pan.toml"))
+    images = []
+    for full_screen in (False, True):
+        if full_screen:
+            monkeypatch.setattr(tile_lists.SelectTiles, "execute", lambda self, frame: None)
+        r = Renderer(ctx, scene, (320, 180))
+        try:
+            res = r.render("hybrid", scene.render.time, ParamSet())
+        finally:
+            r.release()
+        images.append(res.image)
+        if not full_screen:
+            assert res.stats["simple_tiles"] > 50
+    monkeypatch.undo()
+    np.testing.assert_allclose(images[0], images[1], rtol=1e-6, atol=1e-7)

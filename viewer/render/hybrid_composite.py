@@ -26,6 +26,19 @@ JITTER_STREAM = 2
 FRAGMENTS = {"time": "hybrid_time.frag", "bucket": "hybrid_bucket.frag"}
 
 
+def near_edges(frame: Frame, shape) -> np.ndarray:
+    """FINE tiles (GL rows) within the composite's reach (half the blur limit's 2k, the
+    landing tolerance and a pixel, rounded up to tiles, plus one) of a tile holding a ray-
+    mask edge (the reveal reads the edge tiles back with the mask); all of them when the
+    frame has none read back."""
+    edges = frame.host.get("edge_tiles")
+    if edges is None or edges.shape != shape:
+        return np.ones(shape, bool)
+    p = frame.params["hybrid"]
+    r = int(np.ceil((max_radius_px(frame) + p.tolerance + 1.0) / FINE)) + 1
+    return maximum_filter(edges, size=2 * r + 1, mode="constant", cval=False)
+
+
 def composite_kind(frame: Frame) -> str:
     """"bucket", "time" or "split" (the time-sampled composite on the tiles near the ray
     mask, the bucket on the other active tiles): the `hybrid.composite` setting."""
@@ -63,7 +76,7 @@ class Composite(FullscreenPass):
 
     def __init__(self):
         self._kind = "time"
-        self._back, self._still = 1, 0
+        self._back, self._still, self._simple = 1, 0, 0
 
     def program(self, frame: Frame, vertex: str = "fullscreen.vert"):
         self.fragment = FRAGMENTS[self._kind]
@@ -73,7 +86,7 @@ class Composite(FullscreenPass):
         p = frame.params["hybrid"]
         return {"LAYERS": int(p.layers), "MAX_SEEDS": int(p.seeds),
                 "JITTER_STREAM": f"{JITTER_STREAM}u", "BACK_LAYER": self._back,
-                "OWN_STILL": self._still}
+                "OWN_STILL": self._still, "SIMPLE": self._simple}
 
     def outputs(self, frame: Frame):
         return {"hybrid": TexSpec(4, "f4")}
@@ -95,22 +108,29 @@ class Composite(FullscreenPass):
         # tiles where nothing moves (own D < 1e-3 px) the own surface needs no line.
         if kind == "split":
             near, plain = split_tiles(active, masked, frame.size[1], SPLIT_REACH)
-            first = ("time", near, 1, 0)
+            first = ("time", near, 1, 0, 0)
             frame.stats["time_tiles"] = int(near.sum())
         else:
             revealed, plain = split_tiles(active, masked, frame.size[1], 0)
-            first = ("bucket", revealed, 1, 0)
+            first = ("bucket", revealed, 1, 0, 0)
+        # Where no mask edge lies within the blur's reach, no silhouette crosses a pixel:
+        # the neighbourhood's line is needed only where it is the own line (SIMPLE).
         still = plain & (lists.longest < STILL_PX)
-        parts = (first, ("bucket", plain & ~still, 0, 0), ("bucket", still, 0, 1))
-        for which, selected, back, own_still in parts:
-            tl = lists.extra(f"{which}{back}{own_still}")
+        moving = plain & ~still
+        simple = moving & ~near_edges(frame, moving.shape)
+        parts = (first, ("bucket", moving & ~simple, 0, 0, 0), ("bucket", simple, 0, 0, 1),
+                 ("bucket", still, 0, 1, 0))
+        for which, selected, back, own_still, single in parts:
+            tl = lists.extra(f"{which}{back}{own_still}{single}")
             tl.set(tile_coords(selected), FINE, frame.size)
-            self._draw(frame, which, tl, back, own_still)
+            self._draw(frame, which, tl, back, own_still, single)
+        frame.stats["simple_tiles"] = int(simple.sum())
 
-    def _draw(self, frame: Frame, kind: str, tiles, back: int = 1, own_still: int = 0):
+    def _draw(self, frame: Frame, kind: str, tiles, back: int = 1, own_still: int = 0,
+              simple: int = 0):
         p = frame.params["hybrid"]
         k = max_radius_px(frame)
-        self._kind, self._back, self._still = kind, back, own_still
+        self._kind, self._back, self._still, self._simple = kind, back, own_still, simple
         self.draw(frame, self.produces,
                   {"u_front_color": "color", "u_front": "hybrid_front",
                    "u_back_color": "hybrid_back_color", "u_back": "hybrid_back",

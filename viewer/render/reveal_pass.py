@@ -214,7 +214,7 @@ class RevealTrace(Pass):
     """Host side: mask read-back, ray casting, and the hit records of every layer; also
     the mask's tile summary (ray_mask_tiles), made from the pixels read back."""
     name = "reveal"
-    inputs = ("ray_mask",)
+    inputs = ("ray_mask", "mask_edge_ids")
     produces = ("reveal_hits", "ray_mask_tiles")    # reveal_hits: RevealState.layers
 
     def outputs(self, frame: Frame):
@@ -226,6 +226,11 @@ class RevealTrace(Pass):
         st = reveal_state(frame)
         pixels, own = read_masked_pixels(frame)
         frame.write("ray_mask_tiles", mask_tiles(pixels, frame.size, max_radius_px(frame)))
+        # Which FINE tiles hold a mask edge (GL rows), read while the GPU is waited on
+        # anyway: the composite's tile classes (hybrid_composite.near_edges).
+        ids = frame.pool.get("mask_edge_ids")
+        frame.host["edge_tiles"] = np.frombuffer(ids.read(), np.uint32).reshape(
+            ids.size[1], ids.size[0], -1)[..., 0] != 0
         t1 = time.perf_counter()
         result = None
         if len(pixels) and p.trace:
