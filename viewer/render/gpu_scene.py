@@ -38,12 +38,19 @@ def set_uniform(prog: moderngl.Program, name: str, value):
     u = prog.get(name, None)     # (`name in prog` would walk every member: no __contains__)
     if u is None:
         return  # the compiler removed an unused uniform
-    if isinstance(value, np.ndarray) and value.ndim == 2:
-        u.write(mat(value))
-    elif isinstance(value, np.ndarray):
-        u.value = tuple(float(x) for x in value)
+    if isinstance(value, np.ndarray):
+        value = mat(value) if value.ndim == 2 else tuple(float(x) for x in value)
+    # A program keeps its uniforms between draws: skip the write when nothing changed
+    # (most of a frame's ~230 uniforms do not, frame after frame).
+    last = prog.extra if isinstance(prog.extra, dict) else {}
+    if name in last and last[name] == value:
+        return
+    if isinstance(value, bytes):
+        u.write(value)
     else:
         u.value = value
+    last[name] = value
+    prog.extra = last
 
 
 class GpuScene:
