@@ -10,7 +10,7 @@
 // motion) but few edges survive.
 #include "raymask_common.glsl"
 uniform usampler2D u_displacement_mask;
-uniform sampler2D u_edge_probe;   // raymask_edge.frag: (half |relative D|, id) at edges
+uniform sampler2D u_edge_probe;   // raymask_displacement.frag: (half |relative D|, id) at edges
 uniform sampler2D u_front;        // the G-buffer's hybrid_front: (D, depth, id)
 uniform usampler2D u_edge_near;   // .x bit (id mod 32): an edge of that object in this
                                   // u_fine tile or one next to it; .y the bits of the
