@@ -38,6 +38,26 @@ from .attributes import SurfaceTable
 EXCLUSION_BUDGET = 1_000_000
 
 
+class StaticHits:
+    """Per pixel of one view, the nearest static hit of its primary ray, once traced."""
+
+    def __init__(self, key, size: int):
+        self.key = key
+        self.known = np.zeros(size, dtype=bool)
+        self.object_id = np.zeros(size, dtype=np.uint32)
+        self.prim_id = np.full(size, -1, dtype=np.int32)
+        self.u = np.zeros(size, dtype=np.float32)
+        self.v = np.zeros(size, dtype=np.float32)
+        self.distance = np.full(size, np.inf)
+
+    def store(self, keys, object_id, r, distance):
+        self.object_id[keys] = object_id
+        self.prim_id[keys] = r["primID"]
+        self.u[keys], self.v[keys] = r["u"], r["v"]
+        self.distance[keys] = distance
+        self.known[keys] = True
+
+
 @dataclass
 class Hits:
     """Nearest hit of each ray.
@@ -133,6 +153,7 @@ class RayScene:
                    .astype(np.float32), o.mesh.faces.astype(np.int32)) for o in static}
         self._static = self._static_scene(self.static_ids) if static else None
 
+        self._static_hits: StaticHits | None = None
         self.moving: list[tuple[SceneObject, rtcs.EmbreeScene]] = []
         for o in scene.objects:
             if o.moving and len(o.mesh.faces):
@@ -169,8 +190,16 @@ class RayScene:
         from .reveal import reveal   # reveal builds on this module: import it late
         return reveal(self, camera, t, pixels_ij, own_ids, layers, max_depth, threads, **kw)
 
+    def static_view(self, view: tuple) -> "StaticHits":
+        """The static scene's hits kept for `view` = (key, number of pixels), fresh when the
+        key changes (the static geometry never does)."""
+        key, size = view
+        if self._static_hits is None or self._static_hits.key != key:
+            self._static_hits = StaticHits(key, int(size))
+        return self._static_hits
+
     def intersect(self, origins, dirs, t: float, exclude_ids=None, max_restarts: int = 8,
-                  tnear=None, tfar=None) -> Hits:
+                  tnear=None, tfar=None, view: tuple | None = None, pixels=None) -> Hits:
         """Nearest hit per ray at time t, skipping each ray's excluded object.
 
         origins, dirs: (n, 3); dirs should be unit length for `distance` to be metres.
@@ -180,6 +209,11 @@ class RayScene:
         nearer, or a miss, and counts as unresolved).
         tnear, tfar: optional (n,) distances along the ray bounding the hits (clipping);
         distances are still reported from `origins`.
+        view, pixels: the rays are the primary rays of one view through pixels `pixels`
+        ((n,) indices below view[1]), and view[0] names everything they depend on (camera
+        pose, size, clipping): a ray's nearest static hit is then the same in every frame
+        of that view, so it is traced once and looked up after (not for rays that must pass
+        a static object of their own).
         """
         o = np.asarray(origins, dtype=np.float64).reshape(-1, 3)
         d = np.asarray(dirs, dtype=np.float64).reshape(-1, 3)
@@ -246,9 +280,12 @@ class RayScene:
 
         restarts = unresolved = 0
         rows = None                   # the rays left for the static scene; None = all
+        # geomID + 1 -> object id, with geomID -1 (a miss) -> 0.
+        id_of = np.r_[np.uint32(0), self.static_ids]
+        static_own = np.isin(excl, self.static_ids)
         if self._static is not None and excl.any():
             # Rays whose own object is static: into the scene without it, where one exists.
-            static_rows = np.flatnonzero(np.isin(excl, self.static_ids))
+            static_rows = np.flatnonzero(static_own)
             # The rays of each own object, in ray order: one stable sort, not a scan each.
             order = static_rows[np.argsort(excl[static_rows], kind="stable")]
             cuts = np.flatnonzero(np.diff(excl[order])) + 1
@@ -265,9 +302,26 @@ class RayScene:
                 passed[sel] = True
             if passed.any():
                 rows = np.flatnonzero(~passed)
+        if self._static is not None and view is not None:
+            # The view's static hits, looked up (traced first where not yet known), for
+            # the rays that pass no static object of their own.
+            hits = self.static_view(view)
+            left = np.arange(n) if rows is None else rows
+            use = left[~static_own[left]]
+            keys = np.asarray(pixels, dtype=np.int64).reshape(n)[use]
+            new = ~hits.known[keys]
+            if new.any():
+                r_new, k_new = use[new], keys[new]
+                s0 = start[r_new]
+                r = _embree_run(self._static, o32[r_new], d32[r_new], limit[r_new] - s0)
+                queries += r_new.size
+                hits.store(k_new, id_of[r["geomID"] + 1], r, s0 + r["tfar"])
+            nearer = (hits.object_id[keys] != 0) & (hits.distance[keys] < best[use])
+            w, k = use[nearer], keys[nearer]
+            object_id[w], prim_id[w] = hits.object_id[k], hits.prim_id[k]
+            u[w], v[w], best[w] = hits.u[k], hits.v[k], hits.distance[k]
+            rows = left[static_own[left]]
         if self._static is not None and (rows is None or rows.size):
-            # geomID + 1 -> object id, with geomID -1 (a miss) -> 0.
-            id_of = np.r_[np.uint32(0), self.static_ids]
             org, offset = (o_start if rows is None else o_start[rows]), start.copy()
             for depth in range(max_restarts + 1):
                 s0 = take(offset, rows)

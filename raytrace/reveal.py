@@ -113,6 +113,16 @@ def _expand(compact: RevealLayer, traced: np.ndarray) -> RevealLayer:
     return RevealLayer(**cols, table=compact.table)
 
 
+def primary_view(camera: Camera, t: float) -> tuple:
+    """(key, pixel count) naming what a primary ray's static hit depends on: the camera's
+    pose at t, its lens and clipping, the image size (RayScene.intersect's `view`)."""
+    eye, fwd, up = camera.spec.pose(t)
+    s = camera.spec
+    key = (np.concatenate([eye, fwd, up]).tobytes(), s.fov_y, s.near, s.far,
+           camera.width, camera.height)
+    return key, camera.width * camera.height
+
+
 def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
                   own_ids: np.ndarray, layers: int, max_depth: int) -> RevealResult:
     n = len(pixels_ij)
@@ -130,8 +140,11 @@ def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
     tnear = near
     for k in range(layers):
         pick = (lambda a: a) if rows is None else (lambda a: a[rows])
+        # Layer 1's rays are the view's primary rays: their static hits are kept.
+        primary = {} if k else {"view": primary_view(camera, t),
+                                "pixels": pixels_ij[:, 1] * camera.width + pixels_ij[:, 0]}
         hits = rs.intersect(pick(origin), pick(direction), t, exclude,
-                            max_restarts=max_depth, tnear=tnear, tfar=pick(far))
+                            max_restarts=max_depth, tnear=tnear, tfar=pick(far), **primary)
         if rows is None:
             layer = _layer(rs, hits, origin, direction, cos, np.ones(n, dtype=bool))
         else:
@@ -187,6 +200,7 @@ def reveal(rs: RayScene, camera: Camera, t: float, pixels_ij, own_ids, layers: i
     if len(own_ids) != len(pixels_ij):
         raise ValueError(f"{len(pixels_ij)} pixels but {len(own_ids)} own ids")
     n = len(pixels_ij)
+    rs.static_view(primary_view(camera, t))     # made here, not by racing threads
     threads = (os.cpu_count() or 1) if threads is None else max(1, int(threads))
     n_chunks = max(-(-n // max(1, max_chunk)),
                    min(threads * 4, n // max(1, min_chunk)) if threads > 1 else 1)

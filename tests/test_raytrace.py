@@ -2,6 +2,7 @@
 conformance data of an independent Embree renderer."""
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -9,6 +10,7 @@ import pytest
 import trimesh
 
 from raytrace import RayScene, barycentric_weights, local_surface, reveal
+from raytrace.reveal import primary_view
 from viewer.camera import Camera
 from viewer.conventions import BACKGROUND_DEPTH
 from viewer.scene import CameraSpec, Material, Mesh, Scene, SceneObject
@@ -422,17 +424,52 @@ def test_threads_give_the_single_threaded_result():
     rs_restarts = RayScene(s, exclusion_budget=0)
     assert reveal(rs_restarts, cam, 0.05, pix, own, layers=2, threads=1).restarts > 0
     single = reveal(rs, cam, 0.05, pix, own, layers=2, threads=1)
-    # 1920 pixels in 12 chunks of 160 over 3 threads.
-    multi = reveal(rs, cam, 0.05, pix, own, layers=2, threads=3, min_chunk=50)
-    again = reveal(rs, cam, 0.05, pix, own, layers=2, threads=3, min_chunk=50)
-    serial = reveal(rs, cam, 0.05, pix, own, layers=2, threads=1, max_chunk=333)
-    assert single.layers[1].traced.any()
-    for r in (multi, again, serial):
+    # 1920 pixels in 12 chunks of 160 over 3 threads (each on a fresh RayScene, so the
+    # static hits kept for the view are traced again and the query counts compare).
+    multi = reveal(RayScene(s), cam, 0.05, pix, own, layers=2, threads=3, min_chunk=50)
+    again = reveal(RayScene(s), cam, 0.05, pix, own, layers=2, threads=3, min_chunk=50)
+    serial = reveal(RayScene(s), cam, 0.05, pix, own, layers=2, threads=1, max_chunk=333)
+    # And on the first one again, its static hits looked up: the same layers.
+    kept = reveal(rs, cam, 0.05, pix, own, layers=2, threads=3, min_chunk=50)
+    assert single.layers[1].traced.any() and kept.queries < single.queries
+    for r in (multi, again, serial, kept):
         for name in ("rays", "queries", "restarts", "unresolved", "pixels_hit"):
-            assert getattr(r, name) == getattr(single, name), name
+            if r is not kept or name != "queries":
+                assert getattr(r, name) == getattr(single, name), name
         for la, lb in zip(single.layers, r.layers):
             for name in la.__dataclass_fields__:
-                np.testing.assert_array_equal(getattr(la, name), getattr(lb, name), name)
+                if name != "table":         # (each RayScene's own attribute table)
+                    np.testing.assert_array_equal(getattr(la, name), getattr(lb, name), name)
+
+
+def test_static_hits_are_kept_per_view_and_change_nothing():
+    """Primary rays of one view: the static scene is traced once per pixel and looked up
+    in later frames; the hits equal a fresh trace's, frame after frame, and a moved
+    camera (another view) traces again."""
+    s = busy_scene()
+    jj, ii = np.mgrid[0:40, 0:48]
+    pix = np.c_[ii.ravel(), jj.ravel()]
+    own = np.random.default_rng(4).integers(0, 5, len(pix))
+    rs = RayScene(s)
+    cam = Camera(s.camera, 48, 40)
+    first = reveal(rs, cam, 0.05, pix[::2], own[::2], threads=1)
+    for t in (0.05, 0.3):             # the still camera: one view at both times
+        got = reveal(rs, cam, t, pix, own, threads=1)
+        want = reveal(RayScene(s), cam, t, pix, own, threads=1)
+        for name in got.layers[0].__dataclass_fields__:
+            if name != "table":
+                np.testing.assert_array_equal(getattr(got.layers[0], name),
+                                              getattr(want.layers[0], name), name)
+        assert got.queries < want.queries
+    assert rs.static_view(primary_view(cam, 0.3)).known.sum() > 0
+    moved = dataclasses.replace(s.camera, position=s.camera.position + [0.3, 0.0, 0.0])
+    cam2 = Camera(moved, 48, 40)
+    assert primary_view(cam2, 0.3)[0] != primary_view(cam, 0.3)[0]
+    got = reveal(rs, cam2, 0.3, pix, own, threads=1)
+    want = reveal(RayScene(dataclasses.replace(s, camera=moved)), cam2, 0.3, pix, own,
+                  threads=1)
+    np.testing.assert_array_equal(got.layers[0].object_id, want.layers[0].object_id)
+    assert got.queries == want.queries and first.queries > 0
 
 
 def test_reveal_of_no_pixels():
