@@ -4,9 +4,13 @@
       the front by the G-buffer (layout "hybrid"), the revealed ones by reveal_shade;
   hybrid_tilemax_x / hybrid_tilemax / hybrid_neighbormax: the largest displacement around
       each tile (viewer/render/tiles.py, McGuire's passes on the raster displacement);
-  hybrid_composite -> hybrid: the time-sampled composite (glsl/hybrid_time.frag), or the
-      bucketed gather (glsl/hybrid_bucket.frag) for comparison; only on the active tiles
-      where the frame has tile lists (viewer/render/tile_lists.py), the sharp colour elsewhere.
+  hybrid_composite -> hybrid: the bucketed gather (glsl/hybrid_bucket.frag, the default),
+      the time-sampled composite (glsl/hybrid_time.frag), or "split" between them; only on
+      the active tiles where the frame has tile lists (viewer/render/tile_lists.py), the
+      sharp colour elsewhere. The bucketed gather is compiled per class of tile, since
+      llvmpipe pays for every branch whether taken or not: with the revealed layer's line
+      only where a pixel is masked, without the own line where nothing moves, and without
+      the neighbourhood's line where no silhouette is in reach.
 """
 from __future__ import annotations
 
