@@ -4,7 +4,9 @@
 // mask_edge_probe (its (reach, id) at edge pixels, 0 elsewhere), in three steps: STAGE 0
 // over u_tile texels along x (full size -> strip), STAGE 1 over u_tile strip texels along
 // y (strip -> tiles), STAGE 2 the 3x3 tiles around each tile (so a point's tile answers
-// for everything within a tile of it). Output (bits, floatBitsToUint(reach)): reaches are
+// for everything within a tile of it), STAGES 3 and 4 the ids of the tiles within
+// u_radius (so a pixel's tile answers for everything the range check can reach from it).
+// Output (bits, floatBitsToUint(reach)): reaches are
 // >= 0, whose float bits order as the floats do, so max() of the bits is their max.
 // The range check (raymask_range.frag) skips searches whose points see no tile with an
 // edge of the pixel's own object, and bounds the others by the reaches they see: the ids
@@ -21,6 +23,7 @@ uniform float u_min_speed;
 #endif
 #else
 uniform usampler2D u_source;
+uniform int u_radius;
 #endif
 
 void main() {
@@ -45,7 +48,8 @@ void main() {
         uvec2 t = texelFetch(u_source, ivec2(p.x, y), 0).xy;
         near = uvec2(near.x | t.x, max(near.y, t.y));
     }
-#else
+#elif STAGE == 2
+    // The 3x3 tiles around.
     ivec2 size = textureSize(u_source, 0);
     for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
@@ -55,6 +59,15 @@ void main() {
                 near = uvec2(near.x | t.x, max(near.y, t.y));
             }
         }
+    }
+#else
+    // STAGE 3 / 4: the tiles within u_radius along x, then along y (separable).
+    ivec2 size = textureSize(u_source, 0);
+    ivec2 axis = STAGE == 3 ? ivec2(1, 0) : ivec2(0, 1);
+    for (int k = -u_radius; k <= u_radius; ++k) {
+        ivec2 q = p + k * axis;
+        if (all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, size)))
+            near.x |= texelFetch(u_source, q, 0).x;
     }
 #endif
     out_near = near;

@@ -15,6 +15,7 @@ uniform sampler2D u_front;        // the G-buffer's hybrid_front: (D, depth, id)
 uniform usampler2D u_edge_near;   // .x bit (id mod 32): an edge of that object in this
                                   // u_fine tile or one next to it; .y the bits of the
                                   // largest reach of an edge there (edge_ids.frag)
+uniform usampler2D u_edge_reach;  // .x: the same bits over every tile a probe can reach
 uniform int u_fine;
 uniform float u_min_speed;
 uniform float u_relative_reach;   // search length, in half displacements
@@ -30,6 +31,10 @@ void main() {
     out_mask = 0u;
     if (own == 0u || length(d) < u_min_speed) return;
     if (texelFetch(u_displacement_mask, x, 0).x != 0u) { out_mask = own; return; }
+#if REACH_TEST
+    // No edge of the own object anywhere in reach: no search (one read, not the look).
+    if ((texelFetch(u_edge_reach, x / u_fine, 0).x & (1u << (own % 32u))) == 0u) return;
+#endif
     float half_len = 0.5 * length(d);
     vec2 dir = d / length(d);
     float full = min(u_max_reach, u_relative_reach * half_len);

@@ -29,6 +29,7 @@ MASK = TexSpec(1, "u1")
 RAY_MASK = TexSpec(1, "u4")         # own object id where masked
 RELATIVE = TexSpec(2, "f4")
 EDGE_PROBE = TexSpec(2, "f4")       # (half |relative D|, object id) at edge pixels, else 0
+REACH_TEST_FRACTION = 0.5           # of the tiles moving, from which reach_test holds
 
 
 class SurfaceTests(FullscreenPass):
@@ -54,6 +55,18 @@ class SurfaceTests(FullscreenPass):
                   tiles=tile_list(frame, "moving"))
 
 
+def reach_test(frame: Frame) -> bool:
+    """Whether the range check first reads, at its pixel's tile, the own-object bits of
+    every tile in reach (mask_edge_reach) and returns at once where there are none: worth
+    its two extra reductions where most tiles move (a moving camera: vase_pan 1280x720
+    range check 20.5 -> 15.6 ms), not where few do (basic: +0.3 ms). Exact either way."""
+    moving = tile_list(frame, "moving")
+    if moving is None:
+        return False
+    tiles = frame.host["tile_lists"].shape
+    return moving.count > REACH_TEST_FRACTION * tiles[0] * tiles[1]
+
+
 class EdgeIdTiles(FullscreenPass):
     """Per FINE tile, a bitmask of the objects (id mod 32) with edge pixels there and the
     largest reach of those edges, then spread to the 3x3 tiles around
@@ -61,7 +74,8 @@ class EdgeIdTiles(FullscreenPass):
     name = "mask_edge_near"
     fragment = "edge_ids.frag"
     inputs = ("mask_edge_probe",)
-    produces = ("mask_edge_ids_x", "mask_edge_ids", "mask_edge_near")
+    produces = ("mask_edge_ids_x", "mask_edge_ids", "mask_edge_near", "mask_edge_reach_x",
+                "mask_edge_reach")
 
     @staticmethod
     def _motion_tiles(frame: Frame) -> bool:
@@ -75,17 +89,24 @@ class EdgeIdTiles(FullscreenPass):
     def outputs(self, frame: Frame):
         return {"mask_edge_ids_x": StripSpec(2, "u4", tile=FINE),
                 "mask_edge_ids": TexSpec(2, "u4", tile=FINE),
-                "mask_edge_near": TexSpec(2, "u4", tile=FINE)}
+                "mask_edge_near": TexSpec(2, "u4", tile=FINE),
+                "mask_edge_reach_x": TexSpec(2, "u4", tile=FINE),
+                "mask_edge_reach": TexSpec(2, "u4", tile=FINE)}
 
     def execute(self, frame: Frame):
         first = {"u_probe": "mask_edge_probe"}
-        uniforms = {"u_tile": FINE}
+        # A probe of the range check lies at most k px (the blur limit) from its pixel:
+        # within ceil(k / FINE) + 1 tiles of the pixel's tile.
+        uniforms = {"u_tile": FINE, "u_radius": -(-max_radius_px(frame) // FINE) + 1}
         if self._motion_tiles(frame):
             first["u_motion_tiles"] = "motion_tiles"
             uniforms["u_min_speed"] = moving_threshold(frame)
-        steps = ((0, first, "mask_edge_ids_x"),
+        steps = [(0, first, "mask_edge_ids_x"),
                  (1, {"u_source": "mask_edge_ids_x"}, "mask_edge_ids"),
-                 (2, {"u_source": "mask_edge_ids"}, "mask_edge_near"))
+                 (2, {"u_source": "mask_edge_ids"}, "mask_edge_near")]
+        if reach_test(frame):
+            steps += [(3, {"u_source": "mask_edge_ids"}, "mask_edge_reach_x"),
+                      (4, {"u_source": "mask_edge_reach_x"}, "mask_edge_reach")]
         for self._stage, textures, out in steps:
             self.draw(frame, (out,), textures, uniforms)
 
@@ -93,8 +114,12 @@ class EdgeIdTiles(FullscreenPass):
 class RangeCheck(FullscreenPass):
     name = "ray_mask"
     fragment = "raymask_range.frag"
-    inputs = ("mask_displacement", "mask_edge_probe", "mask_edge_near", "hybrid_front")
+    inputs = ("mask_displacement", "mask_edge_probe", "mask_edge_near", "mask_edge_reach",
+              "hybrid_front")
     produces = ("ray_mask",)
+
+    def defines(self, frame: Frame):
+        return {"REACH_TEST": int(reach_test(frame))}
 
     def outputs(self, frame: Frame):
         return {"ray_mask": RAY_MASK}
@@ -104,7 +129,7 @@ class RangeCheck(FullscreenPass):
         self.draw(frame, self.produces,
                   {"u_displacement_mask": "mask_displacement", "u_edge_probe": "mask_edge_probe",
                    "u_front": "hybrid_front",
-                   "u_edge_near": "mask_edge_near"},
+                   "u_edge_near": "mask_edge_near", "u_edge_reach": "mask_edge_reach"},
                   {"u_min_speed": float(p.min_speed), "u_fine": FINE,
                    "u_relative_reach": float(p.relative_reach),
                    "u_max_reach": float(max_radius_px(frame))},
