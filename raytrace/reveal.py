@@ -113,9 +113,16 @@ def _expand(compact: RevealLayer, traced: np.ndarray) -> RevealLayer:
     return RevealLayer(**cols, table=compact.table)
 
 
-def primary_view(camera: Camera, t: float) -> tuple:
+# Views up to this many pixels keep their static hits (~25 bytes a pixel: 105 MB here).
+MAX_VIEW_PIXELS = 1 << 22
+
+
+def primary_view(camera: Camera, t: float) -> tuple | None:
     """(key, pixel count) naming what a primary ray's static hit depends on: the camera's
-    pose at t, its lens and clipping, the image size (RayScene.intersect's `view`)."""
+    pose at t, its lens and clipping, the image size (RayScene.intersect's `view`); None
+    for images too large to keep them."""
+    if camera.width * camera.height > MAX_VIEW_PIXELS:
+        return None
     eye, fwd, up = camera.spec.pose(t)
     s = camera.spec
     key = (np.concatenate([eye, fwd, up]).tobytes(), s.fov_y, s.near, s.far,
@@ -141,8 +148,9 @@ def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
     for k in range(layers):
         pick = (lambda a: a) if rows is None else (lambda a: a[rows])
         # Layer 1's rays are the view's primary rays: their static hits are kept.
-        primary = {} if k else {"view": primary_view(camera, t),
-                                "pixels": pixels_ij[:, 1] * camera.width + pixels_ij[:, 0]}
+        view = None if k else primary_view(camera, t)
+        primary = {} if view is None else {
+            "view": view, "pixels": pixels_ij[:, 1] * camera.width + pixels_ij[:, 0]}
         hits = rs.intersect(pick(origin), pick(direction), t, exclude,
                             max_restarts=max_depth, tnear=tnear, tfar=pick(far), **primary)
         if rows is None:
@@ -200,7 +208,8 @@ def reveal(rs: RayScene, camera: Camera, t: float, pixels_ij, own_ids, layers: i
     if len(own_ids) != len(pixels_ij):
         raise ValueError(f"{len(pixels_ij)} pixels but {len(own_ids)} own ids")
     n = len(pixels_ij)
-    rs.static_view(primary_view(camera, t))     # made here, not by racing threads
+    if primary_view(camera, t) is not None:
+        rs.static_view(primary_view(camera, t))     # made here, not by racing threads
     threads = (os.cpu_count() or 1) if threads is None else max(1, int(threads))
     n_chunks = max(-(-n // max(1, max_chunk)),
                    min(threads * 4, n // max(1, min_chunk)) if threads > 1 else 1)

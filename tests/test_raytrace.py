@@ -604,3 +604,16 @@ def test_slab_hand_values():
     np.testing.assert_array_equal(es._slab(o, inv_d, lo, hi, t0, t1), [True, False, False, True])
     # The box lies 4 to 6 along the first ray: a far limit of 3.9 misses it.
     assert not es._slab(o[:1], inv_d[:1], lo, hi, t0[:1], np.array([3.9]))[0]
+
+
+def test_large_views_keep_no_static_hits(monkeypatch):
+    import raytrace.reveal as rv
+    s = busy_scene()
+    cam = Camera(s.camera, 48, 40)
+    monkeypatch.setattr(rv, "MAX_VIEW_PIXELS", 48 * 40 - 1)
+    assert primary_view(cam, 0.0) is None
+    rs = RayScene(s)
+    pix = np.c_[np.arange(48), np.full(48, 20)]
+    a = reveal(rs, cam, 0.0, pix, np.zeros(48), threads=1)
+    b = reveal(rs, cam, 0.0, pix, np.zeros(48), threads=1)
+    assert a.queries == b.queries > 0 and rs._static_hits is None
