@@ -607,7 +607,8 @@ def test_slab_hand_values():
 
 
 def test_large_views_keep_no_static_hits(monkeypatch):
-    import raytrace.reveal as rv
+    import importlib
+    rv = importlib.import_module("raytrace.reveal")     # (the package's `reveal` is the function)
     s = busy_scene()
     cam = Camera(s.camera, 48, 40)
     monkeypatch.setattr(rv, "MAX_VIEW_PIXELS", 48 * 40 - 1)
