@@ -15,18 +15,37 @@
 // Outputs: the edge flag, and for the range check's inner loop (one fetch per probe)
 // (half the relative displacement, the object id) at an edge pixel, (0, 0) elsewhere (id
 // 0 is the sky, never a searching pixel's own).
+//
+// STEP 0 runs both steps in one pass. Where the camera moves, most moving tiles hold no
+// survivor of step 1 and llvmpipe would pay the Sobel kernel everywhere (both sides of a
+// branch run): STEP 1 then runs the displacement test alone, and STEP 2 the edge test on
+// the tiles that hold a survivor (viewer/render/raymask.py).
 #include "raymask_common.glsl"
 uniform sampler2D u_front;          // the G-buffer's hybrid_front: (D, depth, id)
-uniform sampler2D u_normal;
+#if STEP != 2
 uniform float u_min_speed;          // px over the exposure
 uniform float u_depth_threshold;    // relative
-uniform float u_edge_depth;
-uniform float u_edge_normal;
 layout(location = 0) out uint out_mask;
 layout(location = 1) out vec2 out_relative;
+#endif
+#if STEP != 1
+uniform sampler2D u_normal;
+uniform float u_edge_depth;
+uniform float u_edge_normal;
+#if STEP == 0
 layout(location = 2) out uint out_edge;
 layout(location = 3) out vec2 out_probe;
+#else
+layout(location = 0) out uint out_edge;
+layout(location = 1) out vec2 out_probe;
+#endif
+#endif
+#if STEP == 2
+uniform usampler2D u_displacement_mask;
+uniform sampler2D u_relative;
+#endif
 
+#if STEP != 2
 float own_id;
 float own_depth;
 
@@ -37,6 +56,32 @@ bool uncovers(ivec2 x, vec2 offset, ivec2 size, out vec2 v) {
     return f.w != own_id && f.z > own_depth * (1.0 + u_depth_threshold);
 }
 
+// Step 1 at x: out_mask and out_relative.
+void displacement_test(ivec2 x, ivec2 size) {
+    vec4 f = texelFetch(u_front, x, 0);
+    vec2 d = f.xy;
+    own_id = f.w;
+    own_depth = f.z;
+    out_mask = 0u;
+    out_relative = d;
+    if (own_id == 0.0 || length(d) < u_min_speed) return;   // the sky hides nothing
+    vec2 vb;
+    bool found = false;
+    for (int s = -1; s <= 1; s += 2) {
+        if (uncovers(x, 0.5 * float(s) * d, size, vb)) {
+            out_mask = 1u;
+            if (!found) { out_relative = d - vb; found = true; }
+        }
+    }
+    if (found) {
+        for (int s = -1; s <= 1; s += 2) {
+            if (uncovers(x, 0.5 * float(s) * out_relative, size, vb)) out_mask = 1u;
+        }
+    }
+}
+#endif
+
+#if STEP != 1
 // Step 2 at x: is it on a depth or normal edge?
 bool on_edge(ivec2 x, ivec2 size) {
     vec2 gz = vec2(0.0);
@@ -58,34 +103,29 @@ bool on_edge(ivec2 x, ivec2 size) {
     float g_normal = 0.25 * sqrt(dot(gnx, gnx) + dot(gny, gny));
     return g_depth > u_edge_depth || g_normal > u_edge_normal;
 }
+#endif
 
 void main() {
     ivec2 x = ivec2(gl_FragCoord.xy);
     ivec2 size = textureSize(u_front, 0);
-    vec4 f = texelFetch(u_front, x, 0);
-    vec2 d = f.xy;
-    own_id = f.w;
-    own_depth = f.z;
-    out_mask = 0u;
-    out_relative = d;
+#if STEP != 2
+    displacement_test(x, size);
+#endif
+#if STEP == 0
+    bool survivor = out_mask != 0u;
+    vec2 relative = out_relative;
+    float id = own_id;
+#elif STEP == 2
+    bool survivor = texelFetch(u_displacement_mask, x, 0).x != 0u;
+    vec2 relative = texelFetch(u_relative, x, 0).xy;
+    float id = texelFetch(u_front, x, 0).w;
+#endif
+#if STEP != 1
     out_edge = 0u;
     out_probe = vec2(0.0);
-    if (own_id == 0.0 || length(d) < u_min_speed) return;   // the sky hides nothing
-    vec2 vb;
-    bool found = false;
-    for (int s = -1; s <= 1; s += 2) {
-        if (uncovers(x, 0.5 * float(s) * d, size, vb)) {
-            out_mask = 1u;
-            if (!found) { out_relative = d - vb; found = true; }
-        }
-    }
-    if (found) {
-        for (int s = -1; s <= 1; s += 2) {
-            if (uncovers(x, 0.5 * float(s) * out_relative, size, vb)) out_mask = 1u;
-        }
-    }
-    if (out_mask != 0u && on_edge(x, size)) {
+    if (survivor && on_edge(x, size)) {
         out_edge = 1u;
-        out_probe = vec2(0.5 * length(out_relative), own_id);
+        out_probe = vec2(0.5 * length(relative), id);
     }
+#endif
 }

@@ -17,12 +17,14 @@ all lie far from its own object's edges, and bound the others.
 """
 from __future__ import annotations
 
+import numpy as np
+
 from .blur_common import max_radius_px
 from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass
 from .pool import TexSpec
-from .tile_lists import FINE, moving_threshold, tile_list
+from .tile_lists import FINE, moving_threshold, tile_coords, tile_list
 from .tiles import StripSpec
 
 MASK = TexSpec(1, "u1")
@@ -34,25 +36,69 @@ REACH_TEST_FRACTION = 0.5           # of the tiles moving, from which reach_test
 
 class SurfaceTests(FullscreenPass):
     """The displacement test and, on its survivors, the edge test, in one pass
-    (glsl/raymask_displacement.frag); also mask_edge_probe, what the range check reads
-    per probe."""
+    (glsl/raymask_displacement.frag, STEP 0); also mask_edge_probe, what the range check
+    reads per probe. Where the camera moves (reach_test), the survivors of the first lie
+    in few of the moving tiles (vase_pan: 60 of 883), so the two run apart: STEP 1 on the
+    moving tiles, the tiles holding a survivor read back (glsl/mask_any.frag), STEP 2
+    (the Sobel kernel) on those alone."""
     name = "mask_displacement"
     fragment = "raymask_displacement.frag"
     inputs = ("hybrid_front", "normal")
-    produces = ("mask_displacement", "mask_relative", "mask_edge", "mask_edge_probe")
+    produces = ("mask_displacement", "mask_relative", "mask_edge", "mask_edge_probe",
+                "mask_survivors_x", "mask_survivors")
+
+    def __init__(self):
+        self._step = 0
+        self._any = AnyTiles()
+
+    def defines(self, frame: Frame):
+        return {"STEP": self._step}
 
     def outputs(self, frame: Frame):
         return {"mask_displacement": MASK, "mask_relative": RELATIVE, "mask_edge": MASK,
-                "mask_edge_probe": EDGE_PROBE}
+                "mask_edge_probe": EDGE_PROBE,
+                "mask_survivors_x": StripSpec(1, "u1", tile=FINE),
+                "mask_survivors": TexSpec(1, "u1", tile=FINE)}
 
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
-        self.draw(frame, self.produces,
-                  {"u_front": "hybrid_front", "u_normal": "normal"},
-                  {"u_min_speed": float(p.min_speed),
-                   "u_depth_threshold": float(p.depth_threshold),
-                   "u_edge_depth": float(p.edge_depth), "u_edge_normal": float(p.edge_normal)},
-                  tiles=tile_list(frame, "moving"))
+        tiles = tile_list(frame, "moving")
+        first = {"u_min_speed": float(p.min_speed),
+                 "u_depth_threshold": float(p.depth_threshold)}
+        second = {"u_edge_depth": float(p.edge_depth), "u_edge_normal": float(p.edge_normal)}
+        if not reach_test(frame):
+            self._step = 0
+            return self.draw(frame, self.produces[:4],
+                             {"u_front": "hybrid_front", "u_normal": "normal"},
+                             {**first, **second}, tiles=tiles)
+        self._step = 1
+        self.draw(frame, ("mask_displacement", "mask_relative"), {"u_front": "hybrid_front"},
+                  first, tiles=tiles)
+        survivors = self._any.tiles(frame, "mask_displacement", "mask_survivors")
+        lists = frame.host["tile_lists"]
+        tl = lists.extra("survivors")
+        tl.set(tile_coords(survivors), FINE, frame.size)
+        frame.stats["survivor_tiles"] = tl.count
+        self._step = 2
+        self.draw(frame, ("mask_edge", "mask_edge_probe"),
+                  {"u_front": "hybrid_front", "u_normal": "normal",
+                   "u_displacement_mask": "mask_displacement", "u_relative": "mask_relative"},
+                  second, tiles=tl)
+
+
+class AnyTiles(FullscreenPass):
+    """Which FINE tiles of a uint mask hold a nonzero texel, read back (glsl/mask_any.frag:
+    SOURCE -> NAME_x strip -> NAME), as a GL-rows boolean map."""
+    fragment = "mask_any.frag"
+
+    def defines(self, frame: Frame):
+        return {"STAGE": self._stage}
+
+    def tiles(self, frame: Frame, source: str, name: str) -> np.ndarray:
+        for self._stage, src, dst in ((0, source, name + "_x"), (1, name + "_x", name)):
+            self.draw(frame, (dst,), {"u_source": src}, {"u_tile": FINE})
+        tex = frame.pool.get(name)
+        return np.frombuffer(tex.read(), np.uint8).reshape(tex.size[1], tex.size[0]) != 0
 
 
 def reach_test(frame: Frame) -> bool:
