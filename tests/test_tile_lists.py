@@ -178,3 +178,17 @@ def test_simple_tiles_change_nothing_where_no_edge_is_in_reach(ctx, monkeypatch)
             assert res.stats["simple_tiles"] > 50
     monkeypatch.undo()
     np.testing.assert_allclose(images[0], images[1], rtol=1e-6, atol=1e-7)
+
+
+def test_range_check_tiles_keep_survivors_far_from_edges(ctx, monkeypatch):
+    # A moving camera with edge thresholds few edges pass (the sky's silhouettes only): the
+    # ray mask is mostly the displacement test's survivors, many far from any edge, and the
+    # range check's tile list (edges in reach, or a survivor) must still hold their tiles.
+    scene = load_scene(str(CONFORMANCE / "vase_pan.toml"))
+    p = ParamSet()
+    p.set("hybrid.edge_depth", 10.0)
+    p.set("hybrid.edge_normal", 4.0)
+    tiled, a = render_buffers(ctx, scene, p, False, monkeypatch)
+    full, b = render_buffers(ctx, scene, p, True, monkeypatch)
+    assert tiled.stats["range_tiles"] > 0 and tiled.stats["masked_pixels"] > 100
+    assert a["ray_mask"] == b["ray_mask"]

@@ -18,6 +18,7 @@ all lie far from its own object's edges, and bound the others.
 from __future__ import annotations
 
 import numpy as np
+from scipy.ndimage import maximum_filter
 
 from .blur_common import max_radius_px
 from .frame import Frame
@@ -79,6 +80,7 @@ class SurfaceTests(FullscreenPass):
         tl = lists.extra("survivors")
         tl.set(tile_coords(survivors), FINE, frame.size)
         frame.stats["survivor_tiles"] = tl.count
+        frame.host["survivor_tiles"] = survivors
         self._step = 2
         self.draw(frame, ("mask_edge", "mask_edge_probe"),
                   {"u_front": "hybrid_front", "u_normal": "normal",
@@ -172,6 +174,20 @@ class RangeCheck(FullscreenPass):
 
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
+        tiles = tile_list(frame, "moving")
+        if reach_test(frame):
+            # Only the moving tiles with an edge within reach, or a survivor of the
+            # displacement test (masked as it is): the rest would find nothing.
+            ids = frame.pool.get("mask_edge_ids")
+            edges = np.frombuffer(ids.read(), np.uint32).reshape(
+                ids.size[1], ids.size[0], -1)[..., 0] != 0
+            r = -(-max_radius_px(frame) // FINE) + 1
+            in_reach = maximum_filter(edges, size=2 * r + 1, mode="constant", cval=False)
+            lists = frame.host["tile_lists"]
+            keep = lists.moving_tiles & (in_reach | frame.host["survivor_tiles"])
+            tiles = lists.extra("range_check")
+            tiles.set(tile_coords(keep), FINE, frame.size)
+            frame.stats["range_tiles"] = tiles.count
         self.draw(frame, self.produces,
                   {"u_displacement_mask": "mask_displacement", "u_edge_probe": "mask_edge_probe",
                    "u_front": "hybrid_front",
@@ -179,7 +195,7 @@ class RangeCheck(FullscreenPass):
                   {"u_min_speed": float(p.min_speed), "u_fine": FINE,
                    "u_relative_reach": float(p.relative_reach),
                    "u_max_reach": float(max_radius_px(frame))},
-                  tiles=tile_list(frame, "moving"))
+                  tiles=tiles)
 
 
 def raymask_passes() -> list:

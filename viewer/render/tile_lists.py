@@ -242,6 +242,7 @@ class SelectTiles(Pass):
         active = active_tiles(longest, FINE, 2.0 * max_radius_px(frame), p.tolerance)
         lists.shape = longest.shape
         lists.longest = longest
+        lists.moving_tiles = moving
         lists.moving.set(tile_coords(moving), FINE, frame.size)
         lists.active.set(tile_coords(active), FINE, frame.size)
         frame.host["tile_lists"] = lists
