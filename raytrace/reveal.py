@@ -208,8 +208,9 @@ def reveal(rs: RayScene, camera: Camera, t: float, pixels_ij, own_ids, layers: i
     if len(own_ids) != len(pixels_ij):
         raise ValueError(f"{len(pixels_ij)} pixels but {len(own_ids)} own ids")
     n = len(pixels_ij)
-    if primary_view(camera, t) is not None:
-        rs.static_view(primary_view(camera, t))     # made here, not by racing threads
+    view = primary_view(camera, t)
+    if view is not None:
+        rs.static_view(view)         # made here, not by racing threads
     threads = (os.cpu_count() or 1) if threads is None else max(1, int(threads))
     n_chunks = max(-(-n // max(1, max_chunk)),
                    min(threads * 4, n // max(1, min_chunk)) if threads > 1 else 1)

@@ -109,6 +109,22 @@ class AnyTiles(FullscreenPass):
         return np.frombuffer(tex.read(), np.uint8).reshape(tex.size[1], tex.size[0]) != 0
 
 
+def reach_tiles(frame: Frame) -> int:
+    """Tiles (Chebyshev) within which the range check's probes stay: they lie at most k px
+    (the blur limit) from their pixel, so within ceil(k / FINE) + 1 tiles of its tile."""
+    return -(-max_radius_px(frame) // FINE) + 1
+
+
+def edge_tiles(frame: Frame) -> np.ndarray:
+    """Which FINE tiles (GL rows) hold a ray-mask edge: mask_edge_ids read back once a
+    frame, for the range check's and the composite's tile classes."""
+    if "edge_tiles" not in frame.host:
+        ids = frame.pool.get("mask_edge_ids")
+        frame.host["edge_tiles"] = np.frombuffer(ids.read(), np.uint32).reshape(
+            ids.size[1], ids.size[0], -1)[..., 0] != 0
+    return frame.host["edge_tiles"]
+
+
 def reach_test(frame: Frame) -> bool:
     """Whether most tiles move (a moving camera), so that the mask passes take the
     shortcuts of the module's docstring: worth their read-backs and extra reductions there
@@ -149,9 +165,7 @@ class EdgeIdTiles(FullscreenPass):
 
     def execute(self, frame: Frame):
         first = {"u_probe": "mask_edge_probe"}
-        # A probe of the range check lies at most k px (the blur limit) from its pixel:
-        # within ceil(k / FINE) + 1 tiles of the pixel's tile.
-        uniforms = {"u_tile": FINE, "u_radius": -(-max_radius_px(frame) // FINE) + 1}
+        uniforms = {"u_tile": FINE, "u_radius": reach_tiles(frame)}
         if self._motion_tiles(frame):
             first["u_motion_tiles"] = "motion_tiles"
             uniforms["u_min_speed"] = moving_threshold(frame)
@@ -184,11 +198,9 @@ class RangeCheck(FullscreenPass):
         if reach_test(frame):
             # Only the moving tiles with an edge within reach, or a survivor of the
             # displacement test (masked as it is): the rest would find nothing.
-            ids = frame.pool.get("mask_edge_ids")
-            edges = np.frombuffer(ids.read(), np.uint32).reshape(
-                ids.size[1], ids.size[0], -1)[..., 0] != 0
-            r = -(-max_radius_px(frame) // FINE) + 1
-            in_reach = maximum_filter(edges, size=2 * r + 1, mode="constant", cval=False)
+            r = reach_tiles(frame)
+            in_reach = maximum_filter(edge_tiles(frame), size=2 * r + 1, mode="constant",
+                                      cval=False)
             lists = frame.host["tile_lists"]
             keep = lists.moving_tiles & (in_reach | frame.host["survivor_tiles"])
             tiles = lists.extra("range_check")

@@ -32,6 +32,7 @@ from .gpu_scene import MAX_LIGHTS, set_uniform
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
+from .raymask import edge_tiles
 from .tile_lists import TileList, tile_list
 
 PACKED = TexSpec(4, "f4")
@@ -226,11 +227,9 @@ class RevealTrace(Pass):
         st = reveal_state(frame)
         pixels, own = read_masked_pixels(frame)
         frame.write("ray_mask_tiles", mask_tiles(pixels, frame.size, max_radius_px(frame)))
-        # Which FINE tiles hold a mask edge (GL rows), read while the GPU is waited on
-        # anyway: the composite's tile classes (hybrid_composite.near_edges).
-        ids = frame.pool.get("mask_edge_ids")
-        frame.host["edge_tiles"] = np.frombuffer(ids.read(), np.uint32).reshape(
-            ids.size[1], ids.size[0], -1)[..., 0] != 0
+        # Which FINE tiles hold a mask edge, read while the GPU is waited on anyway (or
+        # already by the range check): the composite's tile classes.
+        edge_tiles(frame)
         t1 = time.perf_counter()
         result = None
         if len(pixels) and p.trace:
