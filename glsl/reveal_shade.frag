@@ -15,8 +15,8 @@
 
 noperspective in vec2 v_record; // this pixel's hit record (glsl/reveal_tiles.vert)
 uniform sampler2D u_hits;       // (face row, u, v, 1 + object id); 0 where no ray
-uniform sampler2D u_faces;      // 6 texels per face: corner c at 2c: (position, normal.x),
-                                // at 2c + 1: (normal.yz, uv)
+uniform sampler2D u_faces;      // 6 texels per face, FACES_PER_ROW faces a row: corner c at
+                                // 2c: (position, normal.x), at 2c + 1: (normal.yz, uv)
 uniform float u_key;
 uniform mat4 u_model;
 uniform mat4 u_view;
@@ -29,10 +29,6 @@ uniform vec3 u_background;
 layout(location = 0) out vec4 out_packed;
 layout(location = 1) out vec4 out_packed_color;
 
-vec4 face_texel(int i) {
-    int w = textureSize(u_faces, 0).x;
-    return texelFetch(u_faces, ivec2(i % w, i / w), 0);
-}
 
 void main() {
     vec4 hit = texelFetch(u_hits, ivec2(floor(v_record)), 0);
@@ -43,12 +39,14 @@ void main() {
         return;
     }
     float weight[3] = float[3](1.0 - hit.y - hit.z, hit.y, hit.z);
-    int base = int(hit.x) * 6;
+    int face = int(hit.x);
+    int row = face / FACES_PER_ROW;
+    ivec2 base = ivec2((face - row * FACES_PER_ROW) * 6, row);
     vec3 local = vec3(0.0), normal_local = vec3(0.0);
     vec2 uv = vec2(0.0);
     for (int c = 0; c < 3; ++c) {
-        vec4 a = face_texel(base + 2 * c);
-        vec4 b = face_texel(base + 2 * c + 1);
+        vec4 a = texelFetch(u_faces, base + ivec2(2 * c, 0), 0);
+        vec4 b = texelFetch(u_faces, base + ivec2(2 * c + 1, 0), 0);
         local += weight[c] * a.xyz;
         normal_local += weight[c] * vec3(a.w, b.xy);
         uv += weight[c] * b.zw;

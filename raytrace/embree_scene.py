@@ -31,6 +31,7 @@ from embreex.mesh_construction import TriangleMesh
 
 from viewer.scene import Scene, SceneObject
 
+from . import kernels
 from .attributes import SurfaceTable
 
 # Triangles that the exclusion scenes of one RayScene may hold together: a static scene of
@@ -102,22 +103,6 @@ def _box_corners(vertices: np.ndarray) -> np.ndarray:
     return np.array([[(lo, hi)[i >> k & 1][k] for k in range(3)] for i in range(8)])
 
 
-def _slab(o: np.ndarray, inv_d: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-          t0: np.ndarray, t1: np.ndarray) -> np.ndarray:
-    """Which rays o + s d meet the box [lo, hi] for some s in [t0, t1] (the slab test;
-    a zero direction component gives infinities, and the NaN of 0 * inf is ignored by
-    fmin/fmax, so a ray along a face counts as meeting it). o may be one row that every
-    ray shares (then lo - o is a scalar per axis)."""
-    near, far = t0.astype(np.float32), t1.astype(np.float32)
-    with np.errstate(invalid="ignore"):
-        for k in range(3):
-            a = (np.float32(lo[k]) - o[:, k]) * inv_d[:, k]
-            b = (np.float32(hi[k]) - o[:, k]) * inv_d[:, k]
-            near = np.fmax(near, np.fmin(a, b))
-            far = np.fmin(far, np.fmax(a, b))
-    return near <= far
-
-
 def _embree_run(scene: rtcs.EmbreeScene, origins: np.ndarray, dirs: np.ndarray,
                 tfar: np.ndarray) -> dict:
     # run() writes the hit distances into `dists` in place: always hand it a fresh array.
@@ -147,6 +132,9 @@ class RayScene:
 
         static = [o for o in scene.objects if not o.moving and len(o.mesh.faces)]
         self.static_ids = np.array([o.id for o in static], dtype=np.uint32)  # geomID -> id
+        self._is_static = np.zeros(max([o.id for o in scene.objects], default=0) + 1, bool)
+        self._is_static[self.static_ids] = True
+        self.cull = True      # the world-box test before each moving object (tests: off)
         # World-space triangles of each static object (its matrix does not depend on t).
         self._static_meshes = {
             o.id: (transform_points(o.matrix(0.0), np.asarray(o.mesh.vertices, np.float64))
@@ -230,15 +218,12 @@ class RayScene:
         best = limit.copy()           # the nearest hit so far bounds every later query
         queries = 0
 
-        def keep(rows, ids, r, dist):
-            """Take the hits of `rows` (None: all rays) nearer than the best so far."""
-            nearer = (r["geomID"] >= 0) & (dist < (best if rows is None else best[rows]))
-            w = np.flatnonzero(nearer) if rows is None else rows[nearer]
-            object_id[w] = ids if np.isscalar(ids) else ids[nearer]
-            prim_id[w] = r["primID"][nearer]
-            u[w] = r["u"][nearer]
-            v[w] = r["v"][nearer]
-            best[w] = dist[nearer]
+        def keep(rows, ids, r, s0=None):
+            """Take the hits of `rows` (None: all rays) nearer than the best so far;
+            ids: geomID + 1 -> object id."""
+            kernels.merge_hits(np.arange(n) if rows is None else rows, r["geomID"], r["primID"],
+                         r["u"], r["v"], r["tfar"], start if s0 is None else s0, best,
+                         object_id, prim_id, u, v, ids, -1)
 
         def take(a, rows):
             return a if rows is None else a[rows]
@@ -249,40 +234,34 @@ class RayScene:
         shared = n > 1 and tnear is None and bool((o32 == o32[0]).all())
         with np.errstate(divide="ignore"):
             inv_d = np.float32(1.0) / d32
+        no_ids = np.zeros(1, np.uint32)
         for obj, es in self.moving:
             m = obj.matrix(t)
             world = transform_points(m, self._corners[obj.id])
             pad = 1e-4 * float(np.ptp(world, axis=0).max()) + 1e-6
             # Rays that may hit the object's world box within [start, best]; a moving
             # excluded object is not traced at all.
-            meets = _slab(o32[:1] if shared else o32, inv_d, world.min(axis=0) - pad,
-                          world.max(axis=0) + pad, start, best)
-            rows = np.flatnonzero(meets & (excl != obj.id))
+            if self.cull:
+                rows = kernels.box_rows(o32, inv_d, shared, world.min(axis=0) - pad,
+                                  world.max(axis=0) + pad, start, best, excl, obj.id)
+            else:
+                rows = np.flatnonzero(excl != obj.id)
             if not rows.size:
                 continue
             inv = np.linalg.inv(m).astype(np.float32)
-            lo = (np.broadcast_to(transform_points(inv, o32[:1]), (rows.size, 3)) if shared
-                  else transform_points(inv, np.take(o32, rows, axis=0)))
             # Not renormalised, so t stays in world units; a pure translation keeps them.
-            dr = np.take(d32, rows, axis=0)
-            ld = dr if np.array_equal(inv[:3, :3], np.eye(3)) else transform_vectors(inv, dr)
-            s0 = np.take(start, rows)
-            r = _embree_run(es, lo, ld, np.take(best, rows) - s0)
+            lo, ld, tfar = kernels.local_rays(o32, d32, rows, shared, inv,
+                                        not np.array_equal(inv[:3, :3], np.eye(3)), start, best)
+            r = _embree_run(es, lo, ld, tfar)
             queries += rows.size
-            dist = s0 + r["tfar"]
-            hit = (r["geomID"] >= 0) & (dist < np.take(best, rows))
-            w = rows[hit]
-            object_id[w] = obj.id
-            prim_id[w] = r["primID"][hit]
-            u[w] = r["u"][hit]
-            v[w] = r["v"][hit]
-            best[w] = dist[hit]
+            kernels.merge_hits(rows, r["geomID"], r["primID"], r["u"], r["v"], r["tfar"], start,
+                         best, object_id, prim_id, u, v, no_ids, obj.id)
 
         restarts = unresolved = 0
         rows = None                   # the rays left for the static scene; None = all
         # geomID + 1 -> object id, with geomID -1 (a miss) -> 0.
         id_of = np.r_[np.uint32(0), self.static_ids]
-        static_own = np.isin(excl, self.static_ids)
+        static_own = kernels.member(excl, self._is_static)
         if self._static is not None and excl.any():
             # Rays whose own object is static: into the scene without it, where one exists.
             static_rows = np.flatnonzero(static_own)
@@ -298,7 +277,7 @@ class RayScene:
                 s0 = start[sel]
                 r = _embree_run(es, o32[sel], d32[sel], best[sel] - s0)
                 queries += sel.size
-                keep(sel, ex_ids[r["geomID"] + 1], r, s0 + r["tfar"])
+                keep(sel, ex_ids, r)
                 passed[sel] = True
             if passed.any():
                 rows = np.flatnonzero(~passed)
@@ -307,20 +286,15 @@ class RayScene:
             # the rays that pass no static object of their own.
             hits = self.static_view(view)
             left = np.arange(n) if rows is None else rows
-            use = left[~static_own[left]]
-            keys = np.asarray(pixels, dtype=np.int64).reshape(n)[use]
-            new = ~hits.known[keys]
-            if new.any():
-                r_new, k_new = use[new], keys[new]
+            use, keys, r_new, k_new, rows = kernels.view_split(
+                left, static_own, np.asarray(pixels, dtype=np.int64).reshape(n), hits.known)
+            if r_new.size:
                 s0 = start[r_new]
                 r = _embree_run(self._static, o32[r_new], d32[r_new], limit[r_new] - s0)
                 queries += r_new.size
                 hits.store(k_new, id_of[r["geomID"] + 1], r, s0 + r["tfar"])
-            nearer = (hits.object_id[keys] != 0) & (hits.distance[keys] < best[use])
-            w, k = use[nearer], keys[nearer]
-            object_id[w], prim_id[w] = hits.object_id[k], hits.prim_id[k]
-            u[w], v[w], best[w] = hits.u[k], hits.v[k], hits.distance[k]
-            rows = left[static_own[left]]
+            kernels.view_merge(use, keys, hits.object_id, hits.prim_id, hits.u, hits.v,
+                         hits.distance, best, object_id, prim_id, u, v)
         if self._static is not None and (rows is None or rows.size):
             org, offset = (o_start if rows is None else o_start[rows]), start.copy()
             for depth in range(max_restarts + 1):
@@ -333,7 +307,7 @@ class RayScene:
                 own = (ids == take(excl, rows)) & (ids != 0)
                 if own.any():
                     r["geomID"][own] = -1
-                keep(rows, ids, r, dist)
+                keep(rows, id_of, r, offset)
                 if not own.any():
                     break
                 if depth == max_restarts:

@@ -584,7 +584,7 @@ def test_box_culling_changes_no_hit(monkeypatch):
     o, d = cam.rays(0.05, ii.ravel(), jj.ravel())
     own = np.random.default_rng(2).integers(0, 5, len(o))
     culled = rs.intersect(o, d, 0.05, own)
-    monkeypatch.setattr(es, "_slab", lambda o, *a: np.ones(len(o), bool))
+    rs.cull = False
     full = rs.intersect(o, d, 0.05, own)
     assert culled.queries < full.queries
     for name in ("object_id", "prim_id", "u", "v", "distance"):
@@ -593,17 +593,25 @@ def test_box_culling_changes_no_hit(monkeypatch):
 
 
 def test_slab_hand_values():
-    import raytrace.embree_scene as es
-    o = np.array([[0, 0, 5], [0, 0, 5], [3, 0, 5], [0.5, 0, 5]], np.float32)
-    d = np.array([[0, 0, -1], [0, 0, 1], [0, 0, -1], [0, 0, -1]], np.float32)
+    from raytrace.kernels import box_rows
+    o = np.array([[0, 0, 5], [0, 0, 5], [3, 0, 5], [0.5, 0, 5], [0.99, 0, 5]], np.float32)
+    d = np.array([[0, 0, -1], [0, 0, 1], [0, 0, -1], [0, 0, -1], [0, 0, -1]], np.float32)
     with np.errstate(divide="ignore"):
-        inv_d = 1.0 / d
+        inv_d = np.float32(1.0) / d
     lo, hi = np.array([-1.0, -1, -1]), np.array([1.0, 1, 1])
-    t0, t1 = np.zeros(4), np.full(4, np.inf)
-    # Towards the box, away from it, beside it, along the x = 0.5 line through it.
-    np.testing.assert_array_equal(es._slab(o, inv_d, lo, hi, t0, t1), [True, False, False, True])
-    # The box lies 4 to 6 along the first ray: a far limit of 3.9 misses it.
-    assert not es._slab(o[:1], inv_d[:1], lo, hi, t0[:1], np.array([3.9]))[0]
+    t0, t1 = np.zeros(5), np.full(5, np.inf)
+    excl = np.zeros(5, np.uint32)
+    # Towards the box, away from it, beside it, along the x = 0.5 line through it, just
+    # inside its x = 1 face.
+    np.testing.assert_array_equal(box_rows(o, inv_d, False, lo, hi, t0, t1, excl, 7),
+                                  [0, 3, 4])
+    # The box lies 4 to 6 along the first ray: a far limit of 3.9 misses it; an excluded
+    # ray is dropped; every ray from the first origin (all but the second meet it).
+    assert not len(box_rows(o[:1], inv_d[:1], False, lo, hi, t0[:1], np.array([3.9]),
+                            excl[:1], 7))
+    np.testing.assert_array_equal(box_rows(o, inv_d, False, lo, hi, t0, t1,
+                                           np.array([7, 0, 0, 0, 0], np.uint32), 7), [3, 4])
+    np.testing.assert_array_equal(box_rows(o, inv_d, True, lo, hi, t0, t1, excl, 7), [0, 2, 3, 4])
 
 
 def test_large_views_keep_no_static_hits(monkeypatch):

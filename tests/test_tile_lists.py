@@ -147,16 +147,32 @@ def test_resize_between_frames_gives_a_fresh_renderers_frame(ctx):
         fresh.release()
 
 
-@pytest.mark.parametrize("top", [50, 10**8])
-def test_cell_compaction_is_np_unique(top):
-    # reveal_shade's (object, tile) cells: the presence-table compaction, and its np.unique
-    # fallback for sparse large values, give np.unique's cells and inverse.
-    from viewer.render.reveal_pass import _compact
-    values = np.random.default_rng(top).integers(0, top, 3000)
-    cells, inverse = _compact(values)
-    want_cells, want_inverse = np.unique(values, return_inverse=True)
-    np.testing.assert_array_equal(cells, want_cells)
-    np.testing.assert_array_equal(inverse, want_inverse)
+@pytest.mark.parametrize("seed", range(3))
+def test_record_blocks_match_a_brute_force_packing(seed):
+    # reveal_shade's hit records: one 8 x 8 block per (key, screen tile) in order of
+    # (key, tile row, tile column), 4 blocks a row here, each pixel's record at its
+    # offset within its tile; everything else zero.
+    from raytrace.kernels import pack_blocks
+    rng = np.random.default_rng(seed)
+    n, tile, per_row = 500, 8, 4
+    flat = rng.choice(70 * 50, n, replace=False)
+    gx, gy = flat % 70, flat // 70
+    key = rng.choice([1, 3, 4, 9], n)
+    face = rng.integers(-1, 1000, n)
+    bary = rng.uniform(0, 1, (n, 2)).astype(np.float32)
+    records, block_key, tiles = pack_blocks(gx, gy, key, face, bary, tile, per_row)
+    cells = sorted({(int(k), int(y) // tile, int(x) // tile) for k, x, y in zip(key, gx, gy)})
+    np.testing.assert_array_equal(block_key, [c[0] for c in cells])
+    np.testing.assert_array_equal(tiles, [(c[2], c[1]) for c in cells])
+    want = np.zeros(records.shape, np.float32)
+    assert records.shape == (-(-len(cells) // per_row) * tile, per_row * tile, 4)
+    index = {c: b for b, c in enumerate(cells)}
+    for k in range(n):
+        b = index[(key[k], gy[k] // tile, gx[k] // tile)]
+        y = (b // per_row) * tile + gy[k] % tile
+        x = (b % per_row) * tile + gx[k] % tile
+        want[y, x] = (max(face[k], 0), bary[k, 0], bary[k, 1], key[k])
+    np.testing.assert_array_equal(records, want)
 
 
 def test_simple_tiles_change_nothing_where_no_edge_is_in_reach(ctx, monkeypatch):

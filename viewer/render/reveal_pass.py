@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from raytrace import RayScene
+from raytrace import RayScene, kernels
 
 from ..conventions import to_image
 from .blur_common import max_radius_px
@@ -40,8 +40,10 @@ MAX_LAYERS = 2
 STATE_KEY = "hybrid_reveal"
 
 
-FACE_TEXTURE_WIDTH = 4096
 TEXELS_PER_FACE = 6      # per corner: (position, normal.x), (normal.yz, uv)
+# Whole faces to a row of the face texture (4092 texels wide): a fragment finds its face's
+# six texels with one integer division, not six (llvmpipe divides lane by lane).
+FACES_PER_ROW = 682
 FACE_UNIT = 7
 RECORD_UNIT = 6
 # Tile side for reveal_shade's draws: finer than the tile lists' FINE, so fewer fragments
@@ -63,14 +65,14 @@ class RevealState:
 
     def face_texture(self) -> moderngl.Texture:
         if self._faces is None:
-            corners = self.rays.surfaces.gpu_corners().reshape(-1, 4)
-            if len(corners) // TEXELS_PER_FACE >= 1 << 24:
+            corners = self.rays.surfaces.gpu_corners().reshape(-1, TEXELS_PER_FACE, 4)
+            if len(corners) >= 1 << 24:
                 raise ValueError("the hybrid reveal shades at most 2^24 faces")
-            w = FACE_TEXTURE_WIDTH
-            rows = max(1, -(-len(corners) // w))
-            data = np.zeros((rows * w, 4), np.float32)
+            rows = max(1, -(-len(corners) // FACES_PER_ROW))
+            data = np.zeros((rows * FACES_PER_ROW, TEXELS_PER_FACE, 4), np.float32)
             data[:len(corners)] = corners
-            self._faces = self.ctx.texture((w, rows), 4, data.tobytes(), dtype="f4")
+            self._faces = self.ctx.texture((FACES_PER_ROW * TEXELS_PER_FACE, rows), 4,
+                                           data.tobytes(), dtype="f4")
             self._faces.filter = (moderngl.NEAREST, moderngl.NEAREST)
         return self._faces
 
@@ -158,24 +160,11 @@ def mask_tiles(pixels: np.ndarray, size: tuple[int, int], tile: int) -> np.ndarr
 BLOCKS_PER_ROW = 256     # record blocks (SHADE_TILE x SHADE_TILE) per row of the texture
 
 
-def _compact(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """np.unique(values, return_inverse=True) for small non-negative ints, without sorting
-    the values: a presence table over 0..max and its running count (O(n + max); the
-    (object, tile) cells number tens of thousands, the pixels up to a few hundred
-    thousand). Falls back to np.unique where the table would be large."""
-    top = int(values.max()) + 1
-    if top > 4 * len(values) + (1 << 20):
-        return np.unique(values, return_inverse=True)
-    present = np.zeros(top, bool)
-    present[values] = True
-    rank = np.cumsum(present, dtype=np.int64)
-    return np.flatnonzero(present), rank[values] - 1
-
-
 def layer_hits(pixels: np.ndarray, layer, height: int) -> LayerHits | None:
     """The traced rows of a layer as hit records (face row, u, v, 1 + object id), one
     SHADE_TILE x SHADE_TILE block per (object, screen tile) holding its pixels, blocks in
-    rows of BLOCKS_PER_ROW; None when nothing was traced."""
+    rows of BLOCKS_PER_ROW, sorted by object: each object's draw covers only its own run
+    of tiles (raytrace.kernels.pack_blocks); None when nothing was traced."""
     rows = np.flatnonzero(layer.traced)
     if not len(rows):
         return None
@@ -184,31 +173,16 @@ def layer_hits(pixels: np.ndarray, layer, height: int) -> LayerHits | None:
     def pick(a):
         return a if every else np.take(a, rows, axis=0)
     px = pick(pixels)
-    ids = pick(layer.object_id).astype(np.int64)
-    gx = px[:, 0].astype(np.int64)
-    gy = (height - 1 - px[:, 1]).astype(np.int64)        # GL rows
-    # Per key (object), the screen tiles holding its pixels, sorted by key: each key's
-    # draw covers only its own run of tiles.
-    tx, ty = gx // SHADE_TILE, gy // SHADE_TILE
-    cols = int(tx.max()) + 1
-    cells_per_key = cols * (int(ty.max()) + 1)
-    cells, block = _compact(ids * cells_per_key + ty * cols + tx)
-    key_of, cell = np.divmod(cells, cells_per_key)
-    tiles = np.stack([cell % cols, cell // cols], axis=1)
-    keys, first, count = np.unique(key_of, return_index=True, return_counts=True)
-    # Pixel (gx, gy) of block b lands at block b's corner plus its offset in its tile.
-    n_rows = -(-len(cells) // BLOCKS_PER_ROW)
-    records = np.zeros((n_rows * SHADE_TILE, BLOCKS_PER_ROW * SHADE_TILE, 4), np.float32)
-    rx = (block % BLOCKS_PER_ROW) * SHADE_TILE + gx - tx * SHADE_TILE
-    ry = (block // BLOCKS_PER_ROW) * SHADE_TILE + gy - ty * SHADE_TILE
-    rec = np.empty((len(rows), 4), np.float32)
-    rec[:, 0] = np.maximum(pick(layer.face_index), 0)
-    rec[:, 1:3] = pick(layer.barycentrics)
-    rec[:, 3] = ids
-    rec[:, 3] += 1.0
-    records.reshape(-1, 4)[ry * records.shape[1] + rx] = rec     # one scatter of rows
-    return LayerHits(records, [(int(k) + 1, int(f), int(c))
-                               for k, f, c in zip(keys, first, count)], tiles)
+    key = pick(layer.object_id).astype(np.int64) + 1
+    gy = height - 1 - px[:, 1]              # GL rows
+    records, block_key, tiles = kernels.pack_blocks(
+        px[:, 0].astype(np.int64), gy.astype(np.int64), key, pick(layer.face_index),
+        pick(layer.barycentrics), SHADE_TILE, BLOCKS_PER_ROW)
+    cuts = np.flatnonzero(np.diff(block_key)) + 1
+    first = np.r_[0, cuts]
+    count = np.diff(np.r_[first, len(block_key)])
+    return LayerHits(records, [(int(block_key[f]), int(f), int(c))
+                               for f, c in zip(first, count)], tiles)
 
 
 class RevealTrace(Pass):
@@ -282,7 +256,7 @@ class RevealShade(FullscreenPass):
         self.clear_tiles = ClearTiles()
 
     def defines(self, frame: Frame):
-        return {"MAX_LIGHTS": MAX_LIGHTS}
+        return {"MAX_LIGHTS": MAX_LIGHTS, "FACES_PER_ROW": FACES_PER_ROW}
 
     def outputs(self, frame: Frame):
         return {n: PACKED for n in self.produces}

@@ -1,0 +1,235 @@
+"""Compiled loops (numba) for the reveal's per-ray bookkeeping around Embree's `run`.
+
+The reveal traces ten to a hundred thousand rays a frame, and Embree itself takes about a
+third of the host time: the rest was chains of numpy operations over those rays (box
+culling, gathers, transforms, hit merges, record packing), each a full pass over memory
+and a Python call. Each function here does one such chain in a single loop. They follow
+the numpy expressions they replace operation for operation, in the same precision
+(float32 where the rays are float32), so the hits do not change; tests/test_raytrace.py
+checks them against the numpy forms.
+
+Compiled once per machine (cache=True, next to this file or in numba's user cache) and
+run without the GIL (nogil=True), so the reveal's worker threads run them side by side.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+_JIT = dict(cache=True, nogil=True)
+
+
+# A direction component of 0 gives an infinite inverse; clamped to this, the slab test
+# needs no NaN rule (0 * inf) and its loop vectorises. It may then drop a ray lying
+# exactly in a face plane of the box: the caller pads the box, so such a ray cannot hit.
+_BIG = np.float32(1e30)
+
+
+@njit(**_JIT)
+def box_rows(o, inv_d, shared, lo, hi, start, best, excl, skip_id):
+    """Rows of the rays o + s d that meet the box [lo, hi] for some s in [start, best]
+    and are not excluded (excl != skip_id): the slab test in float32. shared: every ray
+    starts at o[0]."""
+    n = inv_d.shape[0]
+    meets = np.empty(n, np.bool_)
+    if shared:
+        l0, l1, l2 = (np.float32(lo[0]) - o[0, 0], np.float32(lo[1]) - o[0, 1],
+                      np.float32(lo[2]) - o[0, 2])
+        h0, h1, h2 = (np.float32(hi[0]) - o[0, 0], np.float32(hi[1]) - o[0, 1],
+                      np.float32(hi[2]) - o[0, 2])
+    for i in range(n):
+        if not shared:
+            l0, l1, l2 = (np.float32(lo[0]) - o[i, 0], np.float32(lo[1]) - o[i, 1],
+                          np.float32(lo[2]) - o[i, 2])
+            h0, h1, h2 = (np.float32(hi[0]) - o[i, 0], np.float32(hi[1]) - o[i, 1],
+                          np.float32(hi[2]) - o[i, 2])
+        near = np.float32(start[i])
+        far = np.float32(best[i])
+        x = min(max(inv_d[i, 0], -_BIG), _BIG)
+        a, b = l0 * x, h0 * x
+        near, far = max(near, min(a, b)), min(far, max(a, b))
+        x = min(max(inv_d[i, 1], -_BIG), _BIG)
+        a, b = l1 * x, h1 * x
+        near, far = max(near, min(a, b)), min(far, max(a, b))
+        x = min(max(inv_d[i, 2], -_BIG), _BIG)
+        a, b = l2 * x, h2 * x
+        near, far = max(near, min(a, b)), min(far, max(a, b))
+        meets[i] = (near <= far) & (excl[i] != skip_id)
+    return np.flatnonzero(meets)
+
+
+@njit(inline="always")
+def _xform(m, x, y, z, w):
+    # transform_points' float32 order: ((m0 x + m1 y) + m2 z) + w m3, row by row.
+    return (m[0] * x + m[1] * y + m[2] * z + w * m[3])
+
+
+@njit(**_JIT)
+def local_rays(o, d, rows, shared, inv, rotate, start, best):
+    """The rays `rows` carried into an object's space by `inv` (float32 4x4, column
+    vectors; directions not renormalised, and left as they are when not `rotate`), and
+    their Embree far limits float32(best - start)."""
+    m = rows.shape[0]
+    lo = np.empty((m, 3), np.float32)
+    ld = np.empty((m, 3), np.float32)
+    tfar = np.empty(m, np.float32)
+    one, zero = np.float32(1.0), np.float32(0.0)
+    for k in range(m):
+        i = rows[k]
+        r = 0 if shared else i
+        if k == 0 or not shared:
+            ox, oy, oz = o[r, 0], o[r, 1], o[r, 2]
+            px = _xform(inv[0], ox, oy, oz, one)
+            py = _xform(inv[1], ox, oy, oz, one)
+            pz = _xform(inv[2], ox, oy, oz, one)
+        lo[k, 0], lo[k, 1], lo[k, 2] = px, py, pz
+        dx, dy, dz = d[i, 0], d[i, 1], d[i, 2]
+        if rotate:
+            ld[k, 0] = _xform(inv[0], dx, dy, dz, zero)
+            ld[k, 1] = _xform(inv[1], dx, dy, dz, zero)
+            ld[k, 2] = _xform(inv[2], dx, dy, dz, zero)
+        else:
+            ld[k, 0], ld[k, 1], ld[k, 2] = dx, dy, dz
+        tfar[k] = np.float32(best[i] - start[i])
+    return lo, ld, tfar
+
+
+@njit(**_JIT)
+def merge_hits(rows, geom, prim, hu, hv, htfar, start, best, object_id, prim_id, u, v,
+               ids, single_id):
+    """Take the hits of rays `rows` (Embree's output for them) that lie nearer than the
+    best so far, in place. The object hit is single_id where it is >= 0, else
+    ids[geomID + 1]. Returns how many were taken."""
+    taken = 0
+    for k in range(rows.shape[0]):
+        g = geom[k]
+        if g < 0:
+            continue
+        i = rows[k]
+        dist = start[i] + htfar[k]
+        if dist < best[i]:
+            object_id[i] = single_id if single_id >= 0 else ids[g + 1]
+            prim_id[i] = prim[k]
+            u[i] = hu[k]
+            v[i] = hv[k]
+            best[i] = dist
+            taken += 1
+    return taken
+
+
+@njit(**_JIT)
+def member(values, table):
+    """table[values] where a value is inside the table, else False: np.isin for small
+    non-negative ids with a boolean table over them."""
+    n = values.shape[0]
+    out = np.zeros(n, np.bool_)
+    for i in range(n):
+        x = values[i]
+        if x < table.shape[0]:
+            out[i] = table[x]
+    return out
+
+
+@njit(**_JIT)
+def view_split(left, static_own, pixels, known):
+    """Of the rays `left`, those without a static own object (`use`) with their view
+    pixels (`keys`), the ones of those whose static hit is not yet known (rays and
+    pixels), and the rays with a static own object (`rest`)."""
+    n = left.shape[0]
+    use = np.empty(n, np.int64)
+    keys = np.empty(n, np.int64)
+    new_rows = np.empty(n, np.int64)
+    new_keys = np.empty(n, np.int64)
+    rest = np.empty(n, np.int64)
+    a = b = c = 0
+    for k in range(n):
+        i = left[k]
+        if static_own[i]:
+            rest[c] = i
+            c += 1
+            continue
+        key = pixels[i]
+        use[a] = i
+        keys[a] = key
+        a += 1
+        if not known[key]:
+            new_rows[b] = i
+            new_keys[b] = key
+            b += 1
+    return use[:a], keys[:a], new_rows[:b], new_keys[:b], rest[:c]
+
+
+@njit(**_JIT)
+def view_merge(use, keys, v_id, v_prim, v_u, v_v, v_dist, best, object_id, prim_id, u, v):
+    """The view's kept static hits for rays `use` (pixels `keys`) where nearer than the
+    best so far, in place."""
+    for k in range(use.shape[0]):
+        i, key = use[k], keys[k]
+        if v_id[key] != 0 and v_dist[key] < best[i]:
+            object_id[i] = v_id[key]
+            prim_id[i] = v_prim[key]
+            u[i] = v_u[key]
+            v[i] = v_v[key]
+            best[i] = v_dist[key]
+
+
+@njit(**_JIT)
+def pack_blocks(gx, gy, key, face, bary, tile, blocks_per_row):
+    """Hit records in blocks (viewer/render/reveal_pass.py layer_hits): for ray k at GL
+    pixel (gx, gy) with key (1 + object id; small non-negative ints), face row and
+    barycentrics, the record (max(face, 0), u, v, key) in one tile x tile block per
+    (key, screen tile) holding its pixels. Blocks are numbered in order of (key, tile
+    row, tile column), blocks_per_row to a row of the record texture.
+    Returns (records (rows, blocks_per_row * tile, 4) float32, each block's key, each
+    block's tile (tx, ty))."""
+    n = gx.shape[0]
+    cols = rows_t = top = 0
+    for k in range(n):
+        cols = max(cols, gx[k] // tile + 1)
+        rows_t = max(rows_t, gy[k] // tile + 1)
+        top = max(top, key[k])
+    # The keys present, ranked: the (key, tile) table has a row per present key only.
+    rank = np.full(top + 1, -1, np.int64)
+    for k in range(n):
+        rank[key[k]] = 0
+    n_keys = 0
+    for c in range(top + 1):
+        if rank[c] == 0:
+            rank[c] = n_keys
+            n_keys += 1
+    per_key = cols * rows_t
+    cell = np.empty(n, np.int64)
+    block_of = np.full(n_keys * per_key, -1, np.int64)
+    for k in range(n):
+        c = rank[key[k]] * per_key + (gy[k] // tile) * cols + gx[k] // tile
+        cell[k] = c
+        block_of[c] = 0
+    blocks = 0                       # each present cell's block number, in cell order
+    for c in range(block_of.shape[0]):
+        if block_of[c] == 0:
+            block_of[c] = blocks
+            blocks += 1
+    keys = np.empty(n_keys, np.int64)
+    for c in range(top + 1):
+        if rank[c] >= 0:
+            keys[rank[c]] = c
+    block_key = np.empty(blocks, np.int64)
+    block_tile = np.empty((blocks, 2), np.int64)
+    for c in range(block_of.shape[0]):
+        b = block_of[c]
+        if b >= 0:
+            block_key[b] = keys[c // per_key]
+            r = c % per_key
+            block_tile[b, 0] = r % cols
+            block_tile[b, 1] = r // cols
+    n_rows = (blocks + blocks_per_row - 1) // blocks_per_row
+    records = np.zeros((n_rows * tile, blocks_per_row * tile, 4), np.float32)
+    for k in range(n):
+        b = block_of[cell[k]]
+        rx = (b % blocks_per_row) * tile + gx[k] % tile
+        ry = (b // blocks_per_row) * tile + gy[k] % tile
+        records[ry, rx, 0] = max(face[k], 0)
+        records[ry, rx, 1] = bary[k, 0]
+        records[ry, rx, 2] = bary[k, 1]
+        records[ry, rx, 3] = key[k]
+    return records, block_key, block_tile
