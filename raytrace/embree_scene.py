@@ -230,8 +230,14 @@ class RayScene:
 
         o_start = o + d * start[:, None] if tnear is not None else o
         o32, d32 = o_start.astype(np.float32), d.astype(np.float32)
-        # Primary rays share the eye: carry one point into each object's space, not n.
-        shared = n > 1 and tnear is None and bool((o32 == o32[0]).all())
+        # The box test takes [start, best] along the rays from their own origins, not
+        # from o_start (Embree's origins moved to tnear). Primary rays share the eye:
+        # box-test from one point, and without a tnear carry one point into each
+        # object's space, not n.
+        from_eye = n > 1 and bool((o == o[0]).all())
+        shared = from_eye and tnear is None
+        o_box = o[:1] if from_eye else o
+        o_box = o_box.astype(np.float32) if tnear is not None or from_eye else o32
         with np.errstate(divide="ignore"):
             inv_d = np.float32(1.0) / d32
         no_ids = np.zeros(1, np.uint32)
@@ -242,8 +248,8 @@ class RayScene:
             # Rays that may hit the object's world box within [start, best]; a moving
             # excluded object is not traced at all.
             if self.cull:
-                rows = kernels.box_rows(o32, inv_d, shared, world.min(axis=0) - pad,
-                                  world.max(axis=0) + pad, start, best, excl, obj.id)
+                rows = kernels.box_rows(o_box, inv_d, from_eye, world.min(axis=0) - pad,
+                                        world.max(axis=0) + pad, start, best, excl, obj.id)
             else:
                 rows = np.flatnonzero(excl != obj.id)
             if not rows.size:

@@ -174,19 +174,21 @@ def view_merge(use, keys, v_id, v_prim, v_u, v_v, v_dist, best, object_id, prim_
 
 
 @njit(**_JIT)
-def pack_blocks(gx, gy, key, face, bary, tile, blocks_per_row):
+def pack_blocks(gx, gy, key, face, bary, tile_bits, row_bits):
     """Hit records in blocks (viewer/render/reveal_pass.py layer_hits): for ray k at GL
     pixel (gx, gy) with key (1 + object id; small non-negative ints), face row and
     barycentrics, the record (max(face, 0), u, v, key) in one tile x tile block per
-    (key, screen tile) holding its pixels. Blocks are numbered in order of (key, tile
-    row, tile column), blocks_per_row to a row of the record texture.
-    Returns (records (rows, blocks_per_row * tile, 4) float32, each block's key, each
+    (key, screen tile) holding its pixels, tile = 2^tile_bits. Blocks are numbered in
+    order of (key, tile row, tile column), 2^row_bits to a row of the record texture
+    (powers of two: shifts and masks, not divisions, per pixel).
+    Returns (records (rows, 2^row_bits * tile, 4) float32, each block's key, each
     block's tile (tx, ty))."""
     n = gx.shape[0]
+    tile, per_row = 1 << tile_bits, 1 << row_bits
     cols = rows_t = top = 0
     for k in range(n):
-        cols = max(cols, gx[k] // tile + 1)
-        rows_t = max(rows_t, gy[k] // tile + 1)
+        cols = max(cols, (gx[k] >> tile_bits) + 1)
+        rows_t = max(rows_t, (gy[k] >> tile_bits) + 1)
         top = max(top, key[k])
     # The keys present, ranked: the (key, tile) table has a row per present key only.
     rank = np.full(top + 1, -1, np.int64)
@@ -201,35 +203,56 @@ def pack_blocks(gx, gy, key, face, bary, tile, blocks_per_row):
     cell = np.empty(n, np.int64)
     block_of = np.full(n_keys * per_key, -1, np.int64)
     for k in range(n):
-        c = rank[key[k]] * per_key + (gy[k] // tile) * cols + gx[k] // tile
+        c = rank[key[k]] * per_key + (gy[k] >> tile_bits) * cols + (gx[k] >> tile_bits)
         cell[k] = c
         block_of[c] = 0
+    keys = np.empty(n_keys, np.int64)
+    for c in range(top + 1):
+        if rank[c] >= 0:
+            keys[rank[c]] = c
     blocks = 0                       # each present cell's block number, in cell order
     for c in range(block_of.shape[0]):
         if block_of[c] == 0:
             block_of[c] = blocks
             blocks += 1
-    keys = np.empty(n_keys, np.int64)
-    for c in range(top + 1):
-        if rank[c] >= 0:
-            keys[rank[c]] = c
     block_key = np.empty(blocks, np.int64)
     block_tile = np.empty((blocks, 2), np.int64)
-    for c in range(block_of.shape[0]):
-        b = block_of[c]
-        if b >= 0:
-            block_key[b] = keys[c // per_key]
-            r = c % per_key
-            block_tile[b, 0] = r % cols
-            block_tile[b, 1] = r // cols
-    n_rows = (blocks + blocks_per_row - 1) // blocks_per_row
-    records = np.zeros((n_rows * tile, blocks_per_row * tile, 4), np.float32)
+    for q in range(n_keys):
+        for r in range(per_key):
+            b = block_of[q * per_key + r]
+            if b >= 0:
+                block_key[b] = keys[q]
+                block_tile[b, 0] = r % cols
+                block_tile[b, 1] = r // cols
+    n_rows = (blocks + per_row - 1) >> row_bits
+    records = np.zeros((n_rows * tile, per_row * tile, 4), np.float32)
+    mask = tile - 1
     for k in range(n):
         b = block_of[cell[k]]
-        rx = (b % blocks_per_row) * tile + gx[k] % tile
-        ry = (b // blocks_per_row) * tile + gy[k] % tile
+        rx = ((b & (per_row - 1)) << tile_bits) + (gx[k] & mask)
+        ry = ((b >> row_bits) << tile_bits) + (gy[k] & mask)
         records[ry, rx, 0] = max(face[k], 0)
         records[ry, rx, 1] = bary[k, 0]
         records[ry, rx, 2] = bary[k, 1]
         records[ry, rx, 3] = key[k]
     return records, block_key, block_tile
+
+
+@njit(**_JIT)
+def layer_columns(object_id, distance, u, v, origin, direction, cos, background_depth):
+    """A revealed layer's view depth (distance * cos where hit, else background_depth),
+    world position (origin + distance * direction where hit, else 0) and (u, v)."""
+    n = object_id.shape[0]
+    depth = np.empty(n)
+    world = np.zeros((n, 3))
+    bary = np.empty((n, 2), np.float32)
+    for i in range(n):
+        bary[i, 0], bary[i, 1] = u[i], v[i]
+        if object_id[i] != 0:
+            t = distance[i]
+            depth[i] = t * cos[i]
+            for c in range(3):
+                world[i, c] = origin[i, c] + direction[i, c] * t
+        else:
+            depth[i] = background_depth
+    return depth, world, bary

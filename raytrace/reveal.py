@@ -22,6 +22,7 @@ import numpy as np
 from viewer.camera import Camera
 from viewer.conventions import BACKGROUND_DEPTH
 
+from . import kernels
 from .attributes import LocalSurface, SurfaceTable
 from .embree_scene import RayScene
 
@@ -84,18 +85,12 @@ class RevealResult:
 
 def _layer(rs: RayScene, hits, origin, direction, cos, traced) -> RevealLayer:
     """The layer of the traced rays (compact: one row per traced ray)."""
-    hit = hits.hit
-    dist = np.where(hit, hits.distance, 0.0)
-    return RevealLayer(
-        traced=traced,
-        object_id=hits.object_id,
-        prim_id=hits.prim_id,
-        barycentrics=np.stack([hits.u, hits.v], axis=1),
-        distance=hits.distance,
-        # The rays are unit length from the eye: view depth = distance * cos(ray, forward).
-        depth=np.where(hit, dist * cos, BACKGROUND_DEPTH),
-        world_position=(origin + direction * dist[:, None]) * hit[:, None],
-        table=rs.surfaces)
+    # The rays are unit length from the eye: view depth = distance * cos(ray, forward).
+    depth, world, bary = kernels.layer_columns(hits.object_id, hits.distance, hits.u, hits.v,
+                                               origin, direction, cos, BACKGROUND_DEPTH)
+    return RevealLayer(traced=traced, object_id=hits.object_id, prim_id=hits.prim_id,
+                       barycentrics=bary, distance=hits.distance, depth=depth,
+                       world_position=world, table=rs.surfaces)
 
 
 _MISS = {"object_id": 0, "prim_id": -1, "barycentrics": 0.0, "distance": np.inf,
@@ -166,6 +161,8 @@ def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
         result.restarts += hits.restarts
         result.unresolved += hits.unresolved
 
+        if k + 1 == layers:
+            break
         # Go deeper only behind revealed moving objects, skipping that object.
         deeper = np.isin(hits.object_id, moving_ids)       # compact, over this layer's rays
         rows = np.flatnonzero(deeper) if rows is None else rows[deeper]

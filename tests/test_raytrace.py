@@ -583,13 +583,20 @@ def test_box_culling_changes_no_hit(monkeypatch):
     jj, ii = np.mgrid[0:40, 0:48]
     o, d = cam.rays(0.05, ii.ravel(), jj.ravel())
     own = np.random.default_rng(2).integers(0, 5, len(o))
-    culled = rs.intersect(o, d, 0.05, own)
-    rs.cull = False
-    full = rs.intersect(o, d, 0.05, own)
-    assert culled.queries < full.queries
-    for name in ("object_id", "prim_id", "u", "v", "distance"):
-        np.testing.assert_array_equal(getattr(culled, name), getattr(full, name), name)
-    assert np.count_nonzero(np.isin(culled.object_id, [3, 4])) > 50
+    # Also rays that start part-way (deeper layers, the near plane): the test must take
+    # [tnear, tfar] from the ray's origin, not from where Embree's ray starts.
+    # Starts at 0.6 of the way to a moving hit keep that hit within (tnear, 2 tnear).
+    first = rs.intersect(o, d, 0.05, own)
+    tnear = np.where(np.isin(first.object_id, [3, 4]), 0.6 * first.distance, 0.0)
+    for kw in ({}, {"tnear": tnear}):
+        rs.cull = True
+        culled = rs.intersect(o, d, 0.05, own, **kw)
+        rs.cull = False
+        full = rs.intersect(o, d, 0.05, own, **kw)
+        assert culled.queries < full.queries
+        for name in ("object_id", "prim_id", "u", "v", "distance"):
+            np.testing.assert_array_equal(getattr(culled, name), getattr(full, name), name)
+        assert np.count_nonzero(np.isin(culled.object_id, [3, 4])) > 50
 
 
 def test_slab_hand_values():

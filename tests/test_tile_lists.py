@@ -160,7 +160,7 @@ def test_record_blocks_match_a_brute_force_packing(seed):
     key = rng.choice([1, 3, 4, 9], n)
     face = rng.integers(-1, 1000, n)
     bary = rng.uniform(0, 1, (n, 2)).astype(np.float32)
-    records, block_key, tiles = pack_blocks(gx, gy, key, face, bary, tile, per_row)
+    records, block_key, tiles = pack_blocks(gx, gy, key, face, bary, 3, 2)
     cells = sorted({(int(k), int(y) // tile, int(x) // tile) for k, x, y in zip(key, gx, gy)})
     np.testing.assert_array_equal(block_key, [c[0] for c in cells])
     np.testing.assert_array_equal(tiles, [(c[2], c[1]) for c in cells])

@@ -57,7 +57,8 @@ class Camera:
             if "grid" not in cache:
                 jj, ii = np.mgrid[0:self.height, 0:self.width]
                 cache["grid"] = self._directions(eye, fwd, up, ii.ravel(), jj.ravel())
-            d = cache["grid"][np.asarray(j) * self.width + np.asarray(i)]
+            # np.take: several times faster than fancy indexing for rows of (N, 3).
+            d = np.take(cache["grid"], np.asarray(j) * self.width + np.asarray(i), axis=0)
         else:
             cache.clear()
             cache["pose"] = pose

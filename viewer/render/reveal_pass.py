@@ -157,7 +157,7 @@ def mask_tiles(pixels: np.ndarray, size: tuple[int, int], tile: int) -> np.ndarr
     return out
 
 
-BLOCKS_PER_ROW = 256     # record blocks (SHADE_TILE x SHADE_TILE) per row of the texture
+BLOCKS_PER_ROW = 256     # record blocks (SHADE_TILE x SHADE_TILE) per row; both powers of 2
 
 
 def layer_hits(pixels: np.ndarray, layer, height: int) -> LayerHits | None:
@@ -177,7 +177,7 @@ def layer_hits(pixels: np.ndarray, layer, height: int) -> LayerHits | None:
     gy = height - 1 - px[:, 1]              # GL rows
     records, block_key, tiles = kernels.pack_blocks(
         px[:, 0].astype(np.int64), gy.astype(np.int64), key, pick(layer.face_index),
-        pick(layer.barycentrics), SHADE_TILE, BLOCKS_PER_ROW)
+        pick(layer.barycentrics), SHADE_TILE.bit_length() - 1, BLOCKS_PER_ROW.bit_length() - 1)
     cuts = np.flatnonzero(np.diff(block_key)) + 1
     first = np.r_[0, cuts]
     count = np.diff(np.r_[first, len(block_key)])
