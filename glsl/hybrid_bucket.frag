@@ -11,7 +11,8 @@
 // pixel while the pixel lies within its box-shaped spread: a fraction
 // overlap([a, b], [-|D|/2, |D|/2]) / |D| of the exposure. So a surface filling the line
 // sums to exactly 1 whatever the jitter. Lines: the neighbourhood's largest displacement
-// (others passing over; the own object too where it moves that way), the pixel's own
+// (others passing over; the own object too where it moves that way, or along
+// that line within its reach), the pixel's own
 // displacement (its own object), and the revealed layer's displacement (the background
 // blurred along its own motion). A bucket's coverage is min(1, sum of weights); the
 // revealed colour fills what the background bucket leaves (centre fill); fragments of the
@@ -129,6 +130,18 @@ void main() {
     float back_id = revealed ? bx.w - 1.0 : -1.0;
     // The own object has its own line unless it moves like the neighbourhood.
     bool own_line = any(greaterThanEqual(abs(fx.xy - vn), vec2(1.0)));
+#if !SIMPLE
+    // The neighbourhood's line also samples the own object where the own displacement lies
+    // along it (its ends within a pixel of the line), within its reach, and its taps lie
+    // about as densely as the own line's would: the same pixels, nearly the same taps.
+    float ln = length(vn), lo = length(fx.xy);
+    if (own_line && ln > 1.0) {
+        float across = abs(fx.x * vn.y - fx.y * vn.x) / ln;
+        if (across < 1.0 && lo <= ln + 1.0
+            && float(taps_for(0.5 * ln)) * lo >= 0.85 * float(taps_for(0.5 * lo)) * ln)
+            own_line = false;
+    }
+#endif
     float a, b;
 
     // Line 1: the neighbourhood's largest displacement: what passes over the pixel.

@@ -322,6 +322,14 @@ def bucket_composite(front, front_color, back, back_color, neighbormax, tile: in
             back_depth = bx[2] if revealed else np.inf
             back_id = bx[3] - 1.0 if revealed else -1.0
             own_line = bool(np.any(np.abs(fx[:2] - vn) >= 1.0))
+            ln, lo = np.hypot(*vn), np.hypot(*fx[:2])
+            if own_line and ln > 1.0:
+                # The neighbourhood's line doubles as the own line: along it, within its
+                # reach, its taps about as dense.
+                across = abs(fx[0] * vn[1] - fx[1] * vn[0]) / ln
+                if (across < 1.0 and lo <= ln + 1.0
+                        and taps_for(0.5 * ln) * lo >= 0.85 * taps_for(0.5 * lo) * ln):
+                    own_line = False
 
             def add(k, c, wt):
                 sums[k] += wt * c

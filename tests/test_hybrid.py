@@ -335,16 +335,21 @@ def test_numpy_bucket_composite_with_an_exact_background_is_the_box_shutter():
         np.testing.assert_allclose(got[y], want, atol=1e-12)
 
 
-@pytest.mark.parametrize("case", ["exact", "no_reveal", "moving_wall"])
+@pytest.mark.parametrize("case", ["exact", "no_reveal", "moving_wall", "parallel_wall"])
 def test_bucket_composite_matches_numpy(synthetic_frame, case):
     rng = np.random.default_rng(10)
     p = composite_params(composite="bucket", samples_min=3, samples_max=12)
     frame = synthetic_frame((W, H), p)
-    b = bar_layers(rng, d=(9.0, 0.0) if case == "exact" else (-7.7, 1.3),
-                   reveal_cols=() if case == "no_reveal" else range(12, 24))
+    d = {"exact": (9.0, 0.0), "parallel_wall": (-15.4, 2.6)}.get(case, (-7.7, 1.3))
+    b = bar_layers(rng, d=d, reveal_cols=() if case == "no_reveal" else range(12, 24))
     if case == "moving_wall":
         b["disp"][:, :12] = b["disp"][:, 24:] = (2.3, 0.4)
         b["rev_v"][:, 12:24] = (2.3, 0.4)
+    if case == "parallel_wall":
+        # The wall moves along the bar's line, 0.77 as far (a camera pan's parallax): the
+        # neighbourhood's line doubles as the wall pixels' own line.
+        b["disp"][:, :12] = b["disp"][:, 24:] = (-11.85, 2.0)
+        b["rev_v"][:, 12:24] = (-11.85, 2.0)
     got = run_composite(frame, b)
     np.testing.assert_allclose(got, numpy_composite(frame, b), atol=2e-6)
     if case == "exact":
