@@ -151,6 +151,7 @@ class RayScene:
         # The corners of each moving mesh's local bounding box: at time t their world
         # box culls the rays that cannot hit the object before any Embree call.
         self._corners = {o.id: _box_corners(o.mesh.vertices) for o, _ in self.moving}
+        self._pose_cache: dict[int, tuple] = {}
 
     def _static_scene(self, ids: np.ndarray) -> rtcs.EmbreeScene:
         """One Embree scene of the static objects `ids`, geometry k = ids[k]."""
@@ -171,6 +172,26 @@ class RayScene:
                 self._without_triangles += size
                 self._without[own] = (self._static_scene(ids), np.r_[np.uint32(0), ids])
         return self._without[own]
+
+    def _poses(self, t: float) -> list[tuple]:
+        """Per moving object at time t: its world box (padded, for the box test), M(t)^-1
+        as float32 and whether it rotates or scales (else directions stay as they are);
+        kept per object for its last M(t) (every layer and chunk of a frame asks again)."""
+        poses = []
+        for obj, _ in self.moving:
+            m = obj.matrix(t)
+            key = m.tobytes()
+            kept = self._pose_cache.get(obj.id)
+            if kept is None or kept[0] != key:
+                world = transform_points(m, self._corners[obj.id])
+                pad = 1e-4 * float(np.ptp(world, axis=0).max()) + 1e-6
+                inv = np.linalg.inv(m).astype(np.float32)
+                # Not renormalised, so t stays in world units; a pure translation keeps them.
+                kept = self._pose_cache[obj.id] = (key, (
+                    world.min(axis=0) - pad, world.max(axis=0) + pad, inv,
+                    not np.array_equal(inv[:3, :3], np.eye(3))))
+            poses.append(kept[1])
+        return poses
 
     def reveal(self, camera, t: float, pixels_ij, own_ids, layers: int = 1, max_depth: int = 8,
                threads: int | None = None, **kw):
@@ -228,36 +249,26 @@ class RayScene:
         def take(a, rows):
             return a if rows is None else a[rows]
 
-        o_start = o + d * start[:, None] if tnear is not None else o
-        o32, d32 = o_start.astype(np.float32), d.astype(np.float32)
         # The box test takes [start, best] along the rays from their own origins, not
-        # from o_start (Embree's origins moved to tnear). Primary rays share the eye:
-        # box-test from one point, and without a tnear carry one point into each
-        # object's space, not n.
-        from_eye = n > 1 and bool((o == o[0]).all())
+        # from o_start (Embree's origins moved to tnear). Primary rays share the eye
+        # (Camera.rays broadcasts it: stride 0): box-test from one point, and without a
+        # tnear carry one point into each object's space, not n.
+        from_eye = n > 1 and (o.strides[0] == 0 or bool((o == o[0]).all()))
         shared = from_eye and tnear is None
-        o_box = o[:1] if from_eye else o
-        o_box = o_box.astype(np.float32) if tnear is not None or from_eye else o32
-        with np.errstate(divide="ignore"):
-            inv_d = np.float32(1.0) / d32
+        o_start, o32, d32, inv_d = kernels.ray_arrays(o, d, start, from_eye)
+        o_box = o[:1].astype(np.float32) if from_eye else o.astype(np.float32)
         no_ids = np.zeros(1, np.uint32)
-        for obj, es in self.moving:
-            m = obj.matrix(t)
-            world = transform_points(m, self._corners[obj.id])
-            pad = 1e-4 * float(np.ptp(world, axis=0).max()) + 1e-6
+        for (obj, es), (box_lo, box_hi, inv, rotate) in zip(self.moving, self._poses(t)):
             # Rays that may hit the object's world box within [start, best]; a moving
             # excluded object is not traced at all.
             if self.cull:
-                rows = kernels.box_rows(o_box, inv_d, from_eye, world.min(axis=0) - pad,
-                                        world.max(axis=0) + pad, start, best, excl, obj.id)
+                rows = kernels.box_rows(o_box, inv_d, from_eye, box_lo, box_hi, start, best,
+                                        excl, obj.id)
             else:
                 rows = np.flatnonzero(excl != obj.id)
             if not rows.size:
                 continue
-            inv = np.linalg.inv(m).astype(np.float32)
-            # Not renormalised, so t stays in world units; a pure translation keeps them.
-            lo, ld, tfar = kernels.local_rays(o32, d32, rows, shared, inv,
-                                        not np.array_equal(inv[:3, :3], np.eye(3)), start, best)
+            lo, ld, tfar = kernels.local_rays(o32, d32, rows, shared, inv, rotate, start, best)
             r = _embree_run(es, lo, ld, tfar)
             queries += rows.size
             kernels.merge_hits(rows, r["geomID"], r["primID"], r["u"], r["v"], r["tfar"], start,

@@ -58,6 +58,30 @@ def box_rows(o, inv_d, shared, lo, hi, start, best, excl, skip_id):
     return np.flatnonzero(meets)
 
 
+@njit(**_JIT)
+def ray_arrays(o, d, start, shared):
+    """The rays moved to their starts (o + start d, float64), as Embree takes them
+    (float32 origins and directions), and the directions' float32 inverses (inf for a
+    zero component). shared: every origin is o[0]."""
+    n = d.shape[0]
+    o_start = np.empty((n, 3))
+    o32 = np.empty((n, 3), np.float32)
+    d32 = np.empty((n, 3), np.float32)
+    inv_d = np.empty((n, 3), np.float32)
+    one = np.float32(1.0)
+    for i in range(n):
+        r = 0 if shared else i
+        s = start[i]
+        for c in range(3):
+            p = o[r, c] + d[i, c] * s
+            o_start[i, c] = p
+            o32[i, c] = np.float32(p)
+            f = np.float32(d[i, c])
+            d32[i, c] = f
+            inv_d[i, c] = one / f if f != 0 else (np.inf if not np.signbit(f) else -np.inf)
+    return o_start, o32, d32, inv_d
+
+
 @njit(inline="always")
 def _xform(m, x, y, z, w):
     # transform_points' float32 order: ((m0 x + m1 y) + m2 z) + w m3, row by row.
@@ -256,3 +280,19 @@ def layer_columns(object_id, distance, u, v, origin, direction, cos, background_
         else:
             depth[i] = background_depth
     return depth, world, bary
+
+
+@njit(**_JIT)
+def view_clip(direction, fwd, near, far):
+    """Per unit ray from the eye: cos(ray, forward) (view depth = distance * cos) and the
+    distances along it of the near and far planes, near / cos and far / cos."""
+    n = direction.shape[0]
+    cos = np.empty(n)
+    t0 = np.empty(n)
+    t1 = np.empty(n)
+    for i in range(n):
+        c = direction[i, 0] * fwd[0] + direction[i, 1] * fwd[1] + direction[i, 2] * fwd[2]
+        cos[i] = c
+        t0[i] = near / c
+        t1[i] = far / c
+    return cos, t0, t1

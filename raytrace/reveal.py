@@ -131,9 +131,8 @@ def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
     origin, direction = camera.rays(t, pixels_ij[:, 0], pixels_ij[:, 1])
     _, fwd, _ = camera.spec.pose(t)
     # Clip by view depth like the rasteriser: depth = distance * cos(ray, forward).
-    cos = np.einsum("nk,k->n", direction, fwd)
-    near = camera.spec.near / cos
-    far = camera.spec.far / cos
+    cos, near, far = kernels.view_clip(direction, np.asarray(fwd, np.float64),
+                                       float(camera.spec.near), float(camera.spec.far))
     moving_ids = np.array([o.id for o, _ in rs.moving], dtype=np.uint32)
 
     result = RevealResult(layers=[])

@@ -46,6 +46,8 @@ class Camera:
 
     def rays(self, t: float, i, j) -> tuple[np.ndarray, np.ndarray]:
         """Origins and unit directions of the rays through the centres of image pixels (i, j).
+        The origins are one read-only row, the eye, broadcast to (n, 3) (stride 0: the
+        ray caster sees at once that they are shared).
 
         A camera seen at the same pose twice in a row (a still camera, frame after frame)
         keeps every pixel's direction and answers by lookup; the values are the same."""
@@ -63,7 +65,7 @@ class Camera:
             cache.clear()
             cache["pose"] = pose
             d = self._directions(eye, fwd, up, i, j)
-        return np.broadcast_to(eye, d.shape).copy(), d
+        return np.broadcast_to(np.asarray(eye, np.float64), d.shape), d
 
     def _directions(self, eye, fwd, up, i, j) -> np.ndarray:
         right = np.cross(fwd, up)
