@@ -296,3 +296,29 @@ def view_clip(direction, fwd, near, far):
         t0[i] = near / c
         t1[i] = far / c
     return cos, t0, t1
+
+
+@njit(**_JIT)
+def nonzero_pixels(gl_rows, i0, j0):
+    """The nonzero pixels of a window read back from GL (rows bottom-up) in image order
+    (rows top-down, then columns): their image coordinates (i, j), with (i0, j0) the
+    window's top-left image pixel, and their values. One pass, no flipped copy."""
+    h, w = gl_rows.shape
+    count = 0
+    for y in range(h):
+        for x in range(w):
+            if gl_rows[y, x] != 0:
+                count += 1
+    ij = np.empty((count, 2), np.int64)
+    values = np.empty(count, gl_rows.dtype)
+    k = 0
+    for r in range(h):
+        y = h - 1 - r
+        for x in range(w):
+            v = gl_rows[y, x]
+            if v != 0:
+                ij[k, 0] = x + i0
+                ij[k, 1] = r + j0
+                values[k] = v
+                k += 1
+    return ij, values

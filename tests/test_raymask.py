@@ -196,6 +196,20 @@ def test_random_layers_match_numpy(synthetic_frame, seed):
     assert not np.any(mask[bufs[1] == 0])                   # the sky is never traced
 
 
+def test_masked_pixels_read_in_image_order_from_gl_rows():
+    # The reveal's read-back: the nonzero pixels of a GL-orientation window in image order
+    # (top row first) with the window's top-left image pixel added, and their values.
+    from raytrace.kernels import nonzero_pixels
+    gl_rows = np.random.default_rng(5).integers(0, 4, (7, 9)).astype(np.uint32)
+    gl_rows[gl_rows == 3] = 0
+    ij, values = nonzero_pixels(gl_rows, 20, 30)
+    image = gl_rows[::-1]
+    jj, ii = np.nonzero(image)
+    np.testing.assert_array_equal(ij, np.c_[ii + 20, jj + 30])
+    np.testing.assert_array_equal(values, image[jj, ii])
+    assert values.dtype == np.uint32 and len(values) > 10
+
+
 def test_static_frame_masks_nothing(synthetic_frame):
     frame = synthetic_frame((W, H), params())
     depth, ids, _, normal = bar_scene()

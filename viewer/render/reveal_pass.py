@@ -25,7 +25,6 @@ import numpy as np
 
 from raytrace import RayScene, kernels
 
-from ..conventions import to_image
 from .blur_common import max_radius_px
 from .frame import Frame
 from .gpu_scene import MAX_LIGHTS, set_uniform
@@ -124,16 +123,6 @@ def reveal_state(frame: Frame) -> RevealState:
     return rs
 
 
-def masked_pixels(ray_mask: np.ndarray, origin=(0, 0)) -> tuple[np.ndarray, np.ndarray]:
-    """(n, 2) image coordinates (i, j) of the masked pixels in row-major image order and
-    their own object ids, from (a window of) `ray_mask` in image orientation whose top-left
-    pixel is image pixel `origin`."""
-    flat = ray_mask.reshape(-1)
-    idx = np.flatnonzero(flat != 0)     # numpy's nonzero is ~5x faster on booleans
-    w = ray_mask.shape[1]
-    return np.stack([idx % w + origin[0], idx // w + origin[1]], axis=1), flat[idx]
-
-
 def read_masked_pixels(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
     """The masked pixels and own ids, reading back only the box around the moving tiles
     (the mask passes run nowhere else), or the whole mask without tile lists."""
@@ -144,8 +133,8 @@ def read_masked_pixels(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
     i0, y0, i1, y1 = moving.box if moving is not None else (0, 0, w, h)   # GL pixels
     fbo = frame.pool.framebuffer(("ray_mask",))
     data = fbo.read(viewport=(i0, y0, i1 - i0, y1 - y0), components=1, dtype="u4")
-    window = to_image(np.frombuffer(data, np.uint32).reshape(y1 - y0, i1 - i0))
-    return masked_pixels(window, origin=(i0, h - y1))
+    gl_rows = np.frombuffer(data, np.uint32).reshape(y1 - y0, i1 - i0)
+    return kernels.nonzero_pixels(gl_rows, i0, h - y1)
 
 
 def mask_tiles(pixels: np.ndarray, size: tuple[int, int], tile: int) -> np.ndarray:
