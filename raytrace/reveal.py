@@ -115,8 +115,11 @@ MAX_VIEW_PIXELS = 1 << 22
 def primary_view(camera: Camera, t: float) -> tuple | None:
     """(key, pixel count) naming what a primary ray's static hit depends on: the camera's
     pose at t, its lens and clipping, the image size (RayScene.intersect's `view`); None
-    for images too large to keep them."""
-    if camera.width * camera.height > MAX_VIEW_PIXELS:
+    for images too large to keep them, and for a moving camera: its pose changes every
+    frame of an animation, so what it kept would never be looked up again (only a frame
+    rendered twice, as `hmblur bench` does, would find it, and time what an animation
+    never sees)."""
+    if camera.width * camera.height > MAX_VIEW_PIXELS or camera.spec.moving:
         return None
     eye, fwd, up = camera.spec.pose(t)
     s = camera.spec

@@ -466,6 +466,9 @@ def test_static_hits_are_kept_per_view_and_change_nothing():
     moved = dataclasses.replace(s.camera, position=s.camera.position + [0.3, 0.0, 0.0])
     assert primary_view(Camera(moved, 48, 40), 0.05)[0] != view[0]
     assert not rs.static_view(primary_view(Camera(moved, 48, 40), 0.05)).known.any()
+    # A moving camera's pose is new every frame of an animation: nothing is kept for it.
+    panning = dataclasses.replace(s.camera, velocity=np.array([0.5, 0.0, 0.0]))
+    assert primary_view(Camera(panning, 48, 40), 0.05) is None
 
 
 def test_reveal_of_no_pixels():
