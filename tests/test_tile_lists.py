@@ -208,3 +208,95 @@ def test_range_check_tiles_keep_survivors_far_from_edges(ctx, monkeypatch):
     full, b = render_buffers(ctx, scene, p, True, monkeypatch)
     assert tiled.stats["range_tiles"] > 0 and tiled.stats["masked_pixels"] > 100
     assert a["ray_mask"] == b["ray_mask"]
+
+
+def true_boundary_tiles(ids: np.ndarray, tile: int) -> np.ndarray:
+    """Tiles (GL rows) holding a pixel whose right or upper neighbour has another id."""
+    h, w = ids.shape
+    pair = np.zeros((h, w), bool)
+    pair[:, :-1] |= ids[:, :-1] != ids[:, 1:]
+    pair[:-1, :] |= ids[:-1, :] != ids[1:, :]
+    th, tw = -(-h // tile), -(-w // tile)
+    out = np.zeros((th, tw), bool)
+    ys, xs = np.nonzero(pair)
+    out[ys // tile, xs // tile] = True
+    return out
+
+
+def run_motion_tiles(frame, ids, disp):
+    """motion_tiles (GL rows: (longest |D|, boundary flag)) of ids and D given in GL rows."""
+    from viewer.conventions import to_image
+    from viewer.render.gbuffer import GBUFFER
+    h, w = ids.shape
+    front = np.dstack([disp, np.full((h, w), 5.0, np.float32), ids]).astype(np.float32)
+    frame.pool.texture("hybrid_front", GBUFFER["hybrid_front"])
+    frame.write("hybrid_front", to_image(front))
+    p = tile_lists.MotionTiles()
+    p.allocate(frame)
+    p.execute(frame)
+    tile = tile_lists.FINE
+    return np.frombuffer(frame.pool.get("motion_tiles").read(), np.float32).reshape(
+        -(-h // tile), -(-w // tile), 2)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_motion_tiles_flag_every_id_boundary(synthetic_frame, seed):
+    # motion_tiles .y: every tile holding a pixel whose right or upper neighbour shows
+    # another object is flagged (conservatively: a few more may be), .x the longest |D|.
+    rng = np.random.default_rng(seed)
+    w, h, tile = 70, 52, tile_lists.FINE
+    ids = np.ones((h, w), np.float32)                     # GL rows
+    for _ in range(3):                                    # rectangles of other objects
+        x0, y0 = rng.integers(0, w - 8), rng.integers(0, h - 8)
+        ids[y0:y0 + rng.integers(3, 30), x0:x0 + rng.integers(3, 30)] = rng.integers(2, 9)
+    disp = rng.normal(0, 6, (h, w, 2)).astype(np.float32)
+    frame = synthetic_frame((w, h))
+    got = run_motion_tiles(frame, ids, disp)
+    want = true_boundary_tiles(ids, tile)
+    flagged = got[..., 1] != 0
+    assert want.any() and not (want & ~flagged).any()
+    assert flagged.sum() <= want.sum() + 3
+    longest = np.hypot(disp[..., 0], disp[..., 1])
+    for ty in range(got.shape[0]):
+        for tx in range(got.shape[1]):
+            block = longest[ty * tile:(ty + 1) * tile, tx * tile:(tx + 1) * tile]
+            np.testing.assert_allclose(got[ty, tx, 0], block.max(), rtol=1e-6)
+    # Boundaries that fall exactly between tiles: a row edge at y = 16 (flags tile row 0),
+    # a column edge at x = 32 (flags tile column 1), each tile uniform on its own.
+    for edge in ("row", "column"):
+        ids = np.ones((h, w), np.float32)
+        if edge == "row":
+            ids[tile:] = 4.0
+        else:
+            ids[:, 2 * tile:] = 4.0
+        got = run_motion_tiles(frame, ids, disp)[..., 1] != 0
+        want = true_boundary_tiles(ids, tile)
+        np.testing.assert_array_equal(got, want, err_msg=edge)
+        assert want.sum() == (got.shape[1] if edge == "row" else got.shape[0])
+
+
+def test_near_boundary_matches_its_definition():
+    rng = np.random.default_rng(4)
+    boundary = rng.uniform(size=(9, 12)) < 0.08
+    longest = rng.uniform(0, 90, (9, 12)).astype(np.float32)
+    got = tile_lists.near_boundary(longest, boundary, 16)
+    want = np.zeros_like(boundary)
+    for y, x in np.ndindex(*boundary.shape):
+        for v, u in zip(*np.nonzero(boundary)):
+            gap = max(0, max(abs(x - u), abs(y - v)) - 1) * 16
+            want[y, x] |= gap <= 0.5 * longest[y, x] + 2.0
+    assert want.any() and not want.all()
+    np.testing.assert_array_equal(got, want)
+    assert not tile_lists.near_boundary(longest, np.zeros_like(boundary), 16).any()
+
+
+def test_displacement_test_runs_only_near_id_boundaries(ctx, monkeypatch):
+    # vase_pan: every tile moves, few lie within reach of an object's outline; the masks
+    # are those of the full-screen passes all the same.
+    scene = load_scene(str(CONFORMANCE / "vase_pan.toml"))
+    tiled, a = render_buffers(ctx, scene, ParamSet(), False, monkeypatch)
+    full, b = render_buffers(ctx, scene, ParamSet(), True, monkeypatch)
+    assert tiled.stats["surface_tiles"] < 0.5 * tiled.stats["moving_tiles"]
+    assert tiled.stats["masked_pixels"] > 100
+    for n in ("mask_displacement", "mask_edge", "ray_mask"):
+        assert a[n] == b[n], n

@@ -69,7 +69,10 @@ class SurfaceTests(FullscreenPass):
 
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
-        tiles = tile_list(frame, "moving")
+        # Only where an id boundary lies within the probes' reach can a probe see another
+        # object (tile_lists.near_boundary); elsewhere the targets keep their clear value,
+        # the answer there (mask_relative aside: read only at survivors).
+        tiles = tile_list(frame, "surface")
         first = {"u_min_speed": float(p.min_speed),
                  "u_depth_threshold": float(p.depth_threshold)}
         second = {"u_edge_depth": float(p.edge_depth), "u_edge_normal": float(p.edge_normal)}

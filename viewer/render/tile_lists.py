@@ -2,11 +2,16 @@
 
 On a software rasteriser (llvmpipe) every fragment costs, even one that returns at once,
 and most of a frame does not move. After the G-buffer, `motion_tiles` reduces the
-displacement to its longest |D| per FINE x FINE tile; the host reads that small texture
-back and lists two sets of tiles (GL orientation: tile (0, 0) at the bottom left):
+displacement to its longest |D| per FINE x FINE tile, and flags the tiles that may hold an
+id boundary (a pixel whose right or upper neighbour shows another object); the host reads
+that small texture back and lists three sets of tiles (GL orientation: tile (0, 0) at the
+bottom left):
 
   moving: a pixel there moves at least hybrid.min_speed: the ray mask's per-pixel passes
       run only there (everywhere else their answer is "not masked");
+  surface: the moving tiles with an id boundary within their displacement test's reach
+      (near_boundary): the test runs only there; elsewhere every probe lands on the
+      pixel's own object (a moving camera: vase_pan 204 of 883 moving tiles);
   active: a surface's motion can reach the tile (within half its longest displacement,
       clamped to the blur limit, plus the composite's landing tolerance and a pixel): the
       composite runs only there; everywhere else it would return the sharp colour.
@@ -23,7 +28,7 @@ import math
 
 import moderngl
 import numpy as np
-from scipy.ndimage import maximum_filter
+from scipy.ndimage import distance_transform_cdt, maximum_filter
 
 from .blur_common import max_radius_px
 from .frame import Frame
@@ -149,6 +154,7 @@ class TileLists:
         self.ctx = ctx
         self.moving = TileList(ctx)
         self.active = TileList(ctx)
+        self.surface = TileList(ctx)   # moving, and an id boundary within the probes' reach
         self.shape = (0, 0)            # (rows, columns) of FINE tiles this frame
         self._extra: dict[str, TileList] = {}
 
@@ -161,6 +167,7 @@ class TileLists:
     def release(self):
         self.moving.release()
         self.active.release()
+        self.surface.release()
         for tl in self._extra.values():
             tl.release()
 
@@ -198,6 +205,20 @@ def active_tiles(longest: np.ndarray, tile: int, max_disp: float, tolerance: flo
     return out
 
 
+def near_boundary(longest: np.ndarray, boundary: np.ndarray, tile: int) -> np.ndarray:
+    """Tiles whose displacement test can see another object: some pixel within
+    R = longest / 2 + 2 px of the tile's (the reach of its probes X +- D/2, a half pixel of
+    rounding, and the other pixel of a boundary pair) lies in a tile that may hold an id
+    boundary. Tiles L apart (Chebyshev) have a gap of (L - 1) tiles, so: the distance to
+    the nearest boundary tile L <= 1 + R / tile. Elsewhere every probe lands on the
+    pixel's own object: nothing is uncovered (and the relative-displacement probes, run
+    only after an uncovering, never start)."""
+    if not boundary.any():
+        return np.zeros_like(boundary)
+    dist = distance_transform_cdt(~boundary, metric="chessboard")
+    return dist <= 1.0 + (0.5 * longest.astype(np.float64) + 2.0) / tile
+
+
 def tile_coords(selected: np.ndarray) -> np.ndarray:
     """(n, 2) (tx, ty) of the True entries of a GL-orientation (rows = ty) tile map."""
     ty, tx = np.nonzero(selected)
@@ -214,8 +235,8 @@ class MotionTiles(FullscreenPass):
         return {"STAGE": self._stage}
 
     def outputs(self, frame: Frame):
-        return {"motion_tiles_x": StripSpec(1, "f4", tile=FINE),
-                "motion_tiles": TexSpec(1, "f4", tile=FINE)}
+        return {"motion_tiles_x": StripSpec(2, "f4", tile=FINE),
+                "motion_tiles": TexSpec(2, "f4", tile=FINE)}
 
     def execute(self, frame: Frame):
         for self._stage, src, dst in ((0, "hybrid_front", "motion_tiles_x"),
@@ -236,23 +257,28 @@ class SelectTiles(Pass):
             lists = state[STATE_KEY] = TileLists(frame.ctx)
         tex = frame.pool.get("motion_tiles")
         tw, th = tex.size
-        longest = np.frombuffer(tex.read(), np.float32).reshape(th, tw)   # GL rows
+        both = np.frombuffer(tex.read(), np.float32).reshape(th, tw, 2)   # GL rows
+        longest, boundary = both[..., 0].copy(), both[..., 1] != 0
         p = frame.params["hybrid"]
         moving = moving_tiles(longest, p.min_speed)
         active = active_tiles(longest, FINE, 2.0 * max_radius_px(frame), p.tolerance)
+        surface = moving & near_boundary(longest, boundary, FINE)
         lists.shape = longest.shape
         lists.longest = longest
         lists.moving_tiles = moving
         lists.moving.set(tile_coords(moving), FINE, frame.size)
         lists.active.set(tile_coords(active), FINE, frame.size)
+        lists.surface.set(tile_coords(surface), FINE, frame.size)
         frame.host["tile_lists"] = lists
         frame.stats["tiles"] = int(tw * th)
         frame.stats["moving_tiles"] = lists.moving.count
         frame.stats["active_tiles"] = lists.active.count
+        frame.stats["surface_tiles"] = lists.surface.count
 
 
 def tile_list(frame: Frame, which: str) -> TileList | None:
-    """The frame's `which` ("moving" or "active") list, or None to draw full screen."""
+    """The frame's `which` ("moving", "active" or "surface") list, or None to draw full
+    screen."""
     lists = frame.host.get("tile_lists")
     return getattr(lists, which) if lists is not None else None
 
