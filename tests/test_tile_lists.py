@@ -14,10 +14,10 @@ from viewer.scene_loader import load_scene
 SIZE = (200, 112)
 
 
-def render_buffers(ctx, scene, p, full_screen: bool, monkeypatch):
+def render_buffers(ctx, scene, p, full_screen: bool, monkeypatch, size=SIZE):
     if full_screen:
         monkeypatch.setattr(tile_lists.SelectTiles, "execute", lambda self, frame: None)
-    r = Renderer(ctx, scene, SIZE)
+    r = Renderer(ctx, scene, size)
     try:
         res = r.render("hybrid", scene.render.time, p)
         bufs = {n: r.pool.get(n).read() for n in ("mask_displacement", "mask_edge", "ray_mask",
@@ -294,8 +294,8 @@ def test_displacement_test_runs_only_near_id_boundaries(ctx, monkeypatch):
     # vase_pan: every tile moves, few lie within reach of an object's outline; the masks
     # are those of the full-screen passes all the same.
     scene = load_scene(str(CONFORMANCE / "vase_pan.toml"))
-    tiled, a = render_buffers(ctx, scene, ParamSet(), False, monkeypatch)
-    full, b = render_buffers(ctx, scene, ParamSet(), True, monkeypatch)
+    tiled, a = render_buffers(ctx, scene, ParamSet(), False, monkeypatch, (400, 224))
+    full, b = render_buffers(ctx, scene, ParamSet(), True, monkeypatch, (400, 224))
     assert tiled.stats["surface_tiles"] < 0.5 * tiled.stats["moving_tiles"]
     assert tiled.stats["masked_pixels"] > 100
     for n in ("mask_displacement", "mask_edge", "ray_mask"):
