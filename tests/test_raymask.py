@@ -247,3 +247,32 @@ def test_sparse_edges_on_a_wide_frame_match_numpy(synthetic_frame, seed):
     np.testing.assert_array_equal(got["ray_mask"], mask)
     # Masked pixels that only the range check finds (not displacement survivors) exist.
     assert np.count_nonzero((mask > 0) & (dm == 0)) >= 10
+
+
+def test_tile_lists_keep_far_uncoverings(synthetic_frame):
+    # A wide bar moving 60 px over a wall: its pixels up to 30 px inside its edges are
+    # uncovered, two tiles from the tiles holding the outline. With tile lists (the
+    # displacement test only within |D|/2 + 2 px of an id boundary) the masks equal the
+    # full-screen passes'.
+    from viewer.render.tile_lists import selection_passes
+    w, h = 240, 48
+    bar = (40, 200)
+    depth = np.full((h, w), 10.0)
+    ids = np.ones((h, w), np.uint32)
+    disp = np.zeros((h, w, 2))
+    depth[:, bar[0]:bar[1]], ids[:, bar[0]:bar[1]], disp[:, bar[0]:bar[1]] = 2.0, 2, (60.0, 0.0)
+    normal = np.tile([0.0, 0.0, 1.0, 0.0], (h, w, 1))
+    got = []
+    for tiled in (True, False):
+        frame = synthetic_frame((w, h), params())
+        upload(frame, depth, ids, disp, normal)
+        for p in (selection_passes() if tiled else []) + raymask_passes():
+            p.allocate(frame)
+            p.execute(frame)
+        got.append({n: to_image(frame.read(n)) for n in ("mask_displacement", "ray_mask")})
+        if tiled:
+            assert frame.stats["surface_tiles"] < frame.stats["moving_tiles"]
+    for n in ("mask_displacement", "ray_mask"):
+        np.testing.assert_array_equal(got[0][n], got[1][n], err_msg=n)
+    # Uncovered 30 px in from the leading and trailing edges, by the displacement test.
+    assert columns(got[1]["mask_displacement"][20]) == list(range(40, 70)) + list(range(170, 200))
