@@ -28,13 +28,14 @@ import math
 
 import moderngl
 import numpy as np
-from scipy.ndimage import distance_transform_cdt, maximum_filter
+from scipy.ndimage import distance_transform_cdt
 
 from .blur_common import max_radius_px
 from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
+from . import tile_kernels
 from .tiles import StripSpec
 
 FINE = 16                      # px per side of a list tile
@@ -65,29 +66,16 @@ class TileList:
         blocks_per_row: also give every vertex `in_record`, its place in a texture that
         stores tile k's pixels as a tile x tile block at (k % blocks_per_row,
         k // blocks_per_row) * tile (glsl/reveal_tiles.vert)."""
-        self.tiles = np.asarray(tiles, np.int64).reshape(-1, 2)
+        self.tiles = np.ascontiguousarray(tiles, np.int64).reshape(-1, 2)
         self.count = len(self.tiles)
         w, h = size
-        x0 = self.tiles[:, 0] * tile
-        y0 = self.tiles[:, 1] * tile
-        x1 = np.minimum(x0 + tile, w)
-        y1 = np.minimum(y0 + tile, h)
         self.tile, self.size = tile, size
-        self.box = _box(self.tiles, tile, size) if self.count else None
-        # Two triangles per tile: (x0,y0) (x1,y0) (x0,y1) and (x1,y0) (x1,y1) (x0,y1).
-        xs = np.stack([x0, x1, x0, x1, x1, x0], axis=1)
-        ys = np.stack([y0, y0, y1, y0, y1, y1], axis=1)
-        columns = [xs, ys]
-        if blocks_per_row:
-            k = np.arange(self.count)
-            bx = (k % blocks_per_row) * tile - x0       # block corner minus tile corner
-            by = (k // blocks_per_row) * tile - y0
-            columns += [xs + bx[:, None], ys + by[:, None]]
+        data, box = tile_kernels.tile_quads(self.tiles, tile, w, h, blocks_per_row or 0)
+        self.box = tuple(int(b) for b in box) if self.count else None
         if blocks_per_row != self.blocks_per_row:
             self._release_buffer()                      # the vertex layout changes
         self.blocks_per_row = blocks_per_row
         self.vertex_shader = "reveal_tiles.vert" if blocks_per_row else "tiles.vert"
-        data = np.stack(columns, axis=2).astype(np.float32).reshape(-1)
         nbytes = max(data.nbytes, 4)
         if self.buffer is None or self.buffer.size < nbytes:
             self._release_buffer()
@@ -194,15 +182,9 @@ def active_tiles(longest: np.ndarray, tile: int, max_disp: float, tolerance: flo
     m = np.minimum(longest.astype(np.float64), max_disp)
     reach = np.where(m > 0.0, 0.5 * m + tolerance + MARGIN, -1.0)
     radius = int(math.ceil((0.5 * max_disp + tolerance + MARGIN) / tile)) + 1
-    out = reach >= 0.0
-    # Tiles L apart (Chebyshev) have a gap of (L - 1) tiles: dilate the sources that reach
-    # that gap by L, a separable square max filter, one ring level at a time.
-    for level in range(1, radius + 1):
-        sources = reach >= (level - 1) * tile
-        if not sources.any():
-            break
-        out |= maximum_filter(sources, size=2 * level + 1, mode="constant", cval=False)
-    return out
+    # Tiles L apart (Chebyshev) have a gap of (L - 1) tiles: each source marks the square
+    # of the L whose gap it reaches.
+    return tile_kernels.dilate_by_reach(reach, tile, radius)
 
 
 def near_boundary(longest: np.ndarray, boundary: np.ndarray, tile: int) -> np.ndarray:
