@@ -125,7 +125,10 @@ def speed_table(r: Renderer, s, speeds: list[float], frames: int) -> list[dict]:
                 o.velocity, o.angular_velocity = v * f, w * f
             ms, masked, rays = [], [], []
             for _ in range(frames):
-                res = r.render("hybrid", s.time, s.params, seed=s.seed, read_image=False)
+                # timing=True: finish() around every pass, so reveal_ms is the reveal's own
+                # time, not also the wait for the mask passes its read-back would include.
+                res = r.render("hybrid", s.time, s.params, seed=s.seed, read_image=False,
+                               timing=True)
                 ms.append(res.stats.get("reveal_ms", 0.0))
                 masked.append(res.stats.get("masked_pixels", 0))
                 rays.append(res.stats.get("rays", 0))
