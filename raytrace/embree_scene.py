@@ -242,9 +242,10 @@ class RayScene:
         def keep(rows, ids, r, s0=None):
             """Take the hits of `rows` (None: all rays) nearer than the best so far;
             ids: geomID + 1 -> object id."""
-            kernels.merge_hits(np.arange(n) if rows is None else rows, r["geomID"], r["primID"],
-                         r["u"], r["v"], r["tfar"], start if s0 is None else s0, best,
-                         object_id, prim_id, u, v, ids, -1)
+            kernels.merge_hits(np.arange(n) if rows is None else rows, r["geomID"],
+                               r["primID"], r["u"], r["v"], r["tfar"],
+                               start if s0 is None else s0, best, object_id, prim_id, u, v,
+                               ids, -1)
 
         def take(a, rows):
             return a if rows is None else a[rows]
@@ -271,8 +272,8 @@ class RayScene:
             lo, ld, tfar = kernels.local_rays(o32, d32, rows, shared, inv, rotate, start, best)
             r = _embree_run(es, lo, ld, tfar)
             queries += rows.size
-            kernels.merge_hits(rows, r["geomID"], r["primID"], r["u"], r["v"], r["tfar"], start,
-                         best, object_id, prim_id, u, v, no_ids, obj.id)
+            kernels.merge_hits(rows, r["geomID"], r["primID"], r["u"], r["v"], r["tfar"],
+                               start, best, object_id, prim_id, u, v, no_ids, obj.id)
 
         restarts = unresolved = 0
         rows = None                   # the rays left for the static scene; None = all
