@@ -22,9 +22,10 @@
 // BACK_LAYER 0 compiles the variant for tiles without a revealed pixel (line 3 never runs
 // there), OWN_STILL 1 the one for tiles where no pixel moves (|D| < 1e-3: no own line, no
 // time pairing): llvmpipe would still pay for them, both sides of every branch, one pass
-// of every loop. SIMPLE 1 compiles the one for tiles with no ray-mask edge (moving
-// silhouette) within the blur's reach: every fragment around belongs to the own surface,
-// so the neighbourhood's line runs only where it is the own line.
+// of every loop. SIMPLE 1 compiles the one for tiles with no other object within the
+// lines' reach (viewer/render/hybrid_composite.py near_outlines): every tap of the
+// neighbourhood's line lands on the own object and adds nothing, so it runs only where
+// it is the own line. All three give the image the full variant gives.
 #include "noise.glsl"
 #include "hybrid_layers.glsl"
 uniform sampler2D u_neighbormax;
@@ -130,7 +131,6 @@ void main() {
     float back_id = revealed ? bx.w - 1.0 : -1.0;
     // The own object has its own line unless it moves like the neighbourhood.
     bool own_line = any(greaterThanEqual(abs(fx.xy - vn), vec2(1.0)));
-#if !SIMPLE
     // The neighbourhood's line also samples the own object where the own displacement lies
     // along it (its ends within a pixel of the line), within its reach, and its taps lie
     // about as densely as the own line's would: the same pixels, nearly the same taps.
@@ -141,7 +141,6 @@ void main() {
             && float(taps_for(0.5 * ln)) * lo >= 0.85 * float(taps_for(0.5 * lo)) * ln)
             own_line = false;
     }
-#endif
     float a, b;
 
     // Line 1: the neighbourhood's largest displacement: what passes over the pixel.

@@ -15,7 +15,7 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import maximum_filter
+from scipy.ndimage import distance_transform_cdt, maximum_filter
 
 from .blur_common import max_radius_px
 from .frame import Frame
@@ -30,17 +30,29 @@ JITTER_STREAM = 2
 FRAGMENTS = {"time": "hybrid_time.frag", "bucket": "hybrid_bucket.frag"}
 
 
-def near_edges(frame: Frame, shape) -> np.ndarray:
-    """FINE tiles (GL rows) within the composite's reach (half the blur limit's 2k, the
-    landing tolerance and a pixel, rounded up to tiles, plus one) of a tile holding a ray-
-    mask edge (the reveal reads the edge tiles back with the mask); all of them when the
-    frame has none read back."""
-    edges = frame.host.get("edge_tiles")
-    if edges is None or edges.shape != shape:
+def near_outlines(frame: Frame, shape) -> np.ndarray:
+    """FINE tiles (GL rows) whose composite lines can reach another object: a tile that
+    may hold an id boundary (motion_tiles' flag); all of them without tile lists. A
+    pixel's lines reach half its neighbourhood's largest displacement or half its own,
+    clamped to the blur limit 2k, and a tap lands within half a pixel of its point: the
+    neighbourhood (McGuire's 3 x 3 tiles of k px) lies within 2k px, so tile T's lines
+    reach at most R_T = min(M_T, 2k) / 2 + the landing tolerance + a pixel, M_T the
+    longest |D| within 2k px of T; T is near a boundary tile L tiles away when the gap
+    (L - 1) tiles <= R_T. Elsewhere every tap of the neighbourhood's line lands on the
+    pixel's own object, where it adds nothing unless that line is also the own line: the
+    SIMPLE variant, which skips it then, gives the same image."""
+    lists = frame.host.get("tile_lists")
+    if lists is None or lists.boundary.shape != shape:
         return np.ones(shape, bool)
+    if not lists.boundary.any():
+        return np.zeros(shape, bool)
     p = frame.params["hybrid"]
-    r = int(np.ceil((max_radius_px(frame) + p.tolerance + 1.0) / FINE)) + 1
-    return maximum_filter(edges, size=2 * r + 1, mode="constant", cval=False)
+    k = max_radius_px(frame)
+    q = -(-2 * k // FINE) + 1
+    around = maximum_filter(lists.longest, size=2 * q + 1, mode="constant", cval=0.0)
+    reach = 0.5 * np.minimum(around.astype(np.float64), 2.0 * k) + p.tolerance + 1.0
+    dist = distance_transform_cdt(~lists.boundary, metric="chessboard")
+    return dist <= 1.0 + reach / FINE
 
 
 def composite_kind(frame: Frame) -> str:
@@ -117,11 +129,11 @@ class Composite(FullscreenPass):
         else:
             revealed, plain = split_tiles(active, masked, frame.size[1], 0)
             first = ("bucket", revealed, 1, 0, 0)
-        # Where no mask edge lies within the blur's reach, no silhouette crosses a pixel:
-        # the neighbourhood's line is needed only where it is the own line (SIMPLE).
+        # Where no other object lies within the lines' reach, the neighbourhood's line is
+        # needed only where it is the own line (SIMPLE).
         still = plain & (lists.longest < STILL_PX)
         moving = plain & ~still
-        simple = moving & ~near_edges(frame, moving.shape)
+        simple = moving & ~near_outlines(frame, moving.shape)
         parts = (first, ("bucket", moving & ~simple, 0, 0, 0), ("bucket", simple, 0, 0, 1),
                  ("bucket", still, 0, 1, 0))
         for which, selected, back, own_still, single in parts:

@@ -119,8 +119,8 @@ def reach_tiles(frame: Frame) -> int:
 
 
 def edge_tiles(frame: Frame) -> np.ndarray:
-    """Which FINE tiles (GL rows) hold a ray-mask edge: mask_edge_ids read back once a
-    frame, for the range check's and the composite's tile classes."""
+    """Which FINE tiles (GL rows) hold a ray-mask edge: mask_edge_ids read back (once a
+    frame), for the range check's tile list under a moving camera."""
     if "edge_tiles" not in frame.host:
         ids = frame.pool.get("mask_edge_ids")
         frame.host["edge_tiles"] = np.frombuffer(ids.read(), np.uint32).reshape(

@@ -31,7 +31,6 @@ from .gpu_scene import MAX_LIGHTS, set_uniform
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
-from .raymask import edge_tiles
 from .tile_lists import TileList, tile_list
 
 PACKED = TexSpec(4, "f4")
@@ -178,7 +177,7 @@ class RevealTrace(Pass):
     """Host side: mask read-back, ray casting, and the hit records of every layer; also
     the mask's tile summary (ray_mask_tiles), made from the pixels read back."""
     name = "reveal"
-    inputs = ("ray_mask", "mask_edge_ids")
+    inputs = ("ray_mask",)
     produces = ("reveal_hits", "ray_mask_tiles")    # reveal_hits: RevealState.layers
 
     def outputs(self, frame: Frame):
@@ -190,9 +189,6 @@ class RevealTrace(Pass):
         st = reveal_state(frame)
         pixels, own = read_masked_pixels(frame)
         frame.write("ray_mask_tiles", mask_tiles(pixels, frame.size, max_radius_px(frame)))
-        # Which FINE tiles hold a mask edge, read while the GPU is waited on anyway (or
-        # already by the range check): the composite's tile classes.
-        edge_tiles(frame)
         t1 = time.perf_counter()
         result = None
         if len(pixels) and p.trace:

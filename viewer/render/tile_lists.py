@@ -144,6 +144,7 @@ class TileLists:
         self.active = TileList(ctx)
         self.surface = TileList(ctx)   # moving, and an id boundary within the probes' reach
         self.shape = (0, 0)            # (rows, columns) of FINE tiles this frame
+        self.boundary = np.zeros((0, 0), bool)   # tiles that may hold an id boundary
         self._extra: dict[str, TileList] = {}
 
     def extra(self, name: str) -> TileList:
@@ -248,6 +249,7 @@ class SelectTiles(Pass):
         lists.shape = longest.shape
         lists.longest = longest
         lists.moving_tiles = moving
+        lists.boundary = boundary
         lists.moving.set(tile_coords(moving), FINE, frame.size)
         lists.active.set(tile_coords(active), FINE, frame.size)
         lists.surface.set(tile_coords(surface), FINE, frame.size)
