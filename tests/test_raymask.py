@@ -276,3 +276,33 @@ def test_tile_lists_keep_far_uncoverings(synthetic_frame):
         np.testing.assert_array_equal(got[0][n], got[1][n], err_msg=n)
     # Uncovered 30 px in from the leading and trailing edges, by the displacement test.
     assert columns(got[1]["mask_displacement"][20]) == list(range(40, 70)) + list(range(170, 200))
+
+
+def test_tile_lists_keep_the_range_checks_far_reach(synthetic_frame):
+    # Everything moves (a camera-like frame: the range check draws only the tiles with an
+    # edge within their search's reach): a wide bar moving 60 px over a wall moving -60
+    # px. Bar pixels whose own probes (30 px) stay on the bar are masked by the range
+    # check where the silhouette, whose relative motion reaches 60 px, lies within their
+    # search (min(k, |D|) = 60 px): up to four tiles from the edge tiles. With tile lists
+    # the mask equals the full-screen passes'.
+    from viewer.render.tile_lists import selection_passes
+    w, h = 240, 48
+    bar = (40, 200)
+    depth = np.full((h, w), 10.0)
+    ids = np.ones((h, w), np.uint32)
+    disp = np.tile([-60.0, 0.0], (h, w, 1))
+    depth[:, bar[0]:bar[1]], ids[:, bar[0]:bar[1]], disp[:, bar[0]:bar[1]] = 2.0, 2, (60.0, 0.0)
+    normal = np.tile([0.0, 0.0, 1.0, 0.0], (h, w, 1))
+    got = []
+    for tiled in (True, False):
+        frame = synthetic_frame((w, h), params())
+        upload(frame, depth, ids, disp, normal)
+        for p in (selection_passes() if tiled else []) + raymask_passes():
+            p.allocate(frame)
+            p.execute(frame)
+        got.append(to_image(frame.read("ray_mask")))
+        if tiled:
+            assert 0 < frame.stats["range_tiles"] < frame.stats["moving_tiles"]
+    np.testing.assert_array_equal(got[0], got[1])
+    masked = columns(got[1][20])
+    assert 95 in masked and 120 not in masked

@@ -24,7 +24,7 @@ or a survivor, and there it first reads the own-object bits of every tile in rea
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import maximum_filter
+from scipy.ndimage import distance_transform_cdt
 
 from .blur_common import max_radius_px
 from .frame import Frame
@@ -199,12 +199,20 @@ class RangeCheck(FullscreenPass):
         p = frame.params["hybrid"]
         tiles = tile_list(frame, "moving")
         if reach_test(frame):
-            # Only the moving tiles with an edge within reach, or a survivor of the
-            # displacement test (masked as it is): the rest would find nothing.
-            r = reach_tiles(frame)
-            in_reach = maximum_filter(edge_tiles(frame), size=2 * r + 1, mode="constant",
-                                      cval=False)
+            # Only the moving tiles with an edge within their search's reach, or a
+            # survivor of the displacement test (masked as it is): the rest would find
+            # nothing. A search walks min(k, relative_reach |D| / 2) px each way from its
+            # pixel (probes land within half a pixel), so tile T reaches
+            # R_T = min(k, relative_reach * longest_T / 2) + 1 px, and an edge tile L tiles
+            # away lies within it when the gap (L - 1) tiles <= R_T.
             lists = frame.host["tile_lists"]
+            edges = edge_tiles(frame)
+            reach = np.minimum(float(max_radius_px(frame)),
+                               0.5 * float(p.relative_reach) * lists.longest.astype(np.float64))
+            in_reach = np.zeros_like(edges)
+            if edges.any():
+                dist = distance_transform_cdt(~edges, metric="chessboard")
+                in_reach = dist <= 1.0 + (reach + 1.0) / FINE
             keep = lists.moving_tiles & (in_reach | frame.host["survivor_tiles"])
             tiles = lists.extra("range_check")
             tiles.set(tile_coords(keep), FINE, frame.size)
