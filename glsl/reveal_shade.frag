@@ -3,7 +3,9 @@
 // shade() with the same GpuScene uniforms, the object's M(t) for position and normal, and
 // its M at shutter open and close for the displacement, so the filter can blur it.
 // Drawn over the tiles holding traced pixels (viewer/render/reveal_pass.py), once per
-// revealed object over its own tiles: a pixel is this draw's when its record's key is u_key. The hit
+// revealed object over its own tiles, each of whose pixels it writes: its record's
+// key is this object's (shaded), 0 (no ray: cleared), or -1 (another object's draw
+// writes it). The hit
 // (face row, Embree u, v) is turned into mesh-space position, normal and uv here, from the
 // face's three corners in u_faces, with the weights (1 - u - v, u, v).
 // u_miss draws the rays that left the scene: the background colour, as the G-buffer's
@@ -17,7 +19,6 @@ noperspective in vec2 v_record; // this pixel's hit record (glsl/reveal_tiles.ve
 uniform sampler2D u_hits;       // (face row, u, v, 1 + object id); 0 where no ray
 uniform sampler2D u_faces;      // 6 texels per face, FACES_PER_ROW faces a row: corner c at
                                 // 2c: (position, normal.x), at 2c + 1: (normal.yz, uv)
-uniform float u_key;
 uniform mat4 u_model;
 uniform mat4 u_view;
 uniform mat3 u_normal_matrix;
@@ -32,7 +33,12 @@ layout(location = 1) out vec4 out_packed_color;
 
 void main() {
     vec4 hit = texelFetch(u_hits, ivec2(floor(v_record)), 0);
-    if (hit.w != u_key) discard;
+    if (hit.w < 0.0) discard;               // another object's draw writes this pixel
+    if (hit.w == 0.0) {                     // no ray here: "nothing revealed"
+        out_packed = vec4(0.0);
+        out_packed_color = vec4(0.0);
+        return;
+    }
     if (u_miss) {
         out_packed = vec4(0.0, 0.0, BACKGROUND_DEPTH, 1.0);     // id 0: the sky
         out_packed_color = vec4(u_background, 1.0);

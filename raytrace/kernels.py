@@ -203,7 +203,9 @@ def pack_blocks(gx, gy, key, face, bary, tile_bits, row_bits):
     """Hit records in blocks (viewer/render/reveal_pass.py layer_hits): for ray k at GL
     pixel (gx, gy) with key (1 + object id; small non-negative ints), face row and
     barycentrics, the record (max(face, 0), u, v, key) in one tile x tile block per
-    (key, screen tile) holding its pixels, tile = 2^tile_bits. Blocks are numbered in
+    (key, screen tile) holding its pixels, tile = 2^tile_bits; in the blocks of the same
+    screen tile's other keys, that pixel's record is (0, 0, 0, -1), "another key's";
+    everything else 0, "no ray here". Blocks are numbered in
     order of (key, tile row, tile column), 2^row_bits to a row of the record texture
     (powers of two: shifts and masks, not divisions, per pixel).
     Returns (records (rows, 2^row_bits * tile, 4) float32, each block's key, each
@@ -252,14 +254,27 @@ def pack_blocks(gx, gy, key, face, bary, tile_bits, row_bits):
     n_rows = (blocks + per_row - 1) >> row_bits
     records = np.zeros((n_rows * tile, per_row * tile, 4), np.float32)
     mask = tile - 1
+    shared = np.zeros(per_key, np.int64)      # blocks per screen tile (keys drawn there)
+    for c in range(block_of.shape[0]):
+        if block_of[c] >= 0:
+            shared[c % per_key] += 1
     for k in range(n):
         b = block_of[cell[k]]
-        rx = ((b & (per_row - 1)) << tile_bits) + (gx[k] & mask)
-        ry = ((b >> row_bits) << tile_bits) + (gy[k] & mask)
+        ox, oy = gx[k] & mask, gy[k] & mask
+        rx = ((b & (per_row - 1)) << tile_bits) + ox
+        ry = ((b >> row_bits) << tile_bits) + oy
         records[ry, rx, 0] = max(face[k], 0)
         records[ry, rx, 1] = bary[k, 0]
         records[ry, rx, 2] = bary[k, 1]
         records[ry, rx, 3] = key[k]
+        r = cell[k] % per_key
+        if shared[r] > 1:
+            # The tile's other keys' blocks: -1 there, "another draw's pixel".
+            for q in range(n_keys):
+                o = block_of[q * per_key + r]
+                if o >= 0 and o != b:
+                    records[((o >> row_bits) << tile_bits) + oy,
+                            ((o & (per_row - 1)) << tile_bits) + ox, 3] = -1.0
     return records, block_key, block_tile
 
 

@@ -151,7 +151,7 @@ def test_resize_between_frames_gives_a_fresh_renderers_frame(ctx):
 def test_record_blocks_match_a_brute_force_packing(seed):
     # reveal_shade's hit records: one 8 x 8 block per (key, screen tile) in order of
     # (key, tile row, tile column), 4 blocks a row here, each pixel's record at its
-    # offset within its tile; everything else zero.
+    # offset within its tile, -1 there in the tile's other keys' blocks; else zero.
     from raytrace.kernels import pack_blocks
     rng = np.random.default_rng(seed)
     n, tile, per_row = 500, 8, 4
@@ -172,6 +172,13 @@ def test_record_blocks_match_a_brute_force_packing(seed):
         y = (b // per_row) * tile + gy[k] % tile
         x = (b % per_row) * tile + gx[k] % tile
         want[y, x] = (max(face[k], 0), bary[k, 0], bary[k, 1], key[k])
+        # The same screen tile's other keys' blocks: -1, "another draw's pixel".
+        for other in set(key):
+            o = index.get((other, gy[k] // tile, gx[k] // tile))
+            if other != key[k] and o is not None:
+                want[(o // per_row) * tile + gy[k] % tile, (o % per_row) * tile + gx[k] % tile,
+                     3] = -1.0
+    assert (want[..., 3] == -1).sum() > 10
     np.testing.assert_array_equal(records, want)
 
 

@@ -87,7 +87,8 @@ class RevealState:
             tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
         return tex
 
-    def tile_list(self, k: int) -> TileList:
+    def tile_list(self, k) -> TileList:
+        """Layer k's tile list (or another kept list, by name)."""
         if k not in self.tiles:
             self.tiles[k] = TileList(self.ctx)
         return self.tiles[k]
@@ -254,16 +255,22 @@ class RevealShade(FullscreenPass):
         for k in range(MAX_LAYERS):
             names = packed_names(k)
             tl = st.tile_list(k)
+            hits = st.layers[k] if k < len(st.layers) else None
+            new = hits.tiles if hits is not None else np.zeros((0, 2), np.int64)
             if tl.count and all(frame.pool.written_box(n) == tl.box for n in names):
-                # Only last frame's draws wrote here: undo them tile by tile (a thin
-                # object's box can span the screen while its tiles hold a few pixels).
-                self.clear_tiles.draw(frame, names, {}, tiles=tl, clear=False)
+                # Only last frame's draws wrote here, and this frame's draws write every
+                # pixel of their tiles: clear last frame's other tiles alone (tile by
+                # tile: a thin object's box can span the screen while its tiles hold a
+                # few pixels).
+                stale = st.tile_list(f"stale{k}")
+                stale.set(tiles_not_in(tl.tiles, new), SHADE_TILE, frame.size)
+                if stale.count:
+                    self.clear_tiles.draw(frame, names, {}, tiles=stale, clear=False)
                 frame.pool.mark_clean(names)
             else:
                 frame.pool.clear(names)     # where the last frame drew (ResourcePool.clear)
-            hits = st.layers[k] if k < len(st.layers) else None
             if hits is None:
-                tl.set(np.zeros((0, 2)), SHADE_TILE, frame.size, BLOCKS_PER_ROW)
+                tl.set(new, SHADE_TILE, frame.size, BLOCKS_PER_ROW)
                 continue
             records = st.records_texture(k, hits.records.shape[:2])
             h, w = hits.records.shape[:2]
@@ -281,10 +288,17 @@ class RevealShade(FullscreenPass):
             objects = {o.id: o for o in frame.scene.objects}
             for key, first, count in hits.keys:
                 set_uniform(prog, "u_miss", key == 1)
-                set_uniform(prog, "u_key", float(key))
                 if key > 1:
                     gpu.bind_object(prog, objects[key - 1], t, t_open, t_close)
                 self.draw(frame, names, {}, tiles=tl.part(first, count), clear=False)
+
+
+def tiles_not_in(tiles: np.ndarray, other: np.ndarray) -> np.ndarray:
+    """The rows (tx, ty) of `tiles` that are not rows of `other`."""
+    if not len(tiles) or not len(other):
+        return tiles
+    w = int(max(tiles[:, 0].max(), other[:, 0].max())) + 1
+    return tiles[~np.isin(tiles[:, 1] * w + tiles[:, 0], other[:, 1] * w + other[:, 0])]
 
 
 def reveal_passes() -> list:
