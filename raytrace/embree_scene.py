@@ -282,18 +282,16 @@ class RayScene:
         static_own = kernels.member(excl, self._is_static)
         if self._static is not None and excl.any():
             # Rays whose own object is static: into the scene without it, where one exists.
-            static_rows = np.flatnonzero(static_own)
-            # The rays of each own object, in ray order: one stable sort, not a scan each.
-            order = static_rows[np.argsort(excl[static_rows], kind="stable")]
-            cuts = np.flatnonzero(np.diff(excl[order])) + 1
+            # The rays of each own object, in ray order (a counting sort, not a scan each).
+            order, starts = kernels.group_rows(excl, static_own)
             passed = np.zeros(n, dtype=bool)
-            for sel in np.split(order, cuts) if order.size else ():
+            for a, b in zip(starts[:-1], starts[1:]):
+                sel = order[a:b]
                 ex = self.exclusion_scene(int(excl[sel[0]]))
                 if ex is None:
                     continue
                 es, ex_ids = ex
-                s0 = start[sel]
-                r = _embree_run(es, o32[sel], d32[sel], best[sel] - s0)
+                r = _embree_run(es, *kernels.gather_rays(o32, d32, start, best, sel))
                 queries += sel.size
                 keep(sel, ex_ids, r)
                 passed[sel] = True

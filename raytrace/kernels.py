@@ -338,3 +338,65 @@ def nonzero_pixels(gl_rows, i0, j0):
                 values[k] = v
                 k += 1
     return ij, values
+
+
+@njit(**_JIT)
+def group_rows(values, member):
+    """The rows i with member[i], grouped by values[i] (ascending), in row order within a
+    group (a counting sort: the values are small ids), and where each group starts
+    (with the end appended): np.argsort(values[rows], kind="stable") and its cuts."""
+    n = values.shape[0]
+    top = 0
+    for i in range(n):
+        if member[i]:
+            top = max(top, values[i])
+    count = np.zeros(top + 2, np.int64)
+    for i in range(n):
+        if member[i]:
+            count[values[i] + 1] += 1
+    groups = 0
+    for v in range(top + 1):
+        if count[v + 1] > 0:
+            groups += 1
+    for v in range(top + 1):
+        count[v + 1] += count[v]
+    order = np.empty(count[top + 1], np.int64)
+    fill = count[:top + 1].copy()
+    for i in range(n):
+        if member[i]:
+            order[fill[values[i]]] = i
+            fill[values[i]] += 1
+    starts = np.empty(groups + 1, np.int64)
+    g = 0
+    for v in range(top + 1):
+        if count[v + 1] > count[v]:
+            starts[g] = count[v]
+            g += 1
+    starts[groups] = order.shape[0]
+    return order, starts
+
+
+@njit(**_JIT)
+def gather_rays(o32, d32, start, best, rows):
+    """Rays `rows` as Embree takes them: origins, directions, far limits best - start."""
+    m = rows.shape[0]
+    o = np.empty((m, 3), np.float32)
+    d = np.empty((m, 3), np.float32)
+    tfar = np.empty(m, np.float32)
+    for k in range(m):
+        i = rows[k]
+        for c in range(3):
+            o[k, c] = o32[i, c]
+            d[k, c] = d32[i, c]
+        tfar[k] = np.float32(best[i] - start[i])
+    return o, d, tfar
+
+
+@njit(**_JIT)
+def mark_tiles(pixels, rows, cols, tile):
+    """(rows, cols, 2) float32, (0, 1) in the tile x tile tiles holding a pixel (i, j) of
+    `pixels`, 0 elsewhere (image orientation)."""
+    out = np.zeros((rows, cols, 2), np.float32)
+    for k in range(pixels.shape[0]):
+        out[pixels[k, 1] // tile, pixels[k, 0] // tile, 1] = 1.0
+    return out

@@ -636,3 +636,18 @@ def test_large_views_keep_no_static_hits(monkeypatch):
     a = reveal(rs, cam, 0.0, pix, np.zeros(48), threads=1)
     b = reveal(rs, cam, 0.0, pix, np.zeros(48), threads=1)
     assert a.queries == b.queries > 0 and rs._static_hits is None
+
+
+def test_group_rows_is_a_stable_sort_by_id():
+    from raytrace.kernels import group_rows
+    rng = np.random.default_rng(8)
+    values = rng.integers(0, 9, 500).astype(np.uint32)
+    member = rng.uniform(size=500) < 0.6
+    order, starts = group_rows(values, member)
+    rows = np.flatnonzero(member)
+    want = rows[np.argsort(values[rows], kind="stable")]
+    np.testing.assert_array_equal(order, want)
+    cuts = np.r_[0, np.flatnonzero(np.diff(values[want])) + 1, len(want)]
+    np.testing.assert_array_equal(starts, cuts)
+    order, starts = group_rows(values, np.zeros(500, bool))
+    assert len(order) == 0 and starts.tolist() == [0]

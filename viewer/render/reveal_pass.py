@@ -141,9 +141,7 @@ def mask_tiles(pixels: np.ndarray, size: tuple[int, int], tile: int) -> np.ndarr
     """Per tile x tile tile (image orientation), (0, 1 if it holds a masked pixel): the
     ray mask's tile summary, for the time-sampled composite."""
     w, h = size
-    out = np.zeros((-(-h // tile), -(-w // tile), 2), np.float32)
-    out[pixels[:, 1] // tile, pixels[:, 0] // tile, 1] = 1.0
-    return out
+    return kernels.mark_tiles(pixels, -(-h // tile), -(-w // tile), tile)
 
 
 BLOCKS_PER_ROW = 256     # record blocks (SHADE_TILE x SHADE_TILE) per row; both powers of 2
