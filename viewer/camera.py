@@ -4,6 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from . import transforms as tf
 from .conventions import pixel_centres_ndc
@@ -47,40 +48,30 @@ class Camera:
     def rays(self, t: float, i, j) -> tuple[np.ndarray, np.ndarray]:
         """Origins and unit directions of the rays through the centres of image pixels (i, j).
         The origins are one read-only row, the eye, broadcast to (n, 3) (stride 0: the
-        ray caster sees at once that they are shared).
-
-        A camera seen at the same pose twice in a row (a still camera, frame after frame)
-        keeps every pixel's direction and answers by lookup; the values are the same."""
+        ray caster sees at once that they are shared)."""
         eye, fwd, up = self.spec.pose(t)
-        pose = (np.concatenate([eye, fwd, up]).tobytes(), self.spec.fov_y, self.width,
-                self.height)
-        cache = self.__dict__.setdefault("_ray_cache", {})
-        if cache.get("pose") == pose:
-            if "grid" not in cache:
-                jj, ii = np.mgrid[0:self.height, 0:self.width]
-                cache["grid"] = self._directions(eye, fwd, up, ii.ravel(), jj.ravel())
-            # np.take: several times faster than fancy indexing for rows of (N, 3).
-            d = np.take(cache["grid"], np.asarray(j) * self.width + np.asarray(i), axis=0)
-        else:
-            cache.clear()
-            cache["pose"] = pose
-            d = self._directions(eye, fwd, up, i, j)
-        return np.broadcast_to(np.asarray(eye, np.float64), d.shape), d
-
-    def _directions(self, eye, fwd, up, i, j) -> np.ndarray:
         right = np.cross(fwd, up)
         right /= np.linalg.norm(right)
         true_up = np.cross(right, fwd)
-        x, y = pixel_centres_ndc(i, j, self.width, self.height)
+        # Every column's and row's pixel-centre NDC (the convention's one place), then one
+        # compiled pass over the rays (numpy's dozen passes cost more than the rays).
+        cols, rows = self._centres()
         tan_half = np.tan(np.radians(self.spec.fov_y) * 0.5)
-        sx, sy = x * (tan_half * self.aspect), y * tan_half
-        # Column by column: (n, 3) broadcasting costs several times more here.
-        d = np.empty((len(sx), 3))
-        for k in range(3):
-            d[:, k] = fwd[k] + sx * right[k] + sy * true_up[k]
-        inv_len = 1.0 / np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])
-        d *= inv_len[:, None]
-        return d
+        d = _directions(np.asarray(i, np.int64).reshape(-1), np.asarray(j, np.int64).reshape(-1),
+                        cols, rows, np.asarray(fwd, np.float64), right, true_up,
+                        tan_half * self.aspect, tan_half)
+        return np.broadcast_to(np.asarray(eye, np.float64), d.shape), d
+
+    def _centres(self) -> tuple[np.ndarray, np.ndarray]:
+        key = (self.width, self.height)
+        kept = self.__dict__.get("_centres_cache")
+        if kept is None or kept[0] != key:
+            x, _ = pixel_centres_ndc(np.arange(self.width), np.zeros(self.width),
+                                     self.width, self.height)
+            _, y = pixel_centres_ndc(np.zeros(self.height), np.arange(self.height),
+                                     self.width, self.height)
+            kept = self.__dict__["_centres_cache"] = (key, (x, y))
+        return kept[1]
 
     def project(self, t: float, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """World points -> (GL window pixel coordinates x right / y up, view depth)."""
@@ -90,3 +81,20 @@ class Camera:
         ndc = clip[:, :2] / clip[:, 3:4]
         win = (ndc * 0.5 + 0.5) * np.array([self.width, self.height])
         return win, -view[:, 2]
+
+
+@njit(cache=True, nogil=True)
+def _directions(i, j, cols, rows, fwd, right, up, scale_x, scale_y):
+    """Unit directions fwd + x sx right + y sy up through pixels (i, j), x = cols[i] and
+    y = rows[j] their centres in NDC (in numpy's order of operations)."""
+    n = i.shape[0]
+    d = np.empty((n, 3))
+    for k in range(n):
+        sx = cols[i[k]] * scale_x
+        sy = rows[j[k]] * scale_y
+        for c in range(3):
+            d[k, c] = fwd[c] + sx * right[c] + sy * up[c]
+        inv_len = 1.0 / np.sqrt(d[k, 0] * d[k, 0] + d[k, 1] * d[k, 1] + d[k, 2] * d[k, 2])
+        for c in range(3):
+            d[k, c] *= inv_len
+    return d
