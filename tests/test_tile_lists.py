@@ -21,6 +21,7 @@ def render_buffers(ctx, scene, p, full_screen: bool, monkeypatch, size=SIZE):
     try:
         res = r.render("hybrid", scene.render.time, p)
         bufs = {n: r.pool.get(n).read() for n in ("mask_displacement", "mask_edge", "ray_mask",
+                                                  "hybrid_tilemax_x", "hybrid_neighbormax",
                                                   "hybrid")}
         return res, bufs
     finally:
@@ -39,7 +40,9 @@ def test_tiled_passes_equal_full_screen(ctx, monkeypatch, name, composite):
     tiled, a = render_buffers(ctx, scene, p, False, monkeypatch)
     full, b = render_buffers(ctx, scene, p, True, monkeypatch)
     assert "active_tiles" in tiled.stats and "active_tiles" not in full.stats
-    for n in ("mask_displacement", "mask_edge", "ray_mask"):
+    # (The TileMax strip runs only where a tile's D is not all 0: the same strips.)
+    for n in ("mask_displacement", "mask_edge", "ray_mask", "hybrid_tilemax_x",
+              "hybrid_neighbormax"):
         assert a[n] == b[n], n
     # The composite skips only pixels whose every time sample is their own colour; the
     # full-screen pass averages n equal values there, which may differ in the last bit.

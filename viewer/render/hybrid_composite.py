@@ -22,7 +22,7 @@ from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass
 from .pool import TexSpec
-from .tile_lists import FINE, tile_coords, tile_list
+from .tile_lists import FINE, moving_strips, tile_coords, tile_list
 from .tiles import tile_passes
 
 # Which noise stream of glsl/noise.glsl's hash01 jitters the time samples or taps.
@@ -163,4 +163,4 @@ class Composite(FullscreenPass):
 
 def composite_passes() -> list:
     """The displacement tiles and the composite, after the reveal."""
-    return [*tile_passes("hybrid_front", "hybrid"), Composite()]
+    return [*tile_passes("hybrid_front", "hybrid", select_x=moving_strips), Composite()]

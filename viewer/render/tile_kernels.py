@@ -14,20 +14,20 @@ _CORNERS = ((0, 0), (1, 0), (0, 1), (1, 0), (1, 1), (0, 1))
 
 
 @njit(**_JIT)
-def tile_quads(tiles, tile, w, h, blocks_per_row):
-    """The vertex data of tile quads (float32, 6 vertices a tile: the corner, and where
-    blocks_per_row > 0 also the corner's place in a block-packed record texture, block k
-    at (k % blocks_per_row, k // blocks_per_row) * tile) and the GL-pixel box
-    (x0, y0, x1, y1) around the tiles, cut at the screen's edge (n >= 1 for the box)."""
+def tile_quads(tiles, tile, tile_h, w, h, blocks_per_row):
+    """The vertex data of tile x tile_h quads (float32, 6 vertices a tile: the corner, and
+    where blocks_per_row > 0 also the corner's place in a block-packed record texture,
+    block k at (k % blocks_per_row, k // blocks_per_row) * tile) and the GL-pixel box
+    (x0, y0, x1, y1) around the tiles, cut at the target's edge (n >= 1 for the box)."""
     n = tiles.shape[0]
     stride = 4 if blocks_per_row > 0 else 2
     data = np.empty(n * 6 * stride, np.float32)
     bx0, by0, bx1, by1 = w, h, 0, 0
     for k in range(n):
         x0 = tiles[k, 0] * tile
-        y0 = tiles[k, 1] * tile
+        y0 = tiles[k, 1] * tile_h
         x1 = min(x0 + tile, w)
-        y1 = min(y0 + tile, h)
+        y1 = min(y0 + tile_h, h)
         bx0, by0, bx1, by1 = min(bx0, x0), min(by0, y0), max(bx1, x1), max(by1, y1)
         rx = (k % blocks_per_row) * tile - x0 if blocks_per_row > 0 else 0
         ry = (k // blocks_per_row) * tile - y0 if blocks_per_row > 0 else 0

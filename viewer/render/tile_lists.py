@@ -60,8 +60,9 @@ class TileList:
         self.blocks_per_row = None
 
     def set(self, tiles: np.ndarray, tile: int, size: tuple[int, int],
-            blocks_per_row: int | None = None):
-        """tiles: (n, 2) tile coordinates (tx, ty), GL orientation.
+            blocks_per_row: int | None = None, tile_h: int | None = None):
+        """tiles: (n, 2) tile coordinates (tx, ty), GL orientation, of tile x tile pixels
+        (tile x tile_h where given) of a target of `size`.
 
         blocks_per_row: also give every vertex `in_record`, its place in a texture that
         stores tile k's pixels as a tile x tile block at (k % blocks_per_row,
@@ -70,7 +71,8 @@ class TileList:
         self.count = len(self.tiles)
         w, h = size
         self.tile, self.size = tile, size
-        data, box = tile_kernels.tile_quads(self.tiles, tile, w, h, blocks_per_row or 0)
+        data, box = tile_kernels.tile_quads(self.tiles, tile, tile_h or tile, w, h,
+                                            blocks_per_row or 0)
         self.box = tuple(int(b) for b in box) if self.count else None
         if blocks_per_row != self.blocks_per_row:
             self._release_buffer()                      # the vertex layout changes
@@ -258,6 +260,26 @@ class SelectTiles(Pass):
         frame.stats["moving_tiles"] = lists.moving.count
         frame.stats["active_tiles"] = lists.active.count
         frame.stats["surface_tiles"] = lists.surface.count
+
+
+def moving_strips(frame: Frame, k: int) -> TileList | None:
+    """The texels of a k x 1 TileMax strip (ceil(W / k) x H) that can be nonzero: those
+    whose k pixels meet a FINE tile with any displacement (longest |D| > 0, so elsewhere
+    every D there is exactly 0, the strip's value), as 1 x FINE quads; None without tile
+    lists."""
+    lists = frame.host.get("tile_lists")
+    if lists is None:
+        return None
+    w, h = frame.size
+    sw = -(-w // k)
+    x0 = np.arange(sw) * k
+    t0, t1 = x0 // FINE, (np.minimum(x0 + k, w) - 1) // FINE          # FINE columns met
+    csum = np.concatenate([np.zeros((lists.shape[0], 1), np.int64),
+                           np.cumsum(lists.longest > 0, axis=1)], axis=1)
+    meets = csum[:, t1 + 1] - csum[:, t0] > 0                          # (FINE rows, strips)
+    tl = lists.extra("tilemax_strips")
+    tl.set(tile_coords(meets), 1, (sw, h), tile_h=FINE)
+    return tl
 
 
 def tile_list(frame: Frame, which: str) -> TileList | None:

@@ -31,12 +31,15 @@ class TileMaxPass(FullscreenPass):
     axis "y" reduces 1 x k (strip -> tiles)."""
     fragment = "tilemax.frag"
 
-    def __init__(self, source: str, output: str, axis: str, tile=max_radius_px):
+    def __init__(self, source: str, output: str, axis: str, tile=max_radius_px, select=None):
+        """select(frame, k): a TileList over the output's texels that can be nonzero (the
+        rest is cleared to 0, the value of a still strip), or None for all of them."""
         if axis not in ("x", "y"):
             raise ValueError(f"TileMaxPass axis must be 'x' or 'y', got {axis!r}")
         self.name = output
         self.inputs, self.produces = (source,), (output,)
         self.source, self.output, self.axis, self.tile = source, output, axis, tile
+        self.select = select
 
     def outputs(self, frame: Frame):
         k = self.tile(frame)
@@ -44,9 +47,12 @@ class TileMaxPass(FullscreenPass):
         return {self.output: spec}
 
     def execute(self, frame: Frame):
-        self.draw(frame, (self.output,), {"u_velocity": self.source},
-                  {"u_tile": self.tile(frame),
-                   "u_axis": (1, 0) if self.axis == "x" else (0, 1)})
+        k = self.tile(frame)
+        uniforms = {"u_tile": k, "u_axis": (1, 0) if self.axis == "x" else (0, 1)}
+        tiles = self.select(frame, k) if self.select is not None else None
+        if tiles is not None:
+            uniforms["u_viewport"] = tuple(float(x) for x in tiles.size)
+        self.draw(frame, (self.output,), {"u_velocity": self.source}, uniforms, tiles=tiles)
 
 
 class NeighborMaxPass(FullscreenPass):
@@ -65,9 +71,9 @@ class NeighborMaxPass(FullscreenPass):
         self.draw(frame, (self.output,), {"u_tiles": self.source})
 
 
-def tile_passes(source: str, prefix: str, tile=max_radius_px) -> list[Pass]:
+def tile_passes(source: str, prefix: str, tile=max_radius_px, select_x=None) -> list[Pass]:
     """TileMax x, TileMax y and NeighborMax of `source`, producing PREFIX_tilemax_x,
-    PREFIX_tilemax and PREFIX_neighbormax."""
-    return [TileMaxPass(source, f"{prefix}_tilemax_x", "x", tile),
+    PREFIX_tilemax and PREFIX_neighbormax; select_x: TileMaxPass's `select` for the first."""
+    return [TileMaxPass(source, f"{prefix}_tilemax_x", "x", tile, select_x),
             TileMaxPass(f"{prefix}_tilemax_x", f"{prefix}_tilemax", "y", tile),
             NeighborMaxPass(f"{prefix}_tilemax", f"{prefix}_neighbormax", tile)]
