@@ -314,3 +314,13 @@ def test_displacement_test_runs_only_near_id_boundaries(ctx, monkeypatch):
         for n in ("mask_displacement", "mask_edge", "ray_mask"):
             assert a[n] == b[n], (n, size)
     assert tiled.stats["surface_tiles"] < 0.5 * tiled.stats["moving_tiles"]
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_chessboard_distance_is_scipys(seed):
+    from scipy.ndimage import distance_transform_cdt
+    from viewer.render.tile_kernels import chessboard_distance
+    sources = np.random.default_rng(seed).uniform(size=(13, 21)) < 0.04
+    sources[5, 7] = True
+    np.testing.assert_array_equal(chessboard_distance(sources),
+                                  distance_transform_cdt(~sources, metric="chessboard"))

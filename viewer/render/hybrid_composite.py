@@ -15,9 +15,10 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import distance_transform_cdt, maximum_filter
+from scipy.ndimage import maximum_filter
 
 from .blur_common import max_radius_px
+from . import tile_kernels
 from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass
@@ -51,7 +52,7 @@ def near_outlines(frame: Frame, shape) -> np.ndarray:
     q = -(-2 * k // FINE) + 1
     around = maximum_filter(lists.longest, size=2 * q + 1, mode="constant", cval=0.0)
     reach = 0.5 * np.minimum(around.astype(np.float64), 2.0 * k) + p.tolerance + 1.0
-    dist = distance_transform_cdt(~lists.boundary, metric="chessboard")
+    dist = tile_kernels.chessboard_distance(lists.boundary)
     return dist <= 1.0 + reach / FINE
 
 

@@ -24,8 +24,8 @@ or a survivor, and there it first reads the own-object bits of every tile in rea
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import distance_transform_cdt
 
+from . import tile_kernels
 from .blur_common import max_radius_px
 from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
@@ -211,7 +211,7 @@ class RangeCheck(FullscreenPass):
                                0.5 * float(p.relative_reach) * lists.longest.astype(np.float64))
             in_reach = np.zeros_like(edges)
             if edges.any():
-                dist = distance_transform_cdt(~edges, metric="chessboard")
+                dist = tile_kernels.chessboard_distance(edges)
                 in_reach = dist <= 1.0 + (reach + 1.0) / FINE
             keep = lists.moving_tiles & (in_reach | frame.host["survivor_tiles"])
             tiles = lists.extra("range_check")

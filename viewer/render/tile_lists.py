@@ -28,7 +28,6 @@ import math
 
 import moderngl
 import numpy as np
-from scipy.ndimage import distance_transform_cdt
 
 from .blur_common import max_radius_px
 from .frame import Frame
@@ -200,7 +199,7 @@ def near_boundary(longest: np.ndarray, boundary: np.ndarray, tile: int) -> np.nd
     only after an uncovering, never start)."""
     if not boundary.any():
         return np.zeros_like(boundary)
-    dist = distance_transform_cdt(~boundary, metric="chessboard")
+    dist = tile_kernels.chessboard_distance(boundary)
     return dist <= 1.0 + (0.5 * longest.astype(np.float64) + 2.0) / tile
 
 
