@@ -17,8 +17,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import maximum_filter
 
-from .blur_common import max_radius_px
 from . import tile_kernels
+from .blur_common import max_radius_px
 from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass
