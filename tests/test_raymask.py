@@ -249,17 +249,15 @@ def test_sparse_edges_on_a_wide_frame_match_numpy(synthetic_frame, seed):
     assert np.count_nonzero((mask > 0) & (dm == 0)) >= 10
 
 
-def test_tile_lists_keep_far_uncoverings(synthetic_frame):
-    # A wide bar moving 60 px over a wall: its pixels up to 30 px inside its edges are
-    # uncovered, two tiles from the tiles holding the outline. With tile lists (the
-    # displacement test only within |D|/2 + 2 px of an id boundary) the masks equal the
-    # full-screen passes'.
+def wide_bar_masks(synthetic_frame, bg_disp):
+    """A bar (columns 40-199 of 240 x 48, id 2, depth 2) moving 60 px over a wall (id 1,
+    depth 10) moving bg_disp: (stats with tile lists, masks with tile lists, masks of the
+    full-screen passes), masks in image orientation."""
     from viewer.render.tile_lists import selection_passes
-    w, h = 240, 48
-    bar = (40, 200)
+    w, h, bar = 240, 48, (40, 200)
     depth = np.full((h, w), 10.0)
     ids = np.ones((h, w), np.uint32)
-    disp = np.zeros((h, w, 2))
+    disp = np.tile(np.asarray(bg_disp, float), (h, w, 1))
     depth[:, bar[0]:bar[1]], ids[:, bar[0]:bar[1]], disp[:, bar[0]:bar[1]] = 2.0, 2, (60.0, 0.0)
     normal = np.tile([0.0, 0.0, 1.0, 0.0], (h, w, 1))
     got = []
@@ -271,38 +269,32 @@ def test_tile_lists_keep_far_uncoverings(synthetic_frame):
             p.execute(frame)
         got.append({n: to_image(frame.read(n)) for n in ("mask_displacement", "ray_mask")})
         if tiled:
-            assert frame.stats["surface_tiles"] < frame.stats["moving_tiles"]
+            stats = dict(frame.stats)
+    return stats, got[0], got[1]
+
+
+def test_tile_lists_keep_far_uncoverings(synthetic_frame):
+    # A wide bar moving 60 px over a still wall: its pixels up to 30 px inside its edges
+    # are uncovered, two tiles from the tiles holding the outline. With tile lists (the
+    # displacement test only within |D|/2 + 2 px of an id boundary) the masks equal the
+    # full-screen passes'.
+    stats, tiled, full = wide_bar_masks(synthetic_frame, (0.0, 0.0))
+    assert stats["surface_tiles"] < stats["moving_tiles"]
     for n in ("mask_displacement", "ray_mask"):
-        np.testing.assert_array_equal(got[0][n], got[1][n], err_msg=n)
+        np.testing.assert_array_equal(tiled[n], full[n], err_msg=n)
     # Uncovered 30 px in from the leading and trailing edges, by the displacement test.
-    assert columns(got[1]["mask_displacement"][20]) == list(range(40, 70)) + list(range(170, 200))
+    assert columns(full["mask_displacement"][20]) == list(range(40, 70)) + list(range(170, 200))
 
 
 def test_tile_lists_keep_the_range_checks_far_reach(synthetic_frame):
     # Everything moves (a camera-like frame: the range check draws only the tiles with an
-    # edge within their search's reach): a wide bar moving 60 px over a wall moving -60
-    # px. Bar pixels whose own probes (30 px) stay on the bar are masked by the range
-    # check where the silhouette, whose relative motion reaches 60 px, lies within their
-    # search (min(k, |D|) = 60 px): up to four tiles from the edge tiles. With tile lists
-    # the mask equals the full-screen passes'.
-    from viewer.render.tile_lists import selection_passes
-    w, h = 240, 48
-    bar = (40, 200)
-    depth = np.full((h, w), 10.0)
-    ids = np.ones((h, w), np.uint32)
-    disp = np.tile([-60.0, 0.0], (h, w, 1))
-    depth[:, bar[0]:bar[1]], ids[:, bar[0]:bar[1]], disp[:, bar[0]:bar[1]] = 2.0, 2, (60.0, 0.0)
-    normal = np.tile([0.0, 0.0, 1.0, 0.0], (h, w, 1))
-    got = []
-    for tiled in (True, False):
-        frame = synthetic_frame((w, h), params())
-        upload(frame, depth, ids, disp, normal)
-        for p in (selection_passes() if tiled else []) + raymask_passes():
-            p.allocate(frame)
-            p.execute(frame)
-        got.append(to_image(frame.read("ray_mask")))
-        if tiled:
-            assert 0 < frame.stats["range_tiles"] < frame.stats["moving_tiles"]
-    np.testing.assert_array_equal(got[0], got[1])
-    masked = columns(got[1][20])
+    # edge within their search's reach): the bar moving 60 px over a wall moving -60 px.
+    # Bar pixels whose own probes (30 px) stay on the bar are masked by the range check
+    # where the silhouette, whose relative motion reaches 60 px, lies within their search
+    # (min(k, |D|) = 60 px): up to four tiles from the edge tiles. With tile lists the
+    # mask equals the full-screen passes'.
+    stats, tiled, full = wide_bar_masks(synthetic_frame, (-60.0, 0.0))
+    assert 0 < stats["range_tiles"] < stats["moving_tiles"]
+    np.testing.assert_array_equal(tiled["ray_mask"], full["ray_mask"])
+    masked = columns(full["ray_mask"][20])
     assert 95 in masked and 120 not in masked
