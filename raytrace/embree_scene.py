@@ -305,12 +305,12 @@ class RayScene:
             use, keys, r_new, k_new, rows = kernels.view_split(
                 left, static_own, np.asarray(pixels, dtype=np.int64).reshape(n), hits.known)
             if r_new.size:
-                s0 = start[r_new]
-                r = _embree_run(self._static, o32[r_new], d32[r_new], limit[r_new] - s0)
+                r = _embree_run(self._static,
+                                *kernels.gather_rays(o32, d32, start, limit, r_new))
                 queries += r_new.size
-                hits.store(k_new, id_of[r["geomID"] + 1], r, s0 + r["tfar"])
+                hits.store(k_new, id_of[r["geomID"] + 1], r, start[r_new] + r["tfar"])
             kernels.view_merge(use, keys, hits.object_id, hits.prim_id, hits.u, hits.v,
-                         hits.distance, best, object_id, prim_id, u, v)
+                               hits.distance, best, object_id, prim_id, u, v)
         if self._static is not None and (rows is None or rows.size):
             org, offset = (o_start if rows is None else o_start[rows]), start.copy()
             for depth in range(max_restarts + 1):

@@ -17,13 +17,12 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import maximum_filter
 
-from . import tile_kernels
 from .blur_common import max_radius_px
 from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass
 from .pool import TexSpec
-from .tile_lists import FINE, moving_strips, tile_coords, tile_list
+from .tile_lists import FINE, moving_strips, tile_coords, tile_list, within_reach
 from .tiles import tile_passes
 
 # Which noise stream of glsl/noise.glsl's hash01 jitters the time samples or taps.
@@ -38,22 +37,18 @@ def near_outlines(frame: Frame, shape) -> np.ndarray:
     clamped to the blur limit 2k, and a tap lands within half a pixel of its point: the
     neighbourhood (McGuire's 3 x 3 tiles of k px) lies within 2k px, so tile T's lines
     reach at most R_T = min(M_T, 2k) / 2 + the landing tolerance + a pixel, M_T the
-    longest |D| within 2k px of T; T is near a boundary tile L tiles away when the gap
-    (L - 1) tiles <= R_T. Elsewhere every tap of the neighbourhood's line lands on the
+    longest |D| within 2k px of T (tile_lists.within_reach of a boundary tile). Elsewhere every tap of the neighbourhood's line lands on the
     pixel's own object, where it adds nothing unless that line is also the own line: the
     SIMPLE variant, which skips it then, gives the same image."""
     lists = frame.host.get("tile_lists")
     if lists is None or lists.boundary.shape != shape:
         return np.ones(shape, bool)
-    if not lists.boundary.any():
-        return np.zeros(shape, bool)
     p = frame.params["hybrid"]
     k = max_radius_px(frame)
     q = -(-2 * k // FINE) + 1
     around = maximum_filter(lists.longest, size=2 * q + 1, mode="constant", cval=0.0)
     reach = 0.5 * np.minimum(around.astype(np.float64), 2.0 * k) + p.tolerance + 1.0
-    dist = tile_kernels.chessboard_distance(lists.boundary)
-    return dist <= 1.0 + reach / FINE
+    return within_reach(lists.boundary, reach, FINE)
 
 
 def composite_kind(frame: Frame) -> str:

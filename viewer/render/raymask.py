@@ -25,13 +25,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import tile_kernels
 from .blur_common import max_radius_px
 from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass
 from .pool import TexSpec
-from .tile_lists import FINE, moving_threshold, tile_coords, tile_list
+from .tile_lists import FINE, moving_threshold, tile_coords, tile_list, within_reach
 from .tiles import StripSpec
 
 MASK = TexSpec(1, "u1")
@@ -202,17 +201,12 @@ class RangeCheck(FullscreenPass):
             # Only the moving tiles with an edge within their search's reach, or a
             # survivor of the displacement test (masked as it is): the rest would find
             # nothing. A search walks min(k, relative_reach |D| / 2) px each way from its
-            # pixel (probes land within half a pixel), so tile T reaches
-            # R_T = min(k, relative_reach * longest_T / 2) + 1 px, and an edge tile L tiles
-            # away lies within it when the gap (L - 1) tiles <= R_T.
+            # pixel, and its probes land within half a pixel: tile T reaches
+            # R_T = min(k, relative_reach * longest_T / 2) + 1 px.
             lists = frame.host["tile_lists"]
-            edges = edge_tiles(frame)
             reach = np.minimum(float(max_radius_px(frame)),
                                0.5 * float(p.relative_reach) * lists.longest.astype(np.float64))
-            in_reach = np.zeros_like(edges)
-            if edges.any():
-                dist = tile_kernels.chessboard_distance(edges)
-                in_reach = dist <= 1.0 + (reach + 1.0) / FINE
+            in_reach = within_reach(edge_tiles(frame), reach + 1.0, FINE)
             keep = lists.moving_tiles & (in_reach | frame.host["survivor_tiles"])
             tiles = lists.extra("range_check")
             tiles.set(tile_coords(keep), FINE, frame.size)

@@ -189,18 +189,22 @@ def active_tiles(longest: np.ndarray, tile: int, max_disp: float, tolerance: flo
     return tile_kernels.dilate_by_reach(reach, tile, radius)
 
 
+def within_reach(sources: np.ndarray, reach, tile: int) -> np.ndarray:
+    """Tiles T from which a source tile lies within reach[T] px (an array per tile, or one
+    number): tiles L apart (Chebyshev) have a gap of (L - 1) tiles between their pixels,
+    so the nearest source must lie L <= 1 + reach / tile away (L = 0: T itself)."""
+    if not sources.any():
+        return np.zeros_like(sources)
+    return tile_kernels.chessboard_distance(sources) <= 1.0 + np.asarray(reach) / tile
+
+
 def near_boundary(longest: np.ndarray, boundary: np.ndarray, tile: int) -> np.ndarray:
-    """Tiles whose displacement test can see another object: some pixel within
-    R = longest / 2 + 2 px of the tile's (the reach of its probes X +- D/2, a half pixel of
-    rounding, and the other pixel of a boundary pair) lies in a tile that may hold an id
-    boundary. Tiles L apart (Chebyshev) have a gap of (L - 1) tiles, so: the distance to
-    the nearest boundary tile L <= 1 + R / tile. Elsewhere every probe lands on the
-    pixel's own object: nothing is uncovered (and the relative-displacement probes, run
-    only after an uncovering, never start)."""
-    if not boundary.any():
-        return np.zeros_like(boundary)
-    dist = tile_kernels.chessboard_distance(boundary)
-    return dist <= 1.0 + (0.5 * longest.astype(np.float64) + 2.0) / tile
+    """Tiles whose displacement test can see another object: a tile that may hold an id
+    boundary lies within R = longest / 2 + 2 px (the reach of the probes X +- D/2, a half
+    pixel of rounding, and the other pixel of a boundary pair). Elsewhere every probe
+    lands on the pixel's own object: nothing is uncovered (and the relative-displacement
+    probes, run only after an uncovering, never start)."""
+    return within_reach(boundary, 0.5 * longest.astype(np.float64) + 2.0, tile)
 
 
 def tile_coords(selected: np.ndarray) -> np.ndarray:
