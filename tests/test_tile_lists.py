@@ -7,7 +7,7 @@ import pytest
 
 from conftest import CONFORMANCE
 from viewer.params import ParamSet
-from viewer.render import tile_lists
+from viewer.render import tile_kernels, tile_lists
 from viewer.render.renderer import Renderer
 from viewer.scene_loader import load_scene
 
@@ -71,16 +71,77 @@ def test_active_tiles_reach_half_the_displacement_plus_tolerance():
     assert not tile_lists.active_tiles(np.zeros((3, 3), np.float32), tile, 50.0, 0.65).any()
 
 
+def quad_rects(tl: tile_lists.TileList, stride: int) -> np.ndarray:
+    """The (x0, y0, x1, y1) GL-pixel rectangles of a list's quads, from its vertex buffer."""
+    v = np.frombuffer(tl.buffer.read(), np.float32)[:tl.quads * 6 * stride]
+    v = v.reshape(tl.quads, 6, stride)[..., :2]
+    return np.concatenate([v.min(axis=1), v.max(axis=1)], axis=1).astype(int)
+
+
 def test_tile_quads_cover_exactly_the_listed_tiles(ctx):
     tl = tile_lists.TileList(ctx)
     try:
         tl.set(np.array([[0, 0], [2, 1]]), 16, (40, 20))
-        quads = np.frombuffer(tl.buffer.read(), np.float32)[:24].reshape(2, 6, 2)
-        assert quads[0].min(axis=0).tolist() == [0, 0] and quads[0].max(axis=0).tolist() == [16, 16]
-        # The last tile is cut at the screen's edge.
-        assert quads[1].min(axis=0).tolist() == [32, 16] and quads[1].max(axis=0).tolist() == [40, 20]
+        assert quad_rects(tl, 2).tolist() == [[0, 0, 16, 16], [32, 16, 40, 20]]  # cut at the edge
+        # Side by side in a row, then the same run in the next row: one rectangle; the
+        # tile that sticks out gets its own.
+        tl.set(np.array([[1, 0], [2, 0], [3, 0], [1, 1], [2, 1], [3, 1], [3, 2]]), 16, (100, 50))
+        assert sorted(quad_rects(tl, 2).tolist()) == [[16, 0, 64, 32], [48, 32, 64, 48]]
+        assert tl.count == 7 and tl.box == (16, 0, 64, 48)
     finally:
         tl.release()
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_merged_rectangles_cover_each_listed_tile_once(seed):
+    rng = np.random.default_rng(seed)
+    grid = rng.random((rng.integers(1, 12), rng.integers(1, 30))) < rng.random()
+    tiles = np.argwhere(grid)[:, ::-1]                  # (tx, ty)
+    rects = tile_kernels.merge_tiles(np.ascontiguousarray(rng.permutation(tiles)))
+    cover = np.zeros(grid.shape, int)
+    for x0, y0, x1, y1 in rects:
+        assert x0 < x1 and y0 < y1
+        cover[y0:y1, x0:x1] += 1
+    np.testing.assert_array_equal(cover, grid.astype(int))
+    # Maximal runs along x: no two rectangles in a row touch end to start with equal rows.
+    runs = {(y0, y1, x0) for x0, y0, x1, y1 in rects}
+    assert not any((y0, y1, x1) in runs for x0, y0, x1, y1 in rects)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_block_quads_map_every_pixel_to_its_tiles_block(seed):
+    # Runs of tiles drawn as one quad must still send each pixel to its own tile's block:
+    # record = pixel + (block's corner - tile's corner), from the interpolated corners.
+    rng = np.random.default_rng(seed)
+    tile, per_row, w, h = 8, 4, 90, 50
+    grid = rng.random((-(-h // tile), -(-w // tile))) < 0.6
+    tiles = np.argwhere(grid)[:, ::-1]
+    tiles = np.ascontiguousarray(np.concatenate([tiles, tiles[::3]]))   # a second key's run
+    cuts = np.zeros(len(tiles), bool)
+    cuts[len(grid.nonzero()[0])] = True
+    data, box, first = tile_kernels.block_quads(tiles, tile, w, h, per_row, cuts)
+    # Two keys' tiles side by side: a draw per key, so no quad across the cut.
+    pair = np.array([[0, 0], [1, 0]])
+    assert len(tile_kernels.block_quads(pair, tile, w, h, per_row, np.array([0, 1], bool))[2]) == 2
+    assert len(tile_kernels.block_quads(pair, tile, w, h, per_row, np.array([0, 0], bool))[2]) == 1
+    quads = data.reshape(-1, 6, 4)
+    assert len(quads) < len(tiles) and first[0] == 0 and np.all(np.diff(first) > 0)
+    assert len(grid.nonzero()[0]) in first                      # no quad spans the cut
+    seen = np.zeros(len(tiles), int)
+    for q, corners in enumerate(quads):
+        lo, hi = corners[:, :2].min(axis=0), corners[:, :2].max(axis=0)
+        offset = corners[0, 2:] - corners[0, :2]
+        assert np.all(corners[:, 2:] - corners[:, :2] == offset)   # one affine map a quad
+        last = first[q + 1] if q + 1 < len(first) else len(tiles)
+        for k in range(first[q], last):
+            tx, ty = tiles[k]
+            assert lo[0] <= tx * tile < hi[0] and lo[1] <= ty * tile < hi[1]
+            block = np.array([k % per_row, k // per_row]) * tile
+            np.testing.assert_array_equal(np.array([tx, ty]) * tile + offset, block)
+            seen[k] += 1
+        # The quad spans exactly its tiles (cut at the screen's edge).
+        assert hi[0] == min((tiles[last - 1, 0] + 1) * tile, w) and lo[0] == tiles[first[q], 0] * tile
+    assert np.all(seen == 1)
 
 
 def test_partial_clears_leave_nothing_of_the_last_frame(ctx):

@@ -274,7 +274,8 @@ class RevealShade(FullscreenPass):
             h, w = hits.records.shape[:2]
             records.write(hits.records.tobytes(), viewport=(0, 0, w, h))
             # The tiles holding this layer's pixels; each object's draw keeps its own.
-            tl.set(hits.tiles, SHADE_TILE, frame.size, BLOCKS_PER_ROW)
+            tl.set(hits.tiles, SHADE_TILE, frame.size, BLOCKS_PER_ROW,
+                   cuts=[first for _, first, _ in hits.keys])
             prog = self.program(frame, tl.vertex_shader)
             gpu.bind_camera(prog, cam, t, t_open, t_close, frame.size)
             set_uniform(prog, "u_background", frame.scene.background)

@@ -16,8 +16,8 @@ bottom left):
       clamped to the blur limit, plus the composite's landing tolerance and a pixel): the
       composite runs only there; everywhere else it would return the sharp colour.
 
-A pass given a TileList draws the list's quads (glsl/tiles.vert) with its own fragment
-shader instead of the full-screen triangle; its targets are cleared first (or, for the
+A pass given a TileList draws the list's quads (glsl/tiles.vert; adjacent tiles merged
+into rectangles, which llvmpipe shades faster) with its own fragment shader instead of the full-screen triangle; its targets are cleared first (or, for the
 composite, start as a copy of the sharp colour). Without lists (synthetic tests, single
 passes) every pass draws full screen: both ways give the same pixels, which
 tests/test_tile_lists.py checks on real scenes.
@@ -53,25 +53,37 @@ class TileList:
         self.buffer: moderngl.Buffer | None = None
         self.vaos: dict[int, moderngl.VertexArray] = {}
         self.count = 0                 # tiles in the current list
+        self.quads = 0                 # quads drawn: one per tile, or merged rectangles
         self.tiles = np.zeros((0, 2), np.int64)
         self.box = None                # (x0, y0, x1, y1) GL pixels around the tiles
         self.vertex_shader = "tiles.vert"
         self.blocks_per_row = None
 
     def set(self, tiles: np.ndarray, tile: int, size: tuple[int, int],
-            blocks_per_row: int | None = None, tile_h: int | None = None):
+            blocks_per_row: int | None = None, tile_h: int | None = None,
+            cuts: np.ndarray | None = None):
         """tiles: (n, 2) tile coordinates (tx, ty), GL orientation, of tile x tile pixels
         (tile x tile_h where given) of a target of `size`.
 
         blocks_per_row: also give every vertex `in_record`, its place in a texture that
         stores tile k's pixels as a tile x tile block at (k % blocks_per_row,
-        k // blocks_per_row) * tile (glsl/reveal_tiles.vert)."""
+        k // blocks_per_row) * tile (glsl/reveal_tiles.vert); `cuts`, the first tiles of
+        the runs drawn apart (part())."""
         self.tiles = np.ascontiguousarray(tiles, np.int64).reshape(-1, 2)
         self.count = len(self.tiles)
         w, h = size
         self.tile, self.size = tile, size
-        data, box = tile_kernels.tile_quads(self.tiles, tile, tile_h or tile, w, h,
-                                            blocks_per_row or 0)
+        if blocks_per_row:
+            cut = np.zeros(self.count, np.bool_)
+            if cuts is not None:
+                cut[np.asarray(cuts, np.int64)[np.asarray(cuts) < self.count]] = True
+            data, box, self.quad_first = tile_kernels.block_quads(
+                self.tiles, tile, w, h, blocks_per_row, cut)
+        else:
+            rects = tile_kernels.merge_tiles(self.tiles)
+            data, box = tile_kernels.rect_quads(rects, tile, tile_h or tile, w, h)
+            self.quad_first = None
+        self.quads = len(data) // (24 if blocks_per_row else 12)
         self.box = tuple(int(b) for b in box) if self.count else None
         if blocks_per_row != self.blocks_per_row:
             self._release_buffer()                      # the vertex layout changes
@@ -85,8 +97,9 @@ class TileList:
             self.buffer.write(data.tobytes())
 
     def render(self, prog: moderngl.Program, first: int = 0, count: int | None = None):
-        """Draw tiles first .. first + count - 1 (default: all) with `prog`."""
-        count = self.count - first if count is None else count
+        """Draw quads first .. first + count - 1 (default: all) with `prog`: tiles of a
+        block-mapped list, merged rectangles (tile_kernels.merge_tiles) of another."""
+        count = self.quads - first if count is None else count
         if count <= 0:
             return
         vao = self.vaos.get(prog.glo)
@@ -101,8 +114,14 @@ class TileList:
         vao.render(moderngl.TRIANGLES, vertices=6 * count, first=6 * first)
 
     def part(self, first: int, count: int) -> "TileRange":
-        """Tiles first .. first + count - 1 of this list, drawable like a list."""
-        return TileRange(self, first, count)
+        """Tiles first .. first + count - 1 of this (block-mapped) list, drawable like a
+        list."""
+        if not self.blocks_per_row:
+            raise ValueError("TileList.part: only a block-mapped list draws runs apart")
+        q0, q1 = np.searchsorted(self.quad_first, (first, first + count))
+        if count and self.quad_first[q0] != first:
+            raise ValueError(f"TileList.part: tile {first} is not a cut given to set()")
+        return TileRange(self, first, count, int(q0), int(q1 - q0))
 
     def _release_buffer(self):
         for v in self.vaos.values():
@@ -119,14 +138,15 @@ class TileList:
 class TileRange:
     """A run of a TileList's tiles (what FullscreenPass.draw needs: render and box)."""
 
-    def __init__(self, tiles: TileList, first: int, count: int):
+    def __init__(self, tiles: TileList, first: int, count: int, quad: int, quads: int):
         self.tiles, self.first, self.count = tiles, first, count
+        self.quad, self.quads = quad, quads
         self.vertex_shader = tiles.vertex_shader
         t = tiles.tiles[first:first + count]
         self.box = tiles.box if count == 0 else _box(t, tiles.tile, tiles.size)
 
     def render(self, prog: moderngl.Program):
-        self.tiles.render(prog, self.first, self.count)
+        self.tiles.render(prog, self.quad, self.quads)
 
 
 def _box(tiles: np.ndarray, tile: int, size) -> tuple[int, int, int, int]:
