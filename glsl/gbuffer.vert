@@ -8,6 +8,7 @@ in vec2 in_uv;
 
 uniform mat4 u_model;           // M(t)
 uniform mat4 u_view;
+uniform mat4 u_proj;
 
 out vec3 v_local;
 out vec3 v_normal_local;

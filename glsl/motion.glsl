@@ -1,17 +1,18 @@
 // Screen-space displacement over the exposure (viewer/conventions.py): the window position
 // of a surface point at shutter close minus at shutter open, in pixels, GL axes (y up).
 
-uniform mat4 u_model_open;      // M(t - shutter/2)
-uniform mat4 u_model_close;     // M(t + shutter/2)
-uniform mat4 u_view_open;       // camera view at shutter open / close
-uniform mat4 u_view_close;
-uniform mat4 u_proj;
+// V(t_open) M(t_open) and V(t_close) M(t_close), t_open/close = t -/+ shutter/2: the camera's
+// view times the object's model matrix, combined on the host (one product per point, not
+// two: the reveal's shading computes these per fragment).
+uniform mat4 u_modelview_open;
+uniform mat4 u_modelview_close;
+uniform vec2 u_focal;           // the projection's (P[0][0], P[1][1]); its frustum is
+                                // symmetric, so clip.xy = u_focal * xy and clip.w = -z
 uniform vec2 u_viewport;        // framebuffer size in pixels
 uniform float u_near;
 
 vec2 to_window(vec4 view_pos) {
-    vec4 clip = u_proj * view_pos;
-    return (clip.xy / clip.w * 0.5 + 0.5) * u_viewport;
+    return (u_focal * view_pos.xy / -view_pos.z * 0.5 + 0.5) * u_viewport;
 }
 
 // A point behind the near plane at one end of the exposure has no screen position there:
@@ -27,8 +28,8 @@ vec4 clip_to_near(vec4 q, vec4 q_now) {
 // View-space positions at shutter open and close. They are affine in the mesh-space point,
 // so a vertex shader may compute them per vertex and let (perspective-correct)
 // interpolation deliver the exact per-fragment values.
-vec4 view_open(vec3 p_local) { return u_view_open * (u_model_open * vec4(p_local, 1.0)); }
-vec4 view_close(vec3 p_local) { return u_view_close * (u_model_close * vec4(p_local, 1.0)); }
+vec4 view_open(vec3 p_local) { return u_modelview_open * vec4(p_local, 1.0); }
+vec4 view_close(vec3 p_local) { return u_modelview_close * vec4(p_local, 1.0); }
 
 vec2 displacement_between(vec4 q_open, vec4 q_close, vec4 view_now) {
     return to_window(clip_to_near(q_close, view_now)) - to_window(clip_to_near(q_open, view_now));

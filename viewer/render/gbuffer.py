@@ -60,9 +60,9 @@ class GBufferPass(Pass):
         ctx.enable(moderngl.DEPTH_TEST)
         ctx.depth_func = "<"
         prog = frame.programs.get("gbuffer.vert", "gbuffer.frag", defines)
-        gpu.bind_camera(prog, cam, t, t_open, t_close, frame.size)
+        gpu.bind_camera(prog, cam, t, frame.size)
         gpu.bind_lights(prog)
         for obj in gpu.front_to_back(cam.eye(t), t):
-            gpu.bind_object(prog, obj, t, t_open, t_close)
+            gpu.bind_object(prog, obj, cam, t, t_open, t_close)
             gpu.vao(prog, obj).render(moderngl.TRIANGLES)
         ctx.disable(moderngl.DEPTH_TEST)

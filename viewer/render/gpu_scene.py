@@ -97,13 +97,13 @@ class GpuScene:
         return self._vaos[key]
 
     @staticmethod
-    def bind_camera(prog: moderngl.Program, cam, t: float, t_open: float, t_close: float,
-                    size: tuple[int, int]):
-        """The camera at the frame time and at shutter open and close (glsl/motion.glsl)."""
+    def bind_camera(prog: moderngl.Program, cam, t: float, size: tuple[int, int]):
+        """The camera at the frame time (glsl/motion.glsl; its views at shutter open and
+        close reach the shaders through bind_object)."""
         set_uniform(prog, "u_view", cam.view(t))
-        set_uniform(prog, "u_proj", cam.projection())
-        set_uniform(prog, "u_view_open", cam.view(t_open))
-        set_uniform(prog, "u_view_close", cam.view(t_close))
+        proj = cam.projection()
+        set_uniform(prog, "u_proj", proj)
+        set_uniform(prog, "u_focal", (float(proj[0, 0]), float(proj[1, 1])))
         set_uniform(prog, "u_eye", cam.eye(t))
         set_uniform(prog, "u_viewport", tuple(float(x) for x in size))
         set_uniform(prog, "u_near", float(cam.spec.near))
@@ -135,13 +135,14 @@ class GpuScene:
             self.images[obj.id].use(TEXTURE_UNIT_IMAGE)
             set_uniform(prog, "u_tex_image", TEXTURE_UNIT_IMAGE)
 
-    def bind_object(self, prog: moderngl.Program, obj: SceneObject, t: float,
+    def bind_object(self, prog: moderngl.Program, obj: SceneObject, cam, t: float,
                     t_open: float, t_close: float):
-        """Transforms of `obj` at the frame time and at shutter open and close."""
+        """Transforms of `obj` at the frame time, and seen by the camera `cam` at shutter
+        open and close (glsl/motion.glsl)."""
         model = obj.matrix(t)
         set_uniform(prog, "u_model", model)
-        set_uniform(prog, "u_model_open", obj.matrix(t_open))
-        set_uniform(prog, "u_model_close", obj.matrix(t_close))
+        set_uniform(prog, "u_modelview_open", cam.view(t_open) @ obj.matrix(t_open))
+        set_uniform(prog, "u_modelview_close", cam.view(t_close) @ obj.matrix(t_close))
         set_uniform(prog, "u_normal_matrix", tf.normal_matrix(model))
         set_uniform(prog, "u_object_id", obj.id)
         self.bind_material(prog, obj)

@@ -277,7 +277,7 @@ class RevealShade(FullscreenPass):
             tl.set(hits.tiles, SHADE_TILE, frame.size, BLOCKS_PER_ROW,
                    cuts=[first for _, first, _ in hits.keys])
             prog = self.program(frame, tl.vertex_shader)
-            gpu.bind_camera(prog, cam, t, t_open, t_close, frame.size)
+            gpu.bind_camera(prog, cam, t, frame.size)
             set_uniform(prog, "u_background", frame.scene.background)
             gpu.bind_lights(prog)
             st.face_texture().use(FACE_UNIT)      # draw() binds its textures from unit 0
@@ -288,7 +288,7 @@ class RevealShade(FullscreenPass):
             for key, first, count in hits.keys:
                 set_uniform(prog, "u_miss", key == 1)
                 if key > 1:
-                    gpu.bind_object(prog, objects[key - 1], t, t_open, t_close)
+                    gpu.bind_object(prog, objects[key - 1], cam, t, t_open, t_close)
                 self.draw(frame, names, {}, tiles=tl.part(first, count), clear=False)
 
 
