@@ -12,6 +12,7 @@ from ..errors import UserError
 from ..params import ParamSet
 from ..scene import Scene
 from ..shaders import ProgramCache
+from .allocator import keep_freed_memory
 from .frame import Frame
 from .gpu_scene import GpuScene
 from .modes import MODES
@@ -30,6 +31,7 @@ class RenderResult:
 class Renderer:
     def __init__(self, ctx: moderngl.Context, scene: Scene, size: tuple[int, int]):
         self.ctx, self.scene = ctx, scene
+        keep_freed_memory()          # frame-sized host arrays reused, not re-faulted
         self._check_size(size)
         self.programs = ProgramCache(ctx)
         self.gpu = GpuScene(ctx, scene)
