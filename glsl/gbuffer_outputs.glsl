@@ -3,9 +3,10 @@
 // visibility), 2 = colour only (plain reference sub-frames), 3 = the hybrid mode's: colour,
 // normal and the packed front layer (D, depth, id) that every hybrid pass reads, one fetch
 // for all three (writing depth, id and D once each costs ~2.5 ms a frame at 640x360 on
-// llvmpipe).
+// llvmpipe); 4 = colour and the packed front layer (the static objects' layer that the
+// hybrid reveal copies where a ray's first hit is static: viewer/render/reveal_pass.py).
 #define GBUFFER_FULL (GBUFFER_LAYOUT == 0)
-#define GBUFFER_MOTION (GBUFFER_LAYOUT == 0 || GBUFFER_LAYOUT == 3)    // D is written
+#define GBUFFER_MOTION (GBUFFER_LAYOUT == 0 || GBUFFER_LAYOUT >= 3)    // D is written
 layout(location = 0) out vec4 out_color;         // linear, unclamped
 #if GBUFFER_FULL
 layout(location = 1) out float out_depth;        // linear view depth
@@ -20,6 +21,8 @@ layout(location = 1) out vec4 out_normal;
 // (D.xy, depth, id): glsl/hybrid_layers.glsl's front layer (D not clamped: its readers
 // clamp it to the blur limit where they need to).
 layout(location = 2) out vec4 out_hybrid_front;
+#elif GBUFFER_LAYOUT == 4
+layout(location = 1) out vec4 out_hybrid_front;
 #endif
 
 void write_gbuffer(vec3 color, float depth, vec3 normal, uint id, vec2 velocity) {
@@ -35,5 +38,7 @@ void write_gbuffer(vec3 color, float depth, vec3 normal, uint id, vec2 velocity)
 #elif GBUFFER_LAYOUT == 3
     out_normal = vec4(normal, 0.0);
     out_hybrid_front = vec4(velocity, depth, float(id));   // ids are exact as floats below 2^24
+#elif GBUFFER_LAYOUT == 4
+    out_hybrid_front = vec4(velocity, depth, float(id));
 #endif
 }

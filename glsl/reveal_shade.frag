@@ -9,7 +9,10 @@
 // (face row, Embree u, v) is turned into mesh-space position, normal and uv here, from the
 // face's three corners in u_faces, with the weights (1 - u - v, u, v).
 // u_miss draws the rays that left the scene: the background colour, as the G-buffer's
-// background pass writes it. The targets are packed for the composite
+// background pass writes it. STATIC_LAYER compiles the draw of the rays whose hit is the
+// first static surface along the pixel's primary ray (a still camera): that surface is
+// what the raster of the static objects alone shows at the pixel, kept while the view
+// holds (u_static_*), so it is copied, not shaded. The targets are packed for the composite
 // (glsl/hybrid_layers.glsl): (D, depth, 1 + id) and (colour, 1); cleared ones hold 0,
 // "nothing revealed here".
 #include "shading.glsl"
@@ -26,6 +29,10 @@ uniform vec3 u_eye;
 uniform uint u_object_id;
 uniform bool u_miss;
 uniform vec3 u_background;
+#if STATIC_LAYER
+uniform sampler2D u_static_front;   // the static objects' raster: (D, depth, id), colour
+uniform sampler2D u_static_color;
+#endif
 
 layout(location = 0) out vec4 out_packed;
 layout(location = 1) out vec4 out_packed_color;
@@ -39,6 +46,12 @@ void main() {
         out_packed_color = vec4(0.0);
         return;
     }
+#if STATIC_LAYER
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    vec4 f = texelFetch(u_static_front, p, 0);
+    out_packed = vec4(f.xyz, f.w + 1.0);
+    out_packed_color = vec4(texelFetch(u_static_color, p, 0).rgb, 1.0);
+#else
     if (u_miss) {
         out_packed = vec4(0.0, 0.0, BACKGROUND_DEPTH, 1.0);     // id 0: the sky
         out_packed_color = vec4(u_background, 1.0);
@@ -64,4 +77,5 @@ void main() {
     out_packed = vec4(exposure_displacement(local, view_now), -view_now.z,
                       1.0 + float(u_object_id));
     out_packed_color = vec4(shade(world.xyz, n, local, uv, u_eye), 1.0);
+#endif
 }

@@ -74,6 +74,9 @@ class Hits:
     restarts: int = 0          # rays re-issued past an excluded static object
     unresolved: int = 0        # rays still on their excluded static object after max_restarts
     queries: int = 0           # Embree ray queries issued (one ray into one Embree scene)
+    # (n,) bool: the hit is the view's kept static hit (intersect's `view`): the first static
+    # surface along the pixel's primary ray, what a raster of the static objects shows there.
+    from_view: np.ndarray | None = None
 
     @property
     def hit(self) -> np.ndarray:
@@ -237,6 +240,7 @@ class RayScene:
         u = np.zeros(n, dtype=np.float32)
         v = np.zeros(n, dtype=np.float32)
         best = limit.copy()           # the nearest hit so far bounds every later query
+        from_view = np.zeros(n, dtype=bool)
         queries = 0
 
         def keep(rows, ids, r, s0=None):
@@ -310,7 +314,7 @@ class RayScene:
                 queries += r_new.size
                 hits.store(k_new, id_of[r["geomID"] + 1], r, start[r_new] + r["tfar"])
             kernels.view_merge(use, keys, hits.object_id, hits.prim_id, hits.u, hits.v,
-                               hits.distance, best, object_id, prim_id, u, v)
+                               hits.distance, best, object_id, prim_id, u, v, from_view)
         if self._static is not None and (rows is None or rows.size):
             org, offset = (o_start if rows is None else o_start[rows]), start.copy()
             for depth in range(max_restarts + 1):
@@ -338,4 +342,5 @@ class RayScene:
                 restarts += rows.size
 
         distance = np.where(object_id != 0, best, np.inf)
-        return Hits(object_id, prim_id, u, v, distance, restarts, unresolved, queries)
+        return Hits(object_id, prim_id, u, v, distance, restarts, unresolved, queries,
+                    from_view)

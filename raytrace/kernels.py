@@ -185,9 +185,10 @@ def view_split(left, static_own, pixels, known):
 
 
 @njit(**_JIT)
-def view_merge(use, keys, v_id, v_prim, v_u, v_v, v_dist, best, object_id, prim_id, u, v):
+def view_merge(use, keys, v_id, v_prim, v_u, v_v, v_dist, best, object_id, prim_id, u, v,
+               from_view):
     """The view's kept static hits for rays `use` (pixels `keys`) where nearer than the
-    best so far, in place."""
+    best so far, in place; from_view marks the rays that took one."""
     for k in range(use.shape[0]):
         i, key = use[k], keys[k]
         if v_id[key] != 0 and v_dist[key] < best[i]:
@@ -196,6 +197,7 @@ def view_merge(use, keys, v_id, v_prim, v_u, v_v, v_dist, best, object_id, prim_
             u[i] = v_u[key]
             v[i] = v_v[key]
             best[i] = v_dist[key]
+            from_view[i] = True
 
 
 @njit(**_JIT)

@@ -41,6 +41,8 @@ class RevealLayer:
     distance: np.ndarray        # (n,) float64, from the eye along the unit ray; inf = miss
     depth: np.ndarray           # (n,) float64, view depth at t; BACKGROUND_DEPTH = miss
     world_position: np.ndarray  # (n, 3) float64, eye + distance * dir; zeros on a miss
+    static_view: np.ndarray     # (n,) bool: the hit is the first static surface along the
+                                # pixel's primary ray (RayScene.intersect's from_view)
     table: SurfaceTable | None = field(default=None, repr=False, compare=False)
 
     @property
@@ -91,11 +93,11 @@ def _layer(rs: RayScene, hits, origin, direction, cos, traced) -> RevealLayer:
                                                origin, direction, cos, BACKGROUND_DEPTH)
     return RevealLayer(traced=traced, object_id=hits.object_id, prim_id=hits.prim_id,
                        barycentrics=bary, distance=hits.distance, depth=depth,
-                       world_position=world, table=rs.surfaces)
+                       world_position=world, static_view=hits.from_view, table=rs.surfaces)
 
 
 _MISS = {"object_id": 0, "prim_id": -1, "barycentrics": 0.0, "distance": np.inf,
-         "depth": BACKGROUND_DEPTH, "world_position": 0.0}
+         "depth": BACKGROUND_DEPTH, "world_position": 0.0, "static_view": False}
 
 
 def _expand(compact: RevealLayer, traced: np.ndarray) -> RevealLayer:

@@ -96,6 +96,11 @@ def test_reveal_equals_raster_without_the_own_object(ctx, name, t):
     assert not bufs["hybrid_back"][mask == 0].any()
     assert res.stats["masked_pixels"] == np.count_nonzero(mask)
     assert res.stats["rays"] >= res.stats["masked_pixels"]
+    # Under a still camera, the revealed static surfaces came from the static layer.
+    if scene.camera.moving:
+        assert res.stats["static_layer_hits"] == 0
+    else:
+        assert 0 < res.stats["static_layer_hits"] <= res.stats["masked_pixels"]
 
 
 SAME_COLOUR = """

@@ -445,7 +445,8 @@ def test_threads_give_the_single_threaded_result():
 def test_static_hits_are_kept_per_view_and_change_nothing():
     """Primary rays of one view: the static scene is traced once per pixel and looked up
     in later frames; the hits equal tracing without the view (moving objects in front of
-    the kept static hit included), frame after frame, and another view traces again."""
+    the kept static hit included), frame after frame, and another view traces again.
+    The looked-up hits are flagged (from_view)."""
     s = busy_scene()
     cam = Camera(s.camera, 48, 40)
     jj, ii = np.mgrid[0:40, 0:48]
@@ -461,6 +462,11 @@ def test_static_hits_are_kept_per_view_and_change_nothing():
             np.testing.assert_array_equal(getattr(got, name), getattr(want, name), name)
         moving = np.isin(want.object_id, [3, 4])
         assert moving.any() and (want.object_id == 1).any()
+        # from_view: the hits that are the kept static hit (a static object nearest, the
+        # ray's own object not static): what the static objects' raster shows there.
+        static_hit = np.isin(got.object_id, [1, 2]) & ~np.isin(own[rows], [1, 2])
+        np.testing.assert_array_equal(got.from_view, static_hit)
+        assert static_hit.any() and not want.from_view.any()
     assert got.queries < want.queries            # the static hits were looked up
     assert rs.static_view(view).known.sum() == np.count_nonzero(~np.isin(own, [1, 2]))
     moved = dataclasses.replace(s.camera, position=s.camera.position + [0.3, 0.0, 0.0])

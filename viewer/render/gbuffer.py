@@ -26,16 +26,19 @@ LAYOUTS = {
     "visibility": (1, ("color", "depth", "id")),
     "color": (2, ("color",)),
     "hybrid": (3, ("color", "normal", "hybrid_front")),
+    "front": (4, ("color", "hybrid_front")),
 }
 
 
 class GBufferPass(Pass):
     name = "gbuffer"
 
-    def __init__(self, prefix: str = "", layout: str = "full"):
+    def __init__(self, prefix: str = "", layout: str = "full", static_only: bool = False):
         """`prefix` names a second set of targets (the reference's sub-frames use "sub_");
-        `layout` writes fewer targets where the rest would be thrown away."""
+        `layout` writes fewer targets where the rest would be thrown away; `static_only`
+        draws the objects that never move alone."""
         self.prefix = prefix
+        self.static_only = static_only
         self.layout_id, names = LAYOUTS[layout]
         self.produces = tuple(prefix + n for n in names)
 
@@ -63,6 +66,8 @@ class GBufferPass(Pass):
         gpu.bind_camera(prog, cam, t, frame.size)
         gpu.bind_lights(prog)
         for obj in gpu.front_to_back(cam.eye(t), t):
+            if self.static_only and obj.moving:
+                continue
             gpu.bind_object(prog, obj, cam, t, t_open, t_close)
             gpu.vao(prog, obj).render(moderngl.TRIANGLES)
         ctx.disable(moderngl.DEPTH_TEST)

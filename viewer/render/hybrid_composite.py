@@ -37,8 +37,8 @@ def near_outlines(frame: Frame, shape) -> np.ndarray:
     clamped to the blur limit 2k, and a tap lands within half a pixel of its point: the
     neighbourhood (McGuire's 3 x 3 tiles of k px) lies within 2k px, so tile T's lines
     reach at most R_T = min(M_T, 2k) / 2 + the landing tolerance + a pixel, M_T the
-    longest |D| within 2k px of T (tile_lists.within_reach of a boundary tile). Elsewhere every tap of the neighbourhood's line lands on the
-    pixel's own object, where it adds nothing unless that line is also the own line: the
+    longest |D| within 2k px of T (tile_lists.within_reach of a boundary tile).
+    Elsewhere every tap of the neighbourhood's line lands on the pixel's own object, where it adds nothing unless that line is also the own line: the
     SIMPLE variant, which skips it then, gives the same image."""
     lists = frame.host.get("tile_lists")
     if lists is None or lists.boundary.shape != shape:

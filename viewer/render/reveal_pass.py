@@ -14,6 +14,10 @@ shade what they reveal on the GPU exactly as the raster layer is shaded.
       layers hybrid_back (D, depth, 1 + id) and hybrid_back_color (colour, 1), hybrid_back2*
       for a second layer (a fragment pass, because llvmpipe draws one point per pixel at
       ~1.5 us; two packed targets, because each target written costs on llvmpipe).
+      Under a still camera, a ray whose hit is the first static surface along its
+      primary ray (RayScene.intersect's view) reveals what a raster of the static objects
+      alone shows at its pixel: that layer is rendered once per view (static_layer) and
+      copied there, not shaded again (spinner: 429 of 461 tiles).
 """
 from __future__ import annotations
 
@@ -24,9 +28,11 @@ import moderngl
 import numpy as np
 
 from raytrace import RayScene, kernels
+from raytrace.reveal import primary_view
 
 from .blur_common import max_radius_px
 from .frame import Frame
+from .gbuffer import GBufferPass
 from .gpu_scene import MAX_LIGHTS, set_uniform
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
@@ -36,6 +42,7 @@ from .tile_lists import TileList, tile_list
 PACKED = TexSpec(4, "f4")
 MAX_LAYERS = 2
 STATE_KEY = "hybrid_reveal"
+STATIC_PREFIX = "static_"     # the static objects' raster: static_color, static_hybrid_front
 
 
 TEXELS_PER_FACE = 6      # per corner: (position, normal.x), (normal.yz, uv)
@@ -60,6 +67,24 @@ class RevealState:
         self.layers: list = []        # per layer: LayerHits of the current frame, or None
         self.tiles: dict[int, TileList] = {}
         self.records: dict[int, moderngl.Texture] = {}
+        # Keys above every 1 + object id: the rays whose hit the static layer holds.
+        self.static_key = max((o.id for o in scene.objects), default=0) + 2
+        self._static_gbuffer = GBufferPass(prefix=STATIC_PREFIX, layout="front",
+                                           static_only=True)
+        self._static_stamp = None
+
+    def static_layer(self, frame: Frame) -> tuple[str, str]:
+        """The pool names of the static objects' raster (colour, packed front) for the
+        frame's view, rendered when the view (or the textures) changed since the last."""
+        view = primary_view(frame.camera, frame.time)
+        if view is None:
+            raise ValueError("the static layer needs a still camera's view")
+        textures = self._static_gbuffer.allocate(frame)
+        stamp = (view[0], tuple(t.glo for t in textures.values()))
+        if stamp != self._static_stamp:
+            self._static_gbuffer.execute(frame)
+            self._static_stamp = stamp
+        return self._static_gbuffer.produces
 
     def face_texture(self) -> moderngl.Texture:
         if self._faces is None:
@@ -147,11 +172,13 @@ def mask_tiles(pixels: np.ndarray, size: tuple[int, int], tile: int) -> np.ndarr
 BLOCKS_PER_ROW = 256     # record blocks (SHADE_TILE x SHADE_TILE) per row; both powers of 2
 
 
-def layer_hits(pixels: np.ndarray, layer, height: int) -> LayerHits | None:
-    """The traced rows of a layer as hit records (face row, u, v, 1 + object id), one
-    SHADE_TILE x SHADE_TILE block per (object, screen tile) holding its pixels, blocks in
-    rows of BLOCKS_PER_ROW, sorted by object: each object's draw covers only its own run
-    of tiles (raytrace.kernels.pack_blocks); None when nothing was traced."""
+def layer_hits(pixels: np.ndarray, layer, height: int, static_key: int | None = None
+               ) -> LayerHits | None:
+    """The traced rows of a layer as hit records (face row, u, v, key), key = 1 + object
+    id, or static_key where given for the hits the static layer holds (layer.static_view),
+    one SHADE_TILE x SHADE_TILE block per (key, screen tile) holding its pixels, blocks in
+    rows of BLOCKS_PER_ROW, sorted by key: each key's draw covers only its own run of
+    tiles (raytrace.kernels.pack_blocks); None when nothing was traced."""
     rows = np.flatnonzero(layer.traced)
     if not len(rows):
         return None
@@ -161,6 +188,8 @@ def layer_hits(pixels: np.ndarray, layer, height: int) -> LayerHits | None:
         return a if every else np.take(a, rows, axis=0)
     px = pick(pixels)
     key = pick(layer.object_id).astype(np.int64) + 1
+    if static_key is not None:
+        key[pick(layer.static_view)] = static_key
     gy = height - 1 - px[:, 1]              # GL rows
     records, block_key, tiles = kernels.pack_blocks(
         px[:, 0].astype(np.int64), gy.astype(np.int64), key, pick(layer.face_index),
@@ -194,13 +223,15 @@ class RevealTrace(Pass):
             result = st.rays.reveal(frame.camera, frame.time, pixels, own, layers=p.layers,
                                     max_depth=p.max_depth, threads=p.threads or None)
         t2 = time.perf_counter()
-        st.layers = [layer_hits(pixels, result.layers[k], frame.size[1]) if result else None
-                     for k in range(p.layers)]
+        st.layers = [layer_hits(pixels, result.layers[k], frame.size[1], st.static_key)
+                     if result else None for k in range(p.layers)]
         t3 = time.perf_counter()
         s = frame.stats
         s["masked_pixels"] = int(len(pixels))
         s["rays"] = int(result.rays) if result else 0
         s["revealed_pixels"] = int(result.pixels_hit) if result else 0
+        # Revealed surfaces copied from the static objects' raster (RevealState.static_layer).
+        s["static_layer_hits"] = int(result.layers[0].static_view.sum()) if result else 0
         s["restarts"] = int(result.restarts) if result else 0
         s["unresolved"] = int(result.unresolved) if result else 0
         s["reveal_readback_ms"] = (t1 - t0) * 1e3
@@ -238,9 +269,11 @@ class RevealShade(FullscreenPass):
 
     def __init__(self):
         self.clear_tiles = ClearTiles()
+        self._static = 0
 
     def defines(self, frame: Frame):
-        return {"MAX_LIGHTS": MAX_LIGHTS, "FACES_PER_ROW": FACES_PER_ROW}
+        return {"MAX_LIGHTS": MAX_LIGHTS, "FACES_PER_ROW": FACES_PER_ROW,
+                "STATIC_LAYER": self._static}
 
     def outputs(self, frame: Frame):
         return {n: PACKED for n in self.produces}
@@ -273,23 +306,30 @@ class RevealShade(FullscreenPass):
             records = st.records_texture(k, hits.records.shape[:2])
             h, w = hits.records.shape[:2]
             records.write(hits.records.tobytes(), viewport=(0, 0, w, h))
-            # The tiles holding this layer's pixels; each object's draw keeps its own.
+            # The tiles holding this layer's pixels; each key's draw keeps its own.
             tl.set(hits.tiles, SHADE_TILE, frame.size, BLOCKS_PER_ROW,
                    cuts=[first for _, first, _ in hits.keys])
-            prog = self.program(frame, tl.vertex_shader)
-            gpu.bind_camera(prog, cam, t, frame.size)
-            set_uniform(prog, "u_background", frame.scene.background)
-            gpu.bind_lights(prog)
             st.face_texture().use(FACE_UNIT)      # draw() binds its textures from unit 0
-            set_uniform(prog, "u_faces", FACE_UNIT)
             records.use(RECORD_UNIT)
-            set_uniform(prog, "u_hits", RECORD_UNIT)
             objects = {o.id: o for o in frame.scene.objects}
+            if any(key == st.static_key for key, _, _ in hits.keys):
+                colour, front = st.static_layer(frame)
             for key, first, count in hits.keys:
-                set_uniform(prog, "u_miss", key == 1)
-                if key > 1:
-                    gpu.bind_object(prog, objects[key - 1], cam, t, t_open, t_close)
-                self.draw(frame, names, {}, tiles=tl.part(first, count), clear=False)
+                self._static = int(key == st.static_key)
+                textures = ({"u_static_front": front, "u_static_color": colour}
+                            if self._static else {})
+                prog = self.program(frame, tl.vertex_shader)
+                set_uniform(prog, "u_hits", RECORD_UNIT)
+                if not self._static:
+                    gpu.bind_camera(prog, cam, t, frame.size)
+                    set_uniform(prog, "u_background", frame.scene.background)
+                    gpu.bind_lights(prog)
+                    set_uniform(prog, "u_faces", FACE_UNIT)
+                    set_uniform(prog, "u_miss", key == 1)
+                    if key > 1:
+                        gpu.bind_object(prog, objects[key - 1], cam, t, t_open, t_close)
+                self.draw(frame, names, textures, tiles=tl.part(first, count), clear=False)
+            self._static = 0
 
 
 def tiles_not_in(tiles: np.ndarray, other: np.ndarray) -> np.ndarray:

@@ -17,8 +17,9 @@ bottom left):
       composite runs only there; everywhere else it would return the sharp colour.
 
 A pass given a TileList draws the list's quads (glsl/tiles.vert; adjacent tiles merged
-into rectangles, which llvmpipe shades faster) with its own fragment shader instead of the full-screen triangle; its targets are cleared first (or, for the
-composite, start as a copy of the sharp colour). Without lists (synthetic tests, single
+into rectangles, which llvmpipe shades faster) with its own fragment shader instead of
+the full-screen triangle; its targets are cleared first (or, for the composite, start as
+a copy of the sharp colour). Without lists (synthetic tests, single
 passes) every pass draws full screen: both ways give the same pixels, which
 tests/test_tile_lists.py checks on real scenes.
 """
