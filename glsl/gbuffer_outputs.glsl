@@ -36,7 +36,9 @@ void write_gbuffer(vec3 color, float depth, vec3 normal, uint id, vec2 velocity)
     out_depth = depth;
     out_id = id;
 #elif GBUFFER_LAYOUT == 3
-    out_normal = vec4(normal, 0.0);
+    // w: log view depth (half float: steps of ~0.1%), what the ray mask's edge test reads
+    // per neighbour: one fetch of this target, no log there (glsl/raymask_displacement.frag).
+    out_normal = vec4(normal, log(max(depth, 1e-6)));
     out_hybrid_front = vec4(velocity, depth, float(id));   // ids are exact as floats below 2^24
 #elif GBUFFER_LAYOUT == 4
     out_hybrid_front = vec4(velocity, depth, float(id));

@@ -11,7 +11,8 @@
 // Ray mask, step 2, in the same pass (it needs nothing but this pixel's step 1): the edge
 // test. Survivors of the displacement test are kept where a Sobel kernel on log depth or
 // on the world normal exceeds its threshold: the moving silhouettes (and creases next to
-// them). The kernel is divided by 4, so a one-pixel step of size s reads as s.
+// them). Both come from the G-buffer's normal target, (normal, log depth) at half
+// precision (glsl/gbuffer_outputs.glsl): one fetch per neighbour. The kernel is divided by 4, so a one-pixel step of size s reads as s.
 // Outputs: the edge flag, and for the range check's inner loop (one fetch per probe)
 // (half the relative displacement, the object id) at an edge pixel, (0, 0) elsewhere (id
 // 0 is the sky, never a searching pixel's own).
@@ -29,7 +30,7 @@ layout(location = 0) out uint out_mask;
 layout(location = 1) out vec2 out_relative;
 #endif
 #if STEP != 1
-uniform sampler2D u_normal;
+uniform sampler2D u_normal;         // the G-buffer's (normal, log depth)
 uniform float u_edge_depth;
 uniform float u_edge_normal;
 #if STEP == 0
@@ -92,11 +93,10 @@ bool on_edge(ivec2 x, ivec2 size) {
             ivec2 p = clamp(x + ivec2(dx, dy), ivec2(0), size - 1);
             // Sobel weights: 2 on the axis, 1 on the diagonals; sign by side.
             vec2 w = vec2(float(dx) * (dy == 0 ? 2.0 : 1.0), float(dy) * (dx == 0 ? 2.0 : 1.0));
-            float z = log(max(texelFetch(u_front, p, 0).z, 1e-6));
-            vec3 n = texelFetch(u_normal, p, 0).xyz;
-            gz += w * z;
-            gnx += w.x * n;
-            gny += w.y * n;
+            vec4 n = texelFetch(u_normal, p, 0);       // (world normal, log depth)
+            gz += w * n.w;
+            gnx += w.x * n.xyz;
+            gny += w.y * n.xyz;
         }
     }
     float g_depth = 0.25 * length(gz);

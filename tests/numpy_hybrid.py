@@ -81,9 +81,15 @@ def sobel(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return 0.25 * gx, 0.25 * gy
 
 
+def stored_log_depth(depth) -> np.ndarray:
+    """log depth as the hybrid G-buffer stores it for the edge test: the normal target's
+    w, half precision (glsl/gbuffer_outputs.glsl)."""
+    return np.log(np.maximum(np.asarray(depth, np.float32), np.float32(1e-6))).astype(np.float16)
+
+
 def edge_test(dmask, depth, normal, edge_depth: float, edge_normal: float) -> np.ndarray:
     """Step 2: survivors of step 1 on a log-depth or normal Sobel edge. uint8 (H,W)."""
-    gx, gy = sobel(np.log(np.maximum(np.asarray(depth, np.float64), 1e-6)))
+    gx, gy = sobel(stored_log_depth(depth).astype(np.float64))
     g_depth = np.hypot(gx, gy)
     nx, ny = sobel(np.asarray(normal, np.float64)[..., :3])
     g_normal = np.sqrt((nx * nx).sum(-1) + (ny * ny).sum(-1))

@@ -29,10 +29,12 @@ def params(**hy):
 
 
 def upload(frame, depth, ids, disp, normal):
-    """The hybrid G-buffer's targets: hybrid_front (D, depth, id) and the normal."""
+    """The hybrid G-buffer's targets: hybrid_front (D, depth, id) and (normal, log depth)."""
     front = np.dstack([np.asarray(disp, np.float32), np.asarray(depth, np.float32),
                        np.asarray(ids, np.float32)])
-    for name, a in (("hybrid_front", front), ("normal", normal)):
+    normal_logz = np.dstack([np.asarray(normal, np.float32)[..., :3],
+                             nh.stored_log_depth(depth).astype(np.float32)])
+    for name, a in (("hybrid_front", front), ("normal", normal_logz)):
         frame.pool.texture(name, GBUFFER[name])
         frame.write(name, to_image(np.asarray(a, np.float32)))
 
@@ -298,3 +300,24 @@ def test_tile_lists_keep_the_range_checks_far_reach(synthetic_frame):
     np.testing.assert_array_equal(tiled["ray_mask"], full["ray_mask"])
     masked = columns(full["ray_mask"][20])
     assert 95 in masked and 120 not in masked
+
+
+def test_hybrid_gbuffer_stores_log_depth_for_the_edge_test(ctx):
+    # The edge test reads log depth from the normal target's w (what upload() writes).
+    from conftest import CONFORMANCE
+    from viewer.render.renderer import Renderer
+    from viewer.scene_loader import load_scene
+    r = Renderer(ctx, load_scene(str(CONFORMANCE / "basic.toml")), (96, 54))
+    try:
+        r.render("hybrid", 0.0, ParamSet(), read_image=False)
+        bufs = r.buffers()
+    finally:
+        r.release()
+    depth, logz = bufs["hybrid_front"][..., 2], bufs["normal"][..., 3]
+    assert np.ptp(logz) > 1.0
+    # log on the GPU may differ from numpy's by an ulp before the rounding to half.
+    np.testing.assert_allclose(logz, nh.stored_log_depth(depth).astype(np.float32),
+                               rtol=2e-3, atol=2e-3)
+    surface = bufs["hybrid_front"][..., 3] != 0                   # (the sky has no normal)
+    np.testing.assert_allclose(np.linalg.norm(bufs["normal"][surface][:, :3], axis=-1), 1.0,
+                               atol=2e-3)

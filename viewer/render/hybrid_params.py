@@ -19,7 +19,8 @@ class HybridParams:
                                         "farther by this fraction of the pixel's depth")
     edge_depth: float = param(0.05, lo=0.0, hi=10.0,
                               help="Sobel threshold on log depth (a step of ~5% per pixel "
-                                   "at 0.05; the kernel is normalised to step units)")
+                                   "at 0.05; the kernel is normalised to step units; log "
+                                   "depth is kept at half precision, steps of ~0.1%)")
     edge_normal: float = param(0.3, lo=0.0, hi=4.0,
                                help="Sobel threshold on the world normal (vector step units)")
     relative_reach: float = param(2.0, lo=1.0, hi=8.0,
