@@ -42,8 +42,9 @@ class FullscreenPass(Pass):
              clear: bool = True):
         """Bind pool textures to sampler uniforms, set uniforms, draw into `outputs`.
 
-        tiles: a TileList (viewer/render/tile_lists.py) to draw only its tiles; the targets
-        are cleared to 0 first (where written since their last clear) unless `clear` is
+        tiles: a TileList (viewer/render/tile_lists.py) to draw only its tiles, every
+        texel of which the pass writes; the targets are zero elsewhere (what they held
+        outside the tiles is cleared first: ResourcePool.clear_outside) unless `clear` is
         False (the caller filled them). None: the full-screen triangle."""
         ctx = frame.ctx
         prog = self.program(frame, "fullscreen.vert" if tiles is None else tiles.vertex_shader)
@@ -59,7 +60,7 @@ class FullscreenPass(Pass):
         fbo.viewport = (0, 0) + fbo.size
         ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
         if tiles is not None and clear:
-            frame.pool.clear(tuple(outputs))
+            frame.pool.clear_outside(tuple(outputs), tiles)
         frame.pool.mark_written(outputs, None if tiles is None else tiles.box)
         if blend:
             ctx.enable(moderngl.BLEND)
@@ -68,6 +69,8 @@ class FullscreenPass(Pass):
             frame.programs.empty_vao(prog).render(moderngl.TRIANGLES, vertices=3)
         else:
             tiles.render(prog)
+            if clear:
+                frame.pool.mark_tiles(tuple(outputs), tiles)
         if blend:
             ctx.disable(moderngl.BLEND)
 

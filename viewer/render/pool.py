@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import moderngl
+import numpy as np
 
 
 @dataclass(frozen=True)
@@ -44,6 +45,9 @@ class ResourcePool:
         # name -> (x0, y0, x1, y1): the GL pixel box written since the texture's last clear
         # (None: nothing). A texture without an entry may hold anything: clear it all.
         self._written: dict[str, tuple[int, int, int, int] | None] = {}
+        # name -> (tile geometry, boolean tile map): the tiles a tiled pass wrote whole, the
+        # texture zero elsewhere (mark_tiles); dropped by any other write.
+        self._tiles: dict[str, tuple] = {}
 
     def resize(self, size: tuple[int, int]):
         self.size = (int(size[0]), int(size[1]))
@@ -56,6 +60,7 @@ class ResourcePool:
         if have:
             self._drop(name)
         self._written.pop(name, None)
+        self._tiles.pop(name, None)
         tex = self.ctx.texture(size, spec.components, dtype=spec.dtype)
         f = moderngl.LINEAR if spec.filter == "linear" else moderngl.NEAREST
         tex.filter = (f, f)
@@ -93,6 +98,7 @@ class ResourcePool:
         """Record that `names` were written inside `box` (x0, y0, x1, y1, GL pixels); None
         means anywhere."""
         for n in names:
+            self._tiles.pop(n, None)
             if box is None:
                 self._written.pop(n, None)
             elif n in self._written:
@@ -108,6 +114,7 @@ class ResourcePool:
         what it wrote)."""
         for n in names:
             self._written[n] = None
+            self._tiles.pop(n, None)
 
     def clear(self, names: tuple[str, ...], value=(0.0, 0.0, 0.0, 0.0)):
         """Clear textures `names` (one framebuffer) to `value`, only inside the box written
@@ -122,6 +129,39 @@ class ResourcePool:
             self.framebuffer(tuple(names)).clear(*value, viewport=(x0, y0, x1 - x0, y1 - y0))
         for n in names:
             self._written[n] = None
+            self._tiles.pop(n, None)
+
+    def clear_outside(self, names: tuple[str, ...], tiles):
+        """Before a pass writes every texel of `tiles` (a TileList) in `names`: zero what
+        they hold outside those tiles. Where a tiled pass of the same tile geometry wrote
+        them last, only its tiles that are not drawn again are stale: the box around those
+        is cleared (nothing, when the tiles repeat: a still camera's frames); otherwise
+        the box written since the last clear (clear())."""
+        key, grid = _tile_map(tiles)
+        marks = [self._tiles.get(n) for n in names]
+        if not all(m is not None and m[0] == key for m in marks):
+            return self.clear(names)
+        stale = np.zeros_like(grid)
+        for m in marks:
+            stale |= m[1] & ~grid
+        if stale.any():
+            rows, cols = np.flatnonzero(stale.any(axis=1)), np.flatnonzero(stale.any(axis=0))
+            tile, tile_h, (w, h) = key
+            x0, y0 = int(cols[0]) * tile, int(rows[0]) * tile_h
+            x1, y1 = min((int(cols[-1]) + 1) * tile, w), min((int(rows[-1]) + 1) * tile_h, h)
+            self.framebuffer(tuple(names)).clear(0.0, 0.0, 0.0, 0.0,
+                                                 viewport=(x0, y0, x1 - x0, y1 - y0))
+        for n in names:
+            self._written[n] = None
+            self._tiles.pop(n, None)
+
+    def mark_tiles(self, names, tiles):
+        """`names` hold nonzero texels only inside `tiles` (a TileList), every texel of
+        which a pass has just written (after clear_outside)."""
+        key, grid = _tile_map(tiles)
+        for n in names:
+            self._written[n] = tiles.box
+            self._tiles[n] = (key, grid)
 
     def _drop(self, name: str):
         park_framebuffer(self.ctx)
@@ -138,6 +178,16 @@ class ResourcePool:
         for d in self._depth.values():
             d.release()
         self._fbo.clear(), self._tex.clear(), self._depth.clear(), self._written.clear()
+        self._tiles.clear()
+
+
+def _tile_map(tiles) -> tuple[tuple, np.ndarray]:
+    """(tile geometry, boolean map (rows, columns) of the listed tiles) of a TileList."""
+    tile, tile_h, (w, h) = tiles.tile, tiles.tile_h, tiles.size
+    grid = np.zeros((-(-h // tile_h), -(-w // tile)), bool)
+    if tiles.count:
+        grid[tiles.tiles[:, 1], tiles.tiles[:, 0]] = True
+    return (tile, tile_h, (w, h)), grid
 
 
 def _union(a, b):

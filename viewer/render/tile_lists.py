@@ -73,7 +73,7 @@ class TileList:
         self.tiles = np.ascontiguousarray(tiles, np.int64).reshape(-1, 2)
         self.count = len(self.tiles)
         w, h = size
-        self.tile, self.size = tile, size
+        self.tile, self.tile_h, self.size = tile, tile_h or tile, size
         if blocks_per_row:
             cut = np.zeros(self.count, np.bool_)
             if cuts is not None:
@@ -82,7 +82,7 @@ class TileList:
                 self.tiles, tile, w, h, blocks_per_row, cut)
         else:
             rects = tile_kernels.merge_tiles(self.tiles)
-            data, box = tile_kernels.rect_quads(rects, tile, tile_h or tile, w, h)
+            data, box = tile_kernels.rect_quads(rects, tile, self.tile_h, w, h)
             self.quad_first = None
         self.quads = len(data) // (24 if blocks_per_row else 12)
         self.box = tuple(int(b) for b in box) if self.count else None
