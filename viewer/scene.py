@@ -109,11 +109,25 @@ class CameraSpec:
         return bool(np.any(self.velocity != 0) or np.any(self.angular_velocity != 0))
 
     def pose(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(eye, forward, up) at time t; forward and up are turned by Rot(angular_velocity t)."""
-        r = rotation_at(self.angular_velocity, t)
-        eye = self.position + self.velocity * t
-        fwd = r @ (self.look_at - self.position)
-        return eye, fwd / np.linalg.norm(fwd), r @ self.up
+        """(eye, forward, up) at time t; forward and up are turned by Rot(angular_velocity t).
+
+        Read-only arrays, the last few kept by t and every field they depend on: a frame
+        asks for a handful of times in many places (a turning camera's pose costs ~20 us)."""
+        key = (float(t), self.position.tobytes(), self.look_at.tobytes(), self.up.tobytes(),
+               self.velocity.tobytes(), self.angular_velocity.tobytes())
+        memo = self.__dict__.setdefault("_pose_memo", {})
+        pose = memo.get(key)
+        if pose is None:
+            r = rotation_at(self.angular_velocity, t)
+            eye = self.position + self.velocity * t
+            fwd = r @ (self.look_at - self.position)
+            pose = (eye, fwd / np.linalg.norm(fwd), r @ self.up)
+            for a in pose:
+                a.flags.writeable = False
+            if len(memo) >= 8:
+                memo.pop(next(iter(memo)))
+            memo[key] = pose
+        return pose
 
 
 @dataclass
