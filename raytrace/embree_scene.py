@@ -135,6 +135,8 @@ class RayScene:
 
         static = [o for o in scene.objects if not o.moving and len(o.mesh.faces)]
         self.static_ids = np.array([o.id for o in static], dtype=np.uint32)  # geomID -> id
+        # geomID + 1 -> object id, with geomID -1 (a miss) -> 0.
+        self._id_of = np.concatenate([np.zeros(1, np.uint32), self.static_ids])
         self._is_static = np.zeros(max([o.id for o in scene.objects], default=0) + 1, bool)
         self._is_static[self.static_ids] = True
         self.cull = True      # the world-box test before each moving object (tests: off)
@@ -281,8 +283,7 @@ class RayScene:
 
         restarts = unresolved = 0
         rows = None                   # the rays left for the static scene; None = all
-        # geomID + 1 -> object id, with geomID -1 (a miss) -> 0.
-        id_of = np.r_[np.uint32(0), self.static_ids]
+        id_of = self._id_of
         static_own = kernels.member(excl, self._is_static)
         if self._static is not None and excl.any():
             # Rays whose own object is static: into the scene without it, where one exists.
@@ -316,11 +317,16 @@ class RayScene:
             kernels.view_merge(use, keys, hits.object_id, hits.prim_id, hits.u, hits.v,
                                hits.distance, best, object_id, prim_id, u, v, from_view)
         if self._static is not None and (rows is None or rows.size):
-            org, offset = (o_start if rows is None else o_start[rows]), start.copy()
+            offset, org = start.copy(), None
             for depth in range(max_restarts + 1):
                 s0 = take(offset, rows)
-                r = _embree_run(self._static, o32 if rows is None else org,
-                                d32 if rows is None else d32[rows], take(best, rows) - s0)
+                if rows is None:
+                    r = _embree_run(self._static, o32, d32, best - s0)
+                elif org is None:           # from the starts: one compiled gather
+                    r = _embree_run(self._static, *kernels.gather_rays(o32, d32, start, best,
+                                                                       rows))
+                else:                       # restarted past an own static object
+                    r = _embree_run(self._static, org, d32[rows], take(best, rows) - s0)
                 queries += len(s0)
                 ids = id_of[r["geomID"] + 1]
                 dist = s0 + r["tfar"]

@@ -194,11 +194,11 @@ def layer_hits(pixels: np.ndarray, layer, height: int, static_key: int | None = 
     records, block_key, tiles = kernels.pack_blocks(
         px[:, 0].astype(np.int64), gy.astype(np.int64), key, pick(layer.face_index),
         pick(layer.barycentrics), SHADE_TILE.bit_length() - 1, BLOCKS_PER_ROW.bit_length() - 1)
-    cuts = np.flatnonzero(np.diff(block_key)) + 1
-    first = np.r_[0, cuts]
-    count = np.diff(np.r_[first, len(block_key)])
-    return LayerHits(records, [(int(block_key[f]), int(f), int(c))
-                               for f, c in zip(first, count)], tiles)
+    # Each key's run of blocks: (key, first, count).
+    ends = (np.flatnonzero(np.diff(block_key)) + 1).tolist() + [len(block_key)]
+    starts = [0] + ends[:-1]
+    return LayerHits(records, [(int(block_key[f]), f, e - f) for f, e in zip(starts, ends)],
+                     tiles)
 
 
 class RevealTrace(Pass):
