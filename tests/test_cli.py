@@ -156,6 +156,24 @@ def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys):
     assert "hybrid/mcguire" in text and "bare Embree" in text
 
 
+def test_bench_animates_frame_after_frame(tmp_path, capsys, monkeypatch):
+    from viewer.render.renderer import Renderer
+    times = []
+    render = Renderer.render
+    monkeypatch.setattr(Renderer, "render", lambda self, mode, t, *a, **k: (
+        times.append((mode, t)), render(self, mode, t, *a, **k))[1])
+    out = tmp_path / "bench.json"
+    assert main(["bench", BASIC, "--size", "96x54", "--frames", "2", "--warmup", "0",
+                 "--modes", "mcguire,hybrid", "--animate", "50", "--json", str(out)]) == 0
+    rep = json.loads(out.read_text())
+    assert rep["animate_fps"] == 50 and rep["modes"]["hybrid"]["frame"]["n"] == 2
+    # Per mode: (previous frame, timed frame, timed passes) at t - dt, t, t + dt, t advancing.
+    hybrid = [t for mode, t in times if mode == "hybrid"]
+    assert hybrid == pytest.approx([0.0, 0.02, 0.04, 0.02, 0.04, 0.06])
+    assert main(["bench", BASIC, "--animate", "0"]) == 2
+    assert "--animate 0" in capsys.readouterr().err
+
+
 def test_bench_rejects_an_unknown_mode(capsys):
     assert main(["bench", BASIC, "--modes", "mcguire,fancy"]) == 2
     assert "fancy" in capsys.readouterr().err

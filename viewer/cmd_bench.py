@@ -26,6 +26,10 @@ def register(sub):
     p.add_argument("--warmup", default="3", help="untimed frames first (default 3)")
     p.add_argument("--modes", default=None, help="comma-separated subset of the real-time modes")
     p.add_argument("--json", default=None, metavar="PATH", help="write the results as JSON")
+    p.add_argument("--animate", default=None, metavar="FPS",
+                   help="time an animation: frame k at the scene time + k / FPS (each after "
+                        "the frame before it), not one frame time over and over, so that "
+                        "nothing kept from the last frame (tiles, clears) is the same")
     p.add_argument("--speeds", default=None, metavar="S1,S2,...",
                    help="also scale every object's velocity by each factor and tabulate the "
                         "hybrid reveal's ms against the masked pixel count")
@@ -48,13 +52,17 @@ def summary(values) -> dict:
             "p90": float(np.percentile(a, 90)), "n": int(a.size)}
 
 
-def time_modes(r: Renderer, modes: list[str], s, frames: int, warmup: int, progress) -> dict:
+def time_modes(r: Renderer, modes: list[str], s, frames: int, warmup: int, progress,
+               fps: float | None = None) -> dict:
     """Every mode timed round-robin, frame by frame, so that a slow spell of a shared
     machine falls on all of them alike and the ratios compare like with like. Each timed
     frame follows an untimed frame of the same mode, as in a real-time loop: the caches
     then hold what that mode uses, not what the mode before it in the round-robin (or the
-    bare-Embree timing) left behind, which favoured whichever mode followed a light one."""
+    bare-Embree timing) left behind, which favoured whichever mode followed a light one.
+    With `fps`, frame k is at the scene time + k / fps and follows the frame before it,
+    (k - 1) / fps; otherwise every frame is at the scene time."""
     ctx = r.ctx
+    dt = 1.0 / fps if fps else 0.0
     for mode in modes:
         for _ in range(warmup):
             r.render(mode, s.time, s.params, seed=s.seed, read_image=False)
@@ -62,16 +70,17 @@ def time_modes(r: Renderer, modes: list[str], s, frames: int, warmup: int, progr
     passes = {m: {} for m in modes}
     stats = {m: [] for m in modes}
     for k in range(frames):
+        t = s.time + (k + 1) * dt
         for mode in modes:
-            r.render(mode, s.time, s.params, seed=s.seed, read_image=False)
+            r.render(mode, t - dt, s.params, seed=s.seed, read_image=False)
             # Frame time: one finish() at the end only, so passes overlap as they would.
             ctx.finish()
             t0 = time.perf_counter()
-            r.render(mode, s.time, s.params, seed=s.seed, read_image=False)
+            r.render(mode, t, s.params, seed=s.seed, read_image=False)
             ctx.finish()
             frame_ms[mode].append((time.perf_counter() - t0) * 1e3)
-            # Pass times: a second frame with finish() around every pass.
-            res = r.render(mode, s.time, s.params, seed=s.seed, read_image=False, timing=True)
+            # Pass times: the next frame with finish() around every pass.
+            res = r.render(mode, t + dt, s.params, seed=s.seed, read_image=False, timing=True)
             for name, ms in res.pass_ms.items():
                 passes[mode].setdefault(name, []).append(ms)
             if mode == "hybrid" and res.stats.get("rays"):
@@ -154,18 +163,25 @@ def run(args) -> int:
         if "hybrid" not in available:
             raise cliargs.UserError("--speeds: needs the hybrid mode")
         speeds = [cliargs.parse_float("--speeds", x) for x in args.speeds.split(",")]
+    fps = None
+    if args.animate is not None:
+        fps = cliargs.parse_float("--animate", args.animate)
+        if not fps > 0:
+            raise cliargs.UserError(f"--animate {args.animate}: expected frames per second > 0")
     out = cliargs.check_output_file(args.json, "--json") if args.json else None
     ctx = create_headless()
     r = Renderer(ctx, s.scene, s.size)
     try:
-        results = time_modes(r, modes, s, frames, warmup, Progress(f"bench {'/'.join(modes)}"))
+        results = time_modes(r, modes, s, frames, warmup, Progress(f"bench {'/'.join(modes)}"),
+                             fps)
         reveal = reveal_summary(results)
         table = speed_table(r, s, speeds, max(3, frames // 3)) if speeds else None
     finally:
         r.release()
     device = f"{device_name(ctx)}; CPU {cpu_name()}"
     report = {"device": device, "size": list(s.size), "scene": s.scene.name, "time": s.time,
-              "frames": frames, "modes": results, "reveal": reveal, "ratios": {}}
+              "animate_fps": fps, "frames": frames, "modes": results, "reveal": reveal,
+              "ratios": {}}
     base = results.get("mcguire", {}).get("frame_ms")
     for m in ("hybrid", "ue4"):
         if base and m in results:
