@@ -14,6 +14,18 @@ def _f64(v) -> np.ndarray:
     return np.asarray(v, dtype=np.float64)
 
 
+def _undecorated(f):
+    """pyrr's argument-converting decorator inspects the function's signature on every
+    call (~8-30 us, a moving object's matrices ask three times a frame); the arguments
+    here are float64 arrays already, so the function beneath it is called."""
+    return getattr(f, "__wrapped__", f)
+
+
+_axis_rotation = _undecorated(pyrr.matrix33.create_from_axis_rotation)
+_look_at = _undecorated(pyrr.matrix44.create_look_at)
+_perspective = _undecorated(pyrr.matrix44.create_perspective_projection)
+
+
 def translate(t) -> np.ndarray:
     m = np.eye(4)
     m[:3, 3] = _f64(t)
@@ -30,7 +42,7 @@ def axis_angle(w) -> np.ndarray:
     theta = float(np.linalg.norm(w))
     if theta == 0.0:
         return np.eye(3)
-    return pyrr.matrix33.create_from_axis_rotation(w / theta, theta, dtype=np.float64).T.copy()
+    return _axis_rotation(w / theta, theta, dtype=np.float64).T.copy()
 
 
 def euler_xyz_degrees(deg) -> np.ndarray:
@@ -48,12 +60,12 @@ def homogeneous(r3: np.ndarray) -> np.ndarray:
 def look_at(eye, forward, up) -> np.ndarray:
     """World-to-view matrix: the camera at `eye` looking along `forward` (OpenGL: -Z)."""
     eye = _f64(eye)
-    return pyrr.matrix44.create_look_at(eye, eye + _f64(forward), _f64(up), dtype=np.float64).T.copy()
+    return _look_at(eye, eye + _f64(forward), _f64(up), dtype=np.float64).T.copy()
 
 
 def perspective(fov_y_deg: float, aspect: float, near: float, far: float) -> np.ndarray:
     """OpenGL perspective projection (clip z in [-w, w] between near and far)."""
-    return pyrr.matrix44.create_perspective_projection(
+    return _perspective(
         float(fov_y_deg), float(aspect), float(near), float(far), dtype=np.float64).T.copy()
 
 
