@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The benchmark set of docs/performance.md: every real-time mode on the built-in and the
 # conformance scenes at 640x360 and 1280x720, JSON into docs/perf/, then the tables.
-# About 6 minutes on 2 cores. Run after scripts/setup.sh (or `bash scripts/test.sh`).
+# About 2 minutes on 2 cores. Run after scripts/setup.sh (or `bash scripts/test.sh`).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 H=.venv/bin/hmblur
@@ -18,5 +18,12 @@ done
 for s in spinner $C/basic.toml $C/vase_pan.toml; do
   n=$(basename "$s" .toml)
   $H bench "$s" --size 1280x720 --frames 8 --modes mcguire,hybrid --json "$out/${n}_1280x720.json"
+done
+# The same frames in an animation (frame k at t + k / 60 s after the frame before it):
+# nothing kept from the last frame (tiles, clears) is then the same as in the timed one.
+for s in living_room spinner thin pan $C/basic.toml $C/vase_pan.toml; do
+  n=$(basename "$s" .toml)
+  $H bench "$s" --size 640x360 --frames 15 --modes mcguire,hybrid --animate 60 \
+    --json "$out/${n}_640x360_animated.json"
 done
 .venv/bin/python scripts/perf_tables.py $out/*.json

@@ -15,7 +15,11 @@ SHOWN_PASSES = {
 
 
 def load(paths):
-    return [(Path(p).stem, json.loads(Path(p).read_text())) for p in paths]
+    reports = [(Path(p).stem, json.loads(Path(p).read_text())) for p in paths]
+    for _, r in reports:
+        if r.get("animate_fps"):      # `hmblur bench --animate`: frames advance in time
+            r["scene"] = f"{r['scene']} (animated, {r['animate_fps']:g} fps)"
+    return reports
 
 
 def frame_table(reports) -> str:
