@@ -188,13 +188,11 @@ class RayScene:
             key = m.tobytes()
             kept = self._pose_cache.get(obj.id)
             if kept is None or kept[0] != key:
-                world = transform_points(m, self._corners[obj.id])
-                pad = 1e-4 * float(np.ptp(world, axis=0).max()) + 1e-6
+                lo, hi = kernels.world_box(m, self._corners[obj.id], 1e-4, 1e-6)
                 inv = np.linalg.inv(m).astype(np.float32)
                 # Not renormalised, so t stays in world units; a pure translation keeps them.
-                kept = self._pose_cache[obj.id] = (key, (
-                    world.min(axis=0) - pad, world.max(axis=0) + pad, inv,
-                    not np.array_equal(inv[:3, :3], np.eye(3))))
+                kept = self._pose_cache[obj.id] = (key, (lo, hi, inv,
+                                                         kernels.turns_or_scales(inv)))
             poses.append(kept[1])
         return poses
 

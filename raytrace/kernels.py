@@ -402,3 +402,30 @@ def mark_tiles(pixels, rows, cols, tile):
     for k in range(pixels.shape[0]):
         out[pixels[k, 1] // tile, pixels[k, 0] // tile, 1] = 1.0
     return out
+
+
+@njit(**_JIT)
+def world_box(m, corners, rel_pad, abs_pad):
+    """The axis-aligned world box of `corners` (8, 3) carried by the 4x4 m (column
+    vectors, transform_points' order of operations), padded by rel_pad times its largest
+    side plus abs_pad: (lo, hi)."""
+    lo = np.full(3, np.inf)
+    hi = np.full(3, -np.inf)
+    for k in range(corners.shape[0]):
+        x, y, z = corners[k, 0], corners[k, 1], corners[k, 2]
+        for i in range(3):
+            v = m[i, 0] * x + m[i, 1] * y + m[i, 2] * z + 1.0 * m[i, 3]
+            lo[i] = min(lo[i], v)
+            hi[i] = max(hi[i], v)
+    pad = rel_pad * max(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) + abs_pad
+    return lo - pad, hi + pad
+
+
+@njit(**_JIT)
+def turns_or_scales(inv):
+    """Whether the upper 3x3 of `inv` is not exactly the identity."""
+    for i in range(3):
+        for j in range(3):
+            if inv[i, j] != (1.0 if i == j else 0.0):
+                return True
+    return False

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 import trimesh
 
-from raytrace import RayScene, barycentric_weights, local_surface, reveal
+from raytrace import RayScene, barycentric_weights, kernels, local_surface, reveal
+from raytrace.embree_scene import transform_points
 from raytrace.reveal import primary_view
 from viewer.camera import Camera
 from viewer.conventions import BACKGROUND_DEPTH
@@ -657,3 +658,23 @@ def test_group_rows_is_a_stable_sort_by_id():
     np.testing.assert_array_equal(starts, cuts)
     order, starts = group_rows(values, np.zeros(500, bool))
     assert len(order) == 0 and starts.tolist() == [0]
+
+
+def test_world_box_and_rotation_flag_match_numpy():
+    # The box test's padded world box and "directions need the inverse" flag, compiled
+    # (raytrace/kernels.py), against their numpy statements.
+    rng = np.random.default_rng(9)
+    for k in range(50):
+        m = np.eye(4)
+        if k % 2:
+            m[:3, :3] = rng.normal(size=(3, 3))
+        m[:3, 3] = rng.normal(size=3) * 5
+        corners = rng.normal(size=(8, 3))
+        world = transform_points(m, corners)
+        pad = 1e-4 * float(np.ptp(world, axis=0).max()) + 1e-6
+        lo, hi = kernels.world_box(m, corners, 1e-4, 1e-6)
+        np.testing.assert_array_equal(lo, world.min(axis=0) - pad)
+        np.testing.assert_array_equal(hi, world.max(axis=0) + pad)
+        inv = np.linalg.inv(m).astype(np.float32)
+        assert kernels.turns_or_scales(inv) == (not np.array_equal(inv[:3, :3], np.eye(3)))
+        assert kernels.turns_or_scales(inv) == bool(k % 2)
