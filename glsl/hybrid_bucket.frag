@@ -21,8 +21,8 @@
 // background of post-process filters).
 // BACK_LAYER 0 compiles the variant for tiles without a revealed pixel (line 3 never runs
 // there), OWN_STILL 1 the one for tiles where no pixel moves (|D| < 1e-3: no own line, no
-// time pairing): llvmpipe would still pay for them, both sides of every branch, one pass
-// of every loop. SIMPLE 1 compiles the one for tiles with no other object within the
+// time pairing): llvmpipe would still pay for them (a branch in a loop costs even where
+// no pixel takes it; both sides run where an 8-wide group disagrees). SIMPLE 1 compiles the one for tiles with no other object within the
 // lines' reach (viewer/render/hybrid_composite.py near_outlines): every tap of the
 // neighbourhood's line lands on the own object and adds nothing, so it runs only where
 // it is the own line. All three give the image the full variant gives.
@@ -144,8 +144,8 @@ void main() {
     float a, b;
 
     // Line 1: the neighbourhood's largest displacement: what passes over the pixel.
-    // (llvmpipe runs both sides of a branch for every pixel: each tap fetches its colour
-    // once, unconditionally, and every bucket takes it with a weight of 0 or w.)
+    // (llvmpipe pays for a branch in a loop whether taken or not: each tap fetches its
+    // colour once, unconditionally, and every bucket takes it with a weight of 0 or w.)
 #if SIMPLE
     float rn = own_line ? 0.0 : 0.5 * length(vn);
 #else

@@ -18,8 +18,8 @@
 // 0 is the sky, never a searching pixel's own).
 //
 // STEP 0 runs both steps in one pass. Where the camera moves, most moving tiles hold no
-// survivor of step 1 and llvmpipe would pay the Sobel kernel everywhere (both sides of a
-// branch run): STEP 1 then runs the displacement test alone, and STEP 2 the edge test on
+// survivor of step 1 and llvmpipe would pay the Sobel kernel in every 8-pixel group
+// holding one: STEP 1 then runs the displacement test alone, and STEP 2 the edge test on
 // the tiles that hold a survivor (viewer/render/raymask.py).
 #include "raymask_common.glsl"
 uniform sampler2D u_front;          // the G-buffer's hybrid_front: (D, depth, id)

@@ -8,7 +8,8 @@
       the time-sampled composite (glsl/hybrid_time.frag), or "split" between them; only on
       the active tiles where the frame has tile lists (viewer/render/tile_lists.py), the
       sharp colour elsewhere. The bucketed gather is compiled per class of tile, since
-      llvmpipe pays for every branch whether taken or not: with the revealed layer's line
+      llvmpipe pays for a branch in a loop even where no pixel takes it, and for both
+      sides where the pixels of an 8-wide group disagree: with the revealed layer's line
       only where a pixel is masked, without the own line where nothing moves, and without
       the neighbourhood's line where no silhouette is in reach.
 """
