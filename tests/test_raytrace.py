@@ -583,10 +583,9 @@ def check_passes_own_object(s, cam, t, pix, own, got):
         np.testing.assert_array_equal(got.prim_id[rows][both], want.prim_id[both])
 
 
-def test_box_culling_changes_no_hit(monkeypatch):
+def test_box_culling_changes_no_hit():
     # The world-box test that keeps rays away from moving objects they cannot hit gives
     # exactly the hits of tracing every ray into every moving object.
-    import raytrace.embree_scene as es
     s = busy_scene()
     rs = RayScene(s)
     cam = Camera(s.camera, 48, 40)

@@ -37,7 +37,7 @@ from .gpu_scene import MAX_LIGHTS, set_uniform
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
-from .tile_lists import TileList, tile_list
+from .tile_lists import TileList
 
 PACKED = TexSpec(4, "f4")
 MAX_LAYERS = 2
@@ -149,13 +149,14 @@ def reveal_state(frame: Frame) -> RevealState:
 
 
 def read_masked_pixels(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
-    """The masked pixels and own ids, reading back only the box around the moving tiles
-    (the mask passes run nowhere else), or the whole mask without tile lists."""
+    """The masked pixels and own ids, reading back only the box that the range check wrote
+    (the ray mask is 0 elsewhere: ResourcePool's record), or the whole mask where that is
+    not known."""
     w, h = frame.size
-    moving = tile_list(frame, "moving")
-    if moving is not None and not moving.count:
+    box = frame.pool.written_box("ray_mask")
+    if box is None:                                     # nothing written since a clear
         return np.zeros((0, 2), np.int64), np.zeros(0, np.uint32)
-    i0, y0, i1, y1 = moving.box if moving is not None else (0, 0, w, h)   # GL pixels
+    i0, y0, i1, y1 = box if box != "unknown" else (0, 0, w, h)   # GL pixels
     fbo = frame.pool.framebuffer(("ray_mask",))
     data = fbo.read(viewport=(i0, y0, i1 - i0, y1 - y0), components=1, dtype="u4")
     gl_rows = np.frombuffer(data, np.uint32).reshape(y1 - y0, i1 - i0)
