@@ -135,6 +135,7 @@ def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys):
                  "--json", str(out), "--speeds", "0.5,1"]) == 0
     rep = json.loads(out.read_text())
     assert rep["size"] == [96, 54] and rep["device"]
+    assert rep["pass_timing"] == "CPU clock + ctx.finish()"      # llvmpipe: not its queries
     assert set(rep["modes"]) == {"off", "mcguire", "ue4", "hybrid"}
     for mode, r in rep["modes"].items():
         assert r["frame_ms"] > 0 and r["frame"]["n"] == 2
@@ -158,10 +159,13 @@ def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys):
 
 def test_bench_animates_frame_after_frame(tmp_path, capsys, monkeypatch):
     from viewer.render.renderer import Renderer
+    from viewer.render.timing import PassClock
     times = []
-    render = Renderer.render
+    render, timed = Renderer.render, PassClock.render
     monkeypatch.setattr(Renderer, "render", lambda self, mode, t, *a, **k: (
         times.append((mode, t)), render(self, mode, t, *a, **k))[1])
+    monkeypatch.setattr(PassClock, "render", lambda self, r, mode, t, *a, **k: (
+        times.append((mode, t)), timed(self, r, mode, t, *a, **k))[1])
     out = tmp_path / "bench.json"
     assert main(["bench", BASIC, "--size", "96x54", "--frames", "2", "--warmup", "0",
                  "--modes", "mcguire,hybrid", "--animate", "50", "--json", str(out)]) == 0
@@ -172,6 +176,19 @@ def test_bench_animates_frame_after_frame(tmp_path, capsys, monkeypatch):
     assert hybrid == pytest.approx([0.0, 0.02, 0.04, 0.02, 0.04, 0.06])
     assert main(["bench", BASIC, "--animate", "0"]) == 2
     assert "--animate 0" in capsys.readouterr().err
+
+
+def test_bench_pass_times_by_gpu_timer_queries_on_request(tmp_path):
+    # The path a GPU driver takes by default; on llvmpipe the queries see submission
+    # only, but every pass still gets a time.
+    out = tmp_path / "bench.json"
+    assert main(["bench", BASIC, "--size", "96x54", "--frames", "1", "--warmup", "0",
+                 "--modes", "hybrid", "--pass-timers", "gpu", "--json", str(out)]) == 0
+    rep = json.loads(out.read_text())
+    assert rep["pass_timing"] == "GPU timer queries"
+    passes = rep["modes"]["hybrid"]["passes"]
+    assert {"gbuffer", "reveal", "hybrid_composite"} <= set(passes)
+    assert all(v >= 0.0 for v in passes.values())
 
 
 def test_bench_rejects_an_unknown_mode(capsys):

@@ -280,7 +280,7 @@ def test_progressive_reference_equals_the_full_render_and_restarts(ctx):
     from viewer.render.renderer import Renderer
     from viewer.scene_loader import load_scene
     from viewer.ui.progressive import Progressive
-    from viewer.ui.timing import PassClock
+    from viewer.render.timing import PassClock
     r = Renderer(ctx, load_scene(SCENE), (96, 54))
     try:
         params = ParamSet()
@@ -304,7 +304,7 @@ def test_progressive_reference_equals_the_full_render_and_restarts(ctx):
 def test_pass_clock_method_and_gpu_queries(ctx):
     from viewer.render.renderer import Renderer
     from viewer.scene_loader import load_scene
-    from viewer.ui.timing import PassClock, gpu_timers_truthful
+    from viewer.render.timing import PassClock, gpu_timers_truthful
     software = "llvmpipe" in ctx.info["GL_RENDERER"].lower()
     assert gpu_timers_truthful(ctx) is not software
     assert PassClock(ctx).method == ("cpu" if software else "gpu")

@@ -32,7 +32,7 @@ from .ui.panel import draw_panel
 from .ui.progressive import Progressive, accumulating_pass
 from .ui.script import Action, Timeline
 from .ui.state import FIXED_STEP, ViewState
-from .ui.timing import PassClock
+from .render.timing import PassClock
 from .ui.window import Window
 
 RSS_MARK_FRAME = 50

@@ -1,7 +1,8 @@
-"""`hmblur bench`: frame and per-pass times of every real-time mode (medians and spread of
-synchronised timings: ctx.finish() and a CPU clock, because llvmpipe's timer queries only
-see submission), the hybrid reveal's rays and throughput against bare Embree on the same
-rays, and the ratios hybrid/McGuire and UE4/McGuire, all measured in one run."""
+"""`hmblur bench`: frame and per-pass times of every real-time mode (medians and spread),
+the hybrid reveal's rays and throughput against bare Embree on the same rays, and the
+ratios hybrid/McGuire and UE4/McGuire, all measured in one run. Frame times are
+synchronised (ctx.finish() and a CPU clock); pass times too on software GL, whose timer
+queries only see submission, and GL timer queries on a GPU driver (render/timing.py)."""
 from __future__ import annotations
 
 import platform
@@ -15,6 +16,7 @@ from .imageio import write_json_atomic
 from .progress import Progress
 from .render.modes import MODES
 from .render.renderer import Renderer
+from .render.timing import PassClock, describe, gpu_timers_truthful
 
 REALTIME = ("off", "mcguire", "ue4", "hybrid")
 
@@ -30,6 +32,10 @@ def register(sub):
                    help="time an animation: frame k at the scene time + k / FPS (each after "
                         "the frame before it), not one frame time over and over, so that "
                         "nothing kept from the last frame (tiles, clears) is the same")
+    p.add_argument("--pass-timers", default="auto", choices=("auto", "cpu", "gpu"),
+                   help="per-pass times: cpu = ctx.finish() around each pass and a CPU clock, "
+                        "gpu = GL timer queries (truthful on GPU drivers only); auto = gpu "
+                        "where truthful (default)")
     p.add_argument("--speeds", default=None, metavar="S1,S2,...",
                    help="also scale every object's velocity by each factor and tabulate the "
                         "hybrid reveal's ms against the masked pixel count")
@@ -54,15 +60,17 @@ def summary(values) -> dict:
 
 
 def time_modes(r: Renderer, modes: list[str], s, frames: int, warmup: int, progress,
-               fps: float | None = None) -> dict:
+               fps: float | None = None, clock: PassClock | None = None) -> dict:
     """Every mode timed round-robin, frame by frame, so that a slow spell of a shared
     machine falls on all of them alike and the ratios compare like with like. Each timed
     frame follows an untimed frame of the same mode, as in a real-time loop: the caches
     then hold what that mode uses, not what the mode before it in the round-robin (or the
     bare-Embree timing) left behind, which favoured whichever mode followed a light one.
     With `fps`, frame k is at the scene time + k / fps and follows the frame before it,
-    (k - 1) / fps; otherwise every frame is at the scene time."""
+    (k - 1) / fps; otherwise every frame is at the scene time. `clock` times the passes
+    (default: the CPU clock with ctx.finish() around each)."""
     ctx = r.ctx
+    clock = clock or PassClock(ctx, "cpu")
     dt = 1.0 / fps if fps else 0.0
     for mode in modes:
         for _ in range(warmup):
@@ -80,8 +88,8 @@ def time_modes(r: Renderer, modes: list[str], s, frames: int, warmup: int, progr
             r.render(mode, t, s.params, seed=s.seed, read_image=False)
             ctx.finish()
             frame_ms[mode].append((time.perf_counter() - t0) * 1e3)
-            # Pass times: the next frame with finish() around every pass.
-            res = r.render(mode, t + dt, s.params, seed=s.seed, read_image=False, timing=True)
+            # Pass times: the next frame, each pass timed by `clock`.
+            res = clock.render(r, mode, t + dt, s.params, s.seed)
             for name, ms in res.pass_ms.items():
                 passes[mode].setdefault(name, []).append(ms)
             if mode == "hybrid" and res.stats.get("rays"):
@@ -171,18 +179,21 @@ def run(args) -> int:
             raise cliargs.UserError(f"--animate {args.animate}: expected frames per second > 0")
     out = cliargs.check_output_file(args.json, "--json") if args.json else None
     ctx = create_headless()
+    method = args.pass_timers
+    if method == "auto":
+        method = "gpu" if gpu_timers_truthful(ctx) else "cpu"
     r = Renderer(ctx, s.scene, s.size)
     try:
         results = time_modes(r, modes, s, frames, warmup, Progress(f"bench {'/'.join(modes)}"),
-                             fps)
+                             fps, PassClock(ctx, method))
         reveal = reveal_summary(results)
         table = speed_table(r, s, speeds, max(3, frames // 3)) if speeds else None
     finally:
         r.release()
     device = f"{device_name(ctx)}; CPU {cpu_name()}"
     report = {"device": device, "size": list(s.size), "scene": s.scene.name, "time": s.time,
-              "animate_fps": fps, "frames": frames, "modes": results, "reveal": reveal,
-              "ratios": {}}
+              "animate_fps": fps, "frames": frames, "pass_timing": describe(method),
+              "modes": results, "reveal": reveal, "ratios": {}}
     base = results.get("mcguire", {}).get("frame_ms")
     for m in ("hybrid", "ue4"):
         if base and m in results:
@@ -197,7 +208,8 @@ def run(args) -> int:
 
 def format_report(rep: dict) -> str:
     w, h = rep["size"]
-    lines = [f"{rep['scene']} {w}x{h} on {rep['device']}", "",
+    lines = [f"{rep['scene']} {w}x{h} on {rep['device']}; passes timed by "
+             f"{rep['pass_timing']}", "",
              "| mode | frame ms (median) | p10-p90 | passes (median ms) |", "| --- | ---: | ---: | --- |"]
     for m, r in rep["modes"].items():
         passes = ", ".join(f"{n} {v:.1f}" for n, v in r["passes"].items())

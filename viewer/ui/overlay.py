@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from imgui_bundle import imgui
 
-from .timing import describe
+from ..render.timing import describe
 
 HISTORY = 120
 GRAPH_WIDTH = 220

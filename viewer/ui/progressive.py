@@ -7,7 +7,7 @@ from __future__ import annotations
 from ..params import ParamSet
 from ..render.frame import Frame
 from ..render.renderer import Renderer
-from .timing import PassClock
+from ..render.timing import PassClock
 
 
 def accumulating_pass(pipeline):

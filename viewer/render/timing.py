@@ -12,8 +12,8 @@ from contextlib import contextmanager
 import moderngl
 
 from ..params import ParamSet
-from ..render.frame import Frame, PassTimer
-from ..render.renderer import Renderer
+from .frame import Frame, PassTimer
+from .renderer import Renderer
 
 SOFTWARE_RENDERERS = ("llvmpipe", "softpipe", "swiftshader", "software rasterizer", "swrast")
 
