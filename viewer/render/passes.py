@@ -44,7 +44,7 @@ class FullscreenPass(Pass):
 
         tiles: a TileList (viewer/render/tile_lists.py) to draw only its tiles, every
         texel of which the pass writes; the targets are zero elsewhere (what they held
-        outside the tiles is cleared first: ResourcePool.clear_outside) unless `clear` is
+        outside the tiles is cleared first: tile_lists.clear_outside) unless `clear` is
         False (the caller filled them). None: the full-screen triangle."""
         ctx = frame.ctx
         prog = self.program(frame, "fullscreen.vert" if tiles is None else tiles.vertex_shader)
@@ -60,7 +60,8 @@ class FullscreenPass(Pass):
         fbo.viewport = (0, 0) + fbo.size
         ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
         if tiles is not None and clear:
-            frame.pool.clear_outside(tuple(outputs), tiles)
+            from .tile_lists import clear_outside   # (tile_lists builds on this module)
+            clear_outside(frame, tuple(outputs), tiles)
         frame.pool.mark_written(outputs, None if tiles is None else tiles.box)
         if blend:
             ctx.enable(moderngl.BLEND)

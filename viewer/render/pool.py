@@ -109,13 +109,6 @@ class ResourcePool:
         may hold anything (never cleared, reallocated, written full screen)."""
         return self._written.get(name, "unknown")
 
-    def mark_clean(self, names):
-        """The caller has cleared everything `names` held (e.g. by drawing over exactly
-        what it wrote)."""
-        for n in names:
-            self._written[n] = None
-            self._tiles.pop(n, None)
-
     def clear(self, names: tuple[str, ...], value=(0.0, 0.0, 0.0, 0.0)):
         """Clear textures `names` (one framebuffer) to `value`, only inside the box written
         since their last clear: a memset of a few thousand pixels instead of megabytes
@@ -131,33 +124,24 @@ class ResourcePool:
             self._written[n] = None
             self._tiles.pop(n, None)
 
-    def clear_outside(self, names: tuple[str, ...], tiles):
-        """Before a pass writes every texel of `tiles` (a TileList) in `names`: zero what
-        they hold outside those tiles. Where a tiled pass of the same tile geometry wrote
-        them last, only its tiles that are not drawn again are stale: the box around those
-        is cleared (nothing, when the tiles repeat: a still camera's frames); otherwise
-        the box written since the last clear (clear())."""
+    def stale_tiles(self, names: tuple[str, ...], tiles) -> np.ndarray | None:
+        """Before a pass writes every texel of `tiles` (a TileList) in `names`: where a
+        tiled pass of the same tile geometry wrote them last, the tiles it wrote that are
+        not drawn again (a boolean tile map; all False when the tiles repeat, as under a
+        still camera), the only texels outside `tiles` that are not 0; None where that is
+        not known (clear() then)."""
         key, grid = _tile_map(tiles)
         marks = [self._tiles.get(n) for n in names]
         if not all(m is not None and m[0] == key for m in marks):
-            return self.clear(names)
+            return None
         stale = np.zeros_like(grid)
         for m in marks:
             stale |= m[1] & ~grid
-        if stale.any():
-            rows, cols = np.flatnonzero(stale.any(axis=1)), np.flatnonzero(stale.any(axis=0))
-            tile, tile_h, (w, h) = key
-            x0, y0 = int(cols[0]) * tile, int(rows[0]) * tile_h
-            x1, y1 = min((int(cols[-1]) + 1) * tile, w), min((int(rows[-1]) + 1) * tile_h, h)
-            self.framebuffer(tuple(names)).clear(0.0, 0.0, 0.0, 0.0,
-                                                 viewport=(x0, y0, x1 - x0, y1 - y0))
-        for n in names:
-            self._written[n] = None
-            self._tiles.pop(n, None)
+        return stale
 
     def mark_tiles(self, names, tiles):
         """`names` hold nonzero texels only inside `tiles` (a TileList), every texel of
-        which a pass has just written (after clear_outside)."""
+        which a pass has just written (after tile_lists.clear_outside)."""
         key, grid = _tile_map(tiles)
         for n in names:
             self._written[n] = tiles.box

@@ -37,7 +37,7 @@ from .gpu_scene import MAX_LIGHTS, set_uniform
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
-from .tile_lists import TileList
+from .tile_lists import TileList, clear_outside
 
 PACKED = TexSpec(4, "f4")
 MAX_LAYERS = 2
@@ -252,11 +252,6 @@ def packed_names(k: int) -> tuple[str, str]:
     return tag, tag + "_color"
 
 
-class ClearTiles(FullscreenPass):
-    """A revealed layer's targets back to 'nothing revealed', where drawn."""
-    fragment = "reveal_clear.frag"
-
-
 class RevealShade(FullscreenPass):
     """GPU side: the revealed layers' displacement, depth, id and colour at the masked
     pixels, packed for the composite (packed_names), everything else cleared to 0,
@@ -269,7 +264,6 @@ class RevealShade(FullscreenPass):
     produces = tuple(n for k in range(MAX_LAYERS) for n in packed_names(k))
 
     def __init__(self):
-        self.clear_tiles = ClearTiles()
         self._static = 0
 
     def defines(self, frame: Frame):
@@ -288,28 +282,20 @@ class RevealShade(FullscreenPass):
             names = packed_names(k)
             tl = st.tile_list(k)
             hits = st.layers[k] if k < len(st.layers) else None
-            new = hits.tiles if hits is not None else np.zeros((0, 2), np.int64)
-            if tl.count and all(frame.pool.written_box(n) == tl.box for n in names):
-                # Only last frame's draws wrote here, and this frame's draws write every
-                # pixel of their tiles: clear last frame's other tiles alone (tile by
-                # tile: a thin object's box can span the screen while its tiles hold a
-                # few pixels).
-                stale = st.tile_list(f"stale{k}")
-                stale.set(tiles_not_in(tl.tiles, new), SHADE_TILE, frame.size)
-                if stale.count:
-                    self.clear_tiles.draw(frame, names, {}, tiles=stale, clear=False)
-                frame.pool.mark_clean(names)
-            else:
-                frame.pool.clear(names)     # where the last frame drew (ResourcePool.clear)
             if hits is None:
-                tl.set(new, SHADE_TILE, frame.size, BLOCKS_PER_ROW)
+                tl.set(np.zeros((0, 2), np.int64), SHADE_TILE, frame.size, BLOCKS_PER_ROW)
+                clear_outside(frame, names, tl)     # last frame's tiles
+                frame.pool.mark_tiles(names, tl)
                 continue
+            # The tiles holding this layer's pixels; each key's draw keeps its own run.
+            # Its draws together write every pixel of them (records: the key's own, 0 "no
+            # ray", -1 another key's), so only last frame's other tiles are cleared.
+            tl.set(hits.tiles, SHADE_TILE, frame.size, BLOCKS_PER_ROW,
+                   cuts=[first for _, first, _ in hits.keys])
+            clear_outside(frame, names, tl)
             records = st.records_texture(k, hits.records.shape[:2])
             h, w = hits.records.shape[:2]
             records.write(hits.records.tobytes(), viewport=(0, 0, w, h))
-            # The tiles holding this layer's pixels; each key's draw keeps its own.
-            tl.set(hits.tiles, SHADE_TILE, frame.size, BLOCKS_PER_ROW,
-                   cuts=[first for _, first, _ in hits.keys])
             st.face_texture().use(FACE_UNIT)      # draw() binds its textures from unit 0
             records.use(RECORD_UNIT)
             objects = {o.id: o for o in frame.scene.objects}
@@ -331,14 +317,7 @@ class RevealShade(FullscreenPass):
                         gpu.bind_object(prog, objects[key - 1], cam, t, t_open, t_close)
                 self.draw(frame, names, textures, tiles=tl.part(first, count), clear=False)
             self._static = 0
-
-
-def tiles_not_in(tiles: np.ndarray, other: np.ndarray) -> np.ndarray:
-    """The rows (tx, ty) of `tiles` that are not rows of `other`."""
-    if not len(tiles) or not len(other):
-        return tiles
-    w = int(max(tiles[:, 0].max(), other[:, 0].max())) + 1
-    return tiles[~np.isin(tiles[:, 1] * w + tiles[:, 0], other[:, 1] * w + other[:, 0])]
+            frame.pool.mark_tiles(names, tl)
 
 
 def reveal_passes() -> list:

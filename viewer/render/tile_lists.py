@@ -228,6 +228,41 @@ def near_boundary(longest: np.ndarray, boundary: np.ndarray, tile: int) -> np.nd
     return within_reach(boundary, 0.5 * longest.astype(np.float64) + 2.0, tile)
 
 
+class ZeroTiles(FullscreenPass):
+    """Every target of a framebuffer back to 0 over a tile list (glsl/zero_tiles.frag)."""
+    fragment = "zero_tiles.frag"
+
+    def defines(self, frame: Frame):
+        return {f"OUT{k}": self._kinds[k] if k < len(self._kinds) else 0 for k in range(4)}
+
+    def zero(self, frame: Frame, outputs: tuple[str, ...], tiles: TileList):
+        # 1: a float target, 2: an integer one (moderngl's u* and i* formats).
+        self._kinds = [2 if frame.pool.spec(n).dtype[0] in "ui" else 1 for n in outputs]
+        self.draw(frame, outputs, {}, {"u_viewport": tuple(float(x) for x in tiles.size)},
+                  tiles=tiles, clear=False)            # (a strip's size, not the frame's)
+
+
+_ZERO = ZeroTiles()
+
+
+def clear_outside(frame: Frame, outputs: tuple[str, ...], tiles: TileList):
+    """Before a pass draws `tiles`, writing every texel of them in `outputs`: zero what
+    the targets hold outside them. Where a tiled pass of the same geometry wrote them
+    last, that is its tiles not drawn again, zeroed tile by tile in one draw (nothing
+    when the tiles repeat); otherwise the box written since the last clear."""
+    stale = frame.pool.stale_tiles(outputs, tiles)
+    if stale is None:
+        frame.pool.clear(outputs)
+        return
+    if stale.any():
+        state = frame.host.setdefault("state", {})
+        tl = state.get("zero_tiles")
+        if tl is None:
+            tl = state["zero_tiles"] = TileList(frame.ctx)
+        tl.set(tile_coords(stale), tiles.tile, tiles.size, tile_h=tiles.tile_h)
+        _ZERO.zero(frame, outputs, tl)
+
+
 def tile_coords(selected: np.ndarray) -> np.ndarray:
     """(n, 2) (tx, ty) of the True entries of a GL-orientation (rows = ty) tile map."""
     ty, tx = np.nonzero(selected)
