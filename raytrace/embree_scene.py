@@ -255,12 +255,12 @@ class RayScene:
             return a if rows is None else a[rows]
 
         # The box test takes [start, best] along the rays from their own origins, not
-        # from o_start (Embree's origins moved to tnear). Primary rays share the eye
+        # from o32 (Embree's origins, moved to tnear). Primary rays share the eye
         # (Camera.rays broadcasts it: stride 0): box-test from one point, and without a
         # tnear carry one point into each object's space, not n.
         from_eye = n > 1 and (o.strides[0] == 0 or bool((o == o[0]).all()))
         shared = from_eye and tnear is None
-        o_start, o32, d32, inv_d = kernels.ray_arrays(o, d, start, from_eye)
+        o32, d32, inv_d = kernels.ray_arrays(o, d, start, from_eye)
         o_box = o[:1].astype(np.float32) if from_eye else o.astype(np.float32)
         no_ids = np.zeros(1, np.uint32)
         for (obj, es), (box_lo, box_hi, inv, rotate) in zip(self.moving, self._poses(t)):

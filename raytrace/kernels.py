@@ -61,11 +61,10 @@ def box_rows(o, inv_d, shared, lo, hi, start, best, excl, skip_id):
 
 @njit(**_JIT)
 def ray_arrays(o, d, start, shared):
-    """The rays moved to their starts (o + start d, float64), as Embree takes them
+    """The rays moved to their starts (o + start d, in float64) as Embree takes them
     (float32 origins and directions), and the directions' float32 inverses (inf for a
     zero component). shared: every origin is o[0]."""
     n = d.shape[0]
-    o_start = np.empty((n, 3))
     o32 = np.empty((n, 3), np.float32)
     d32 = np.empty((n, 3), np.float32)
     inv_d = np.empty((n, 3), np.float32)
@@ -74,13 +73,11 @@ def ray_arrays(o, d, start, shared):
         r = 0 if shared else i
         s = start[i]
         for c in range(3):
-            p = o[r, c] + d[i, c] * s
-            o_start[i, c] = p
-            o32[i, c] = np.float32(p)
+            o32[i, c] = np.float32(o[r, c] + d[i, c] * s)
             f = np.float32(d[i, c])
             d32[i, c] = f
             inv_d[i, c] = one / f if f != 0 else (np.inf if not np.signbit(f) else -np.inf)
-    return o_start, o32, d32, inv_d
+    return o32, d32, inv_d
 
 
 @njit(inline="always")
