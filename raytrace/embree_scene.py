@@ -33,10 +33,15 @@ from viewer.scene import Scene, SceneObject
 
 from . import kernels
 from .attributes import SurfaceTable
+from .workers import run_all
 
 # Triangles that the exclusion scenes of one RayScene may hold together: a static scene of
 # 100 k triangles gets ~10 of them (Embree's BVH ~ 100 bytes a triangle: ~100 MB).
 EXCLUSION_BUDGET = 1_000_000
+# Rays in one Embree call (or in the exclusion scenes' calls of one intersect() together)
+# from which they are split over the worker threads: below, handing work to a thread costs
+# more than it saves. MEASURED below.
+PARALLEL_RAYS = 8192
 
 
 class StaticHits:
@@ -107,7 +112,16 @@ def _box_corners(vertices: np.ndarray) -> np.ndarray:
 
 
 def _embree_run(scene: rtcs.EmbreeScene, origins: np.ndarray, dirs: np.ndarray,
-                tfar: np.ndarray) -> dict:
+                tfar: np.ndarray, threads: int = 1) -> dict:
+    """Embree's nearest hits (run(..., output=1)); with threads > 1 and PARALLEL_RAYS rays
+    or more, in parts of at least half that many side by side (the rays are independent)."""
+    n = len(origins)
+    k = min(threads, n // (PARALLEL_RAYS // 2))
+    if k > 1:
+        b = np.linspace(0, n, k + 1).astype(np.int64)
+        parts = run_all([lambda a=a, e=e: _embree_run(scene, origins[a:e], dirs[a:e], tfar[a:e])
+                         for a, e in zip(b[:-1], b[1:])], list(np.diff(b)), k, "embree")
+        return {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
     # run() writes the hit distances into `dists` in place: always hand it a fresh array.
     return scene.run(np.ascontiguousarray(origins, dtype=np.float32),
                      np.ascontiguousarray(dirs, dtype=np.float32),
@@ -211,7 +225,8 @@ class RayScene:
         return self._static_hits
 
     def intersect(self, origins, dirs, t: float, exclude_ids=None, max_restarts: int = 8,
-                  tnear=None, tfar=None, view: tuple | None = None, pixels=None) -> Hits:
+                  tnear=None, tfar=None, view: tuple | None = None, pixels=None,
+                  threads: int = 1) -> Hits:
         """Nearest hit per ray at time t, skipping each ray's excluded object.
 
         origins, dirs: (n, 3); dirs should be unit length for `distance` to be metres.
@@ -226,6 +241,9 @@ class RayScene:
         pose, size, clipping): a ray's nearest static hit is then the same in every frame
         of that view, so it is traced once and looked up after (not for rays that must pass
         a static object of their own).
+        threads: Embree's calls run on up to this many worker threads from PARALLEL_RAYS rays:
+        the exclusion scenes' calls (each ray in one of them) side by side, another call
+        split into parts.
         """
         o = np.asarray(origins, dtype=np.float64).reshape(-1, 3)
         d = np.asarray(dirs, dtype=np.float64).reshape(-1, 3)
@@ -274,7 +292,7 @@ class RayScene:
             if not rows.size:
                 continue
             lo, ld, tfar = kernels.local_rays(o32, d32, rows, shared, inv, rotate, start, best)
-            r = _embree_run(es, lo, ld, tfar)
+            r = _embree_run(es, lo, ld, tfar, threads)
             queries += rows.size
             kernels.merge_hits(rows, r["geomID"], r["primID"], r["u"], r["v"], r["tfar"],
                                start, best, object_id, prim_id, u, v, no_ids, obj.id)
@@ -288,16 +306,22 @@ class RayScene:
             # The rays of each own object, in ray order (a counting sort, not a scan each).
             order, starts = kernels.group_rows(excl, static_own)
             passed = np.zeros(n, dtype=bool)
+            groups = []
             for a, b in zip(starts[:-1], starts[1:]):
                 sel = order[a:b]
                 ex = self.exclusion_scene(int(excl[sel[0]]))
-                if ex is None:
-                    continue
-                es, ex_ids = ex
-                r = _embree_run(es, *kernels.gather_rays(o32, d32, start, best, sel))
+                if ex is not None:
+                    groups.append((sel, ex))
+                    passed[sel] = True
+
+            def call(sel, es):     # reads best[sel] only: the groups are disjoint
+                return lambda: _embree_run(es, *kernels.gather_rays(o32, d32, start, best, sel))
+            sizes = [sel.size for sel, _ in groups]
+            results = run_all([call(sel, es) for sel, (es, _) in groups], sizes,
+                              threads if sum(sizes) >= PARALLEL_RAYS else 1, "embree")
+            for (sel, (_, ex_ids)), r in zip(groups, results):
                 queries += sel.size
                 keep(sel, ex_ids, r)
-                passed[sel] = True
             if passed.any():
                 rows = np.flatnonzero(~passed)
         if self._static is not None and view is not None:
@@ -309,7 +333,7 @@ class RayScene:
                 left, static_own, np.asarray(pixels, dtype=np.int64).reshape(n), hits.known)
             if r_new.size:
                 r = _embree_run(self._static,
-                                *kernels.gather_rays(o32, d32, start, limit, r_new))
+                                *kernels.gather_rays(o32, d32, start, limit, r_new), threads)
                 queries += r_new.size
                 hits.store(k_new, id_of[r["geomID"] + 1], r, start[r_new] + r["tfar"])
             kernels.view_merge(use, keys, hits.object_id, hits.prim_id, hits.u, hits.v,
@@ -319,12 +343,13 @@ class RayScene:
             for depth in range(max_restarts + 1):
                 s0 = take(offset, rows)
                 if rows is None:
-                    r = _embree_run(self._static, o32, d32, best - s0)
+                    r = _embree_run(self._static, o32, d32, best - s0, threads)
                 elif org is None:           # from the starts: one compiled gather
                     r = _embree_run(self._static, *kernels.gather_rays(o32, d32, start, best,
-                                                                       rows))
+                                                                       rows), threads)
                 else:                       # restarted past an own static object
-                    r = _embree_run(self._static, org, d32[rows], take(best, rows) - s0)
+                    r = _embree_run(self._static, org, d32[rows], take(best, rows) - s0,
+                                    threads)
                 queries += len(s0)
                 ids = id_of[r["geomID"] + 1]
                 dist = s0 + r["tfar"]

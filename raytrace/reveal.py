@@ -13,7 +13,6 @@ and every ray is independent, so the result does not depend on the split.
 from __future__ import annotations
 
 import os
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, fields
 from functools import cached_property
 
@@ -25,6 +24,7 @@ from viewer.conventions import BACKGROUND_DEPTH
 from . import kernels
 from .attributes import LocalSurface, SurfaceTable
 from .embree_scene import RayScene
+from .workers import worker_pool
 
 CPUS = os.cpu_count() or 1    # read once: os.cpu_count() costs ~60 us a call here
 # Threads pay only for large batches (2 cores, the reveal's own Python between Embree
@@ -136,7 +136,8 @@ def primary_view(camera: Camera, t: float) -> tuple | None:
 
 
 def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
-                  own_ids: np.ndarray, layers: int, max_depth: int) -> RevealResult:
+                  own_ids: np.ndarray, layers: int, max_depth: int,
+                  call_threads: int = 1) -> RevealResult:
     n = len(pixels_ij)
     origin, direction = camera.rays(t, pixels_ij[:, 0], pixels_ij[:, 1])
     _, fwd, _ = camera.spec.pose(t)
@@ -156,7 +157,8 @@ def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
         primary = {} if view is None else {
             "view": view, "pixels": pixels_ij[:, 1] * camera.width + pixels_ij[:, 0]}
         hits = rs.intersect(pick(origin), pick(direction), t, exclude,
-                            max_restarts=max_depth, tnear=tnear, tfar=pick(far), **primary)
+                            max_restarts=max_depth, tnear=tnear, tfar=pick(far),
+                            threads=call_threads, **primary)
         if rows is None:
             layer = _layer(rs, hits, origin, direction, cos, np.ones(n, dtype=bool))
         else:
@@ -220,8 +222,8 @@ def reveal(rs: RayScene, camera: Camera, t: float, pixels_ij, own_ids, layers: i
     threads = CPUS if threads is None else max(1, int(threads))
     n_chunks = max(-(-n // max(1, max_chunk)),
                    min(threads * 4, n // max(1, min_chunk)) if threads > 1 else 1)
-    if n_chunks <= 1:
-        return _reveal_chunk(rs, camera, t, pixels_ij, own_ids, layers, max_depth)
+    if n_chunks <= 1:     # one chunk: its independent Embree calls may share the threads
+        return _reveal_chunk(rs, camera, t, pixels_ij, own_ids, layers, max_depth, threads)
     bounds = np.linspace(0, n, n_chunks + 1).astype(np.int64)
 
     def run(k):
@@ -230,16 +232,4 @@ def reveal(rs: RayScene, camera: Camera, t: float, pixels_ij, own_ids, layers: i
 
     if threads == 1:
         return _concatenate([run(k) for k in range(n_chunks)])
-    return _concatenate(list(_pool(threads).map(run, range(n_chunks))))
-
-
-_POOLS: dict[int, ThreadPoolExecutor] = {}
-
-
-def _pool(threads: int) -> ThreadPoolExecutor:
-    """A worker pool kept for the process (starting threads every frame costs ~1 ms)."""
-    pool = _POOLS.get(threads)
-    if pool is None:
-        pool = _POOLS[threads] = ThreadPoolExecutor(max_workers=threads,
-                                                    thread_name_prefix="reveal")
-    return pool
+    return _concatenate(list(worker_pool("reveal", threads).map(run, range(n_chunks))))

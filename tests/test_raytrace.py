@@ -10,7 +10,9 @@ import pytest
 import trimesh
 
 from raytrace import RayScene, barycentric_weights, kernels, local_surface, reveal
+from raytrace import embree_scene
 from raytrace.embree_scene import transform_points
+from raytrace.workers import run_all
 from raytrace.reveal import primary_view
 from viewer.camera import Camera
 from viewer.conventions import BACKGROUND_DEPTH
@@ -413,6 +415,42 @@ def busy_scene():
                      obj(4, mesh_of(trimesh.creation.icosphere(2, radius=0.8)), "smooth",
                          position=[1.0, 0.5, -5.0], velocity=[-2, 0, 0])], fov_y=60.0)
 
+
+
+def test_split_embree_calls_give_the_single_threaded_result(monkeypatch):
+    # One chunk whose Embree calls run on worker threads: the exclusion scenes' calls side
+    # by side, every other call split into parts (PARALLEL_RAYS lowered so 1920 rays do).
+    s = busy_scene()
+    cam = Camera(s.camera, 48, 40)
+    jj, ii = np.mgrid[0:40, 0:48]
+    pix = np.c_[ii.ravel(), jj.ravel()]
+    own = np.random.default_rng(2).integers(0, 5, len(pix))
+    single = reveal(RayScene(s), cam, 0.05, pix, own, layers=2, threads=1)
+    calls = []
+    run = embree_scene.run_all
+
+    def counting(jobs, sizes, threads, purpose):
+        calls.append((len(jobs), threads))
+        return run(jobs, sizes, threads, purpose)
+    monkeypatch.setattr(embree_scene, "run_all", counting)
+    monkeypatch.setattr(embree_scene, "PARALLEL_RAYS", 64)
+    split = reveal(RayScene(s), cam, 0.05, pix, own, layers=2, threads=3)
+    assert any(n > 1 and k == 3 for n, k in calls)           # the threads were used
+    for name in ("rays", "queries", "restarts", "unresolved", "pixels_hit"):
+        assert getattr(split, name) == getattr(single, name), name
+    for la, lb in zip(single.layers, split.layers):
+        for name in la.__dataclass_fields__:
+            if name != "table":
+                np.testing.assert_array_equal(getattr(la, name), getattr(lb, name), name)
+
+
+def test_run_all_runs_every_job_once_and_keeps_their_order():
+    import threading
+    seen = []
+    jobs = [lambda k=k: (seen.append((k, threading.get_ident())), k * k)[1] for k in range(7)]
+    assert run_all(jobs, [1, 5, 2, 9, 3, 3, 0], 3, "test") == [k * k for k in range(7)]
+    assert sorted(k for k, _ in seen) == list(range(7))
+    assert run_all(jobs[:1], [1], 3, "test") == [0]
 
 def test_threads_give_the_single_threaded_result():
     s = busy_scene()
