@@ -317,18 +317,24 @@ def view_clip(direction, fwd, near, far):
 def nonzero_pixels(gl_rows, i0, j0):
     """The nonzero pixels of a window read back from GL (rows bottom-up) in image order
     (rows top-down, then columns): their image coordinates (i, j), with (i0, j0) the
-    window's top-left image pixel, and their values. One pass, no flipped copy."""
+    window's top-left image pixel, and their values. No flipped copy; a first pass counts
+    each row's pixels (a branch-free sum that vectorises), the second reads only the rows
+    holding any (the mask is mostly 0)."""
     h, w = gl_rows.shape
-    count = 0
+    per_row = np.zeros(h, np.int64)
     for y in range(h):
+        c = 0
         for x in range(w):
-            if gl_rows[y, x] != 0:
-                count += 1
+            c += gl_rows[y, x] != 0
+        per_row[y] = c
+    count = per_row.sum()
     ij = np.empty((count, 2), np.int64)
     values = np.empty(count, gl_rows.dtype)
     k = 0
     for r in range(h):
         y = h - 1 - r
+        if per_row[y] == 0:
+            continue
         for x in range(w):
             v = gl_rows[y, x]
             if v != 0:

@@ -62,7 +62,7 @@ class SceneObject:
 
     @property
     def moving(self) -> bool:
-        return bool(np.any(self.velocity != 0) or np.any(self.angular_velocity != 0))
+        return bool(self.velocity.any() or self.angular_velocity.any())   # (np.any: 3x slower)
 
     def matrix(self, t: float) -> np.ndarray:
         """M(t) = T(position + velocity t) @ Rot(angular_velocity t) @ R0 @ S.
@@ -106,7 +106,7 @@ class CameraSpec:
 
     @property
     def moving(self) -> bool:
-        return bool(np.any(self.velocity != 0) or np.any(self.angular_velocity != 0))
+        return bool(self.velocity.any() or self.angular_velocity.any())   # (np.any: 3x slower)
 
     def pose(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(eye, forward, up) at time t; forward and up are turned by Rot(angular_velocity t).
