@@ -13,13 +13,14 @@ uniform usampler2D u_displacement_mask;
 uniform sampler2D u_edge_probe;   // raymask_displacement.frag: (half |relative D|, id) at edges
 uniform sampler2D u_front;        // the G-buffer's hybrid_front: (D, depth, id)
 uniform usampler2D u_edge_near;   // .x bit (id mod 32): an edge of that object in this
-                                  // u_fine tile or one next to it; .y the bits of the
+                                  // FINE tile or one next to it; .y the bits of the
                                   // largest reach of an edge there (edge_ids.frag)
 uniform usampler2D u_edge_reach;  // .x: the same bits over every tile a probe can reach
-uniform int u_fine;
 uniform float u_min_speed;
 uniform float u_relative_reach;   // search length, in half displacements
 uniform float u_max_reach;        // the blur limit k, px per side
+// FINE (a define, not a uniform: llvmpipe divides by a uniform lane by lane): the tile
+// size of u_edge_near and u_edge_reach.
 out uint out_mask;
 
 void main() {
@@ -33,7 +34,7 @@ void main() {
     if (texelFetch(u_displacement_mask, x, 0).x != 0u) { out_mask = own; return; }
 #if REACH_TEST
     // No edge of the own object anywhere in reach: no search (one read, not the look).
-    if ((texelFetch(u_edge_reach, x / u_fine, 0).x & (1u << (own % 32u))) == 0u) return;
+    if ((texelFetch(u_edge_reach, x / FINE, 0).x & (1u << (own % 32u))) == 0u) return;
 #endif
     float half_len = 0.5 * length(d);
     vec2 dir = d / length(d);
@@ -48,7 +49,7 @@ void main() {
     float reach_seen = 0.0;
     int m_max = (int(ceil(full)) + 7) / 8;
     for (int m = -m_max; m <= m_max; ++m) {
-        uvec2 t = texelFetch(u_edge_near, probe(x, float(8 * m) * dir, size) / u_fine, 0).xy;
+        uvec2 t = texelFetch(u_edge_near, probe(x, float(8 * m) * dir, size) / FINE, 0).xy;
         bool own_edge = (t.x & own_bit) != 0u;
         any_edge = any_edge || own_edge;
         reach_seen = max(reach_seen, own_edge ? uintBitsToFloat(t.y) : 0.0);

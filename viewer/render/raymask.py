@@ -189,7 +189,9 @@ class RangeCheck(FullscreenPass):
     produces = ("ray_mask",)
 
     def defines(self, frame: Frame):
-        return {"REACH_TEST": int(reach_test(frame))}
+        # The tile size as a constant: a division by a uniform runs lane by lane on
+        # llvmpipe, in the coarse look's loop (pan: ray_mask 4.3 -> 3.3 ms).
+        return {"REACH_TEST": int(reach_test(frame)), "FINE": FINE}
 
     def outputs(self, frame: Frame):
         return {"ray_mask": RAY_MASK}
@@ -215,7 +217,7 @@ class RangeCheck(FullscreenPass):
                   {"u_displacement_mask": "mask_displacement", "u_edge_probe": "mask_edge_probe",
                    "u_front": "hybrid_front",
                    "u_edge_near": "mask_edge_near", "u_edge_reach": "mask_edge_reach"},
-                  {"u_min_speed": float(p.min_speed), "u_fine": FINE,
+                  {"u_min_speed": float(p.min_speed),
                    "u_relative_reach": float(p.relative_reach),
                    "u_max_reach": float(max_radius_px(frame))},
                   tiles=tiles)
