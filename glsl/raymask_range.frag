@@ -39,17 +39,18 @@ void main() {
     float half_len = 0.5 * length(d);
     vec2 dir = d / length(d);
     float full = min(u_max_reach, u_relative_reach * half_len);
-    // Coarse look first: points every 8 px along the search. A probe lies within 4 px of
-    // one (5 px per axis after flooring, less than a tile), so its tile is within a tile
-    // of that point's: where no point's tile has an edge of the own object next to it, no
-    // probe sees one; and an edge a probe accepts has a reach no larger than the largest
-    // those points see.
+    // Coarse look first: points every 2 FINE px along the search. A probe lies within
+    // FINE px of one, per axis too, and so within FINE px after flooring and clamping, so
+    // its tile is within a tile of that point's: where no point's tile has an edge of the
+    // own object next to it, no probe sees one; and an edge a probe accepts has a reach no
+    // larger than the largest those points see. (Points every 8 px cost 1.4 ms on pan.)
     uint own_bit = 1u << (own % 32u);
     bool any_edge = false;
     float reach_seen = 0.0;
-    int m_max = (int(ceil(full)) + 7) / 8;
+    const int spacing = 2 * FINE;
+    int m_max = (int(ceil(full)) + spacing - 1) / spacing;
     for (int m = -m_max; m <= m_max; ++m) {
-        uvec2 t = texelFetch(u_edge_near, probe(x, float(8 * m) * dir, size) / FINE, 0).xy;
+        uvec2 t = texelFetch(u_edge_near, probe(x, float(spacing * m) * dir, size) / FINE, 0).xy;
         bool own_edge = (t.x & own_bit) != 0u;
         any_edge = any_edge || own_edge;
         reach_seen = max(reach_seen, own_edge ? uintBitsToFloat(t.y) : 0.0);
