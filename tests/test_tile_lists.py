@@ -385,3 +385,33 @@ def test_chessboard_distance_is_scipys(seed):
     sources[5, 7] = True
     np.testing.assert_array_equal(chessboard_distance(sources),
                                   distance_transform_cdt(~sources, metric="chessboard"))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_square_max_is_scipys_maximum_filter(seed):
+    from scipy.ndimage import maximum_filter
+    rng = np.random.default_rng(seed)
+    values = (rng.uniform(size=(11, 19)) * (rng.uniform(size=(11, 19)) < 0.1)).astype(np.float32)
+    marks = rng.uniform(size=(11, 19)) < 0.05
+    for r in (0, 1, 3, 25):
+        np.testing.assert_array_equal(tile_kernels.square_max(values, r), maximum_filter(
+            values, size=2 * r + 1, mode="constant", cval=0.0))
+        np.testing.assert_array_equal(tile_kernels.square_max(marks, r), maximum_filter(
+            marks, size=2 * r + 1, mode="constant", cval=False))
+
+
+def test_pixel_tiles_mark_the_gl_row_tiles_of_image_pixels():
+    ij = np.array([[0, 0], [33, 5], [47, 39], [20, 20]], np.int64)      # (i, j), 48x40 image
+    got = tile_kernels.pixel_tiles(ij, 3, 3, 16, 40)
+    want = np.zeros((3, 3), bool)
+    for i, j in ij:
+        want[(39 - j) // 16, i // 16] = True
+    np.testing.assert_array_equal(got, want)
+    assert got[2, 0] and got[2, 2] and got[0, 2] and got.sum() == 4
+
+
+def test_tile_coords_list_the_true_tiles_row_by_row():
+    sel = np.random.default_rng(4).uniform(size=(9, 14)) < 0.3
+    ty, tx = np.nonzero(sel)
+    np.testing.assert_array_equal(tile_lists.tile_coords(sel), np.stack([tx, ty], axis=1))
+    assert tile_lists.tile_coords(np.zeros((3, 4), bool)).shape == (0, 2)

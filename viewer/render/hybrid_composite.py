@@ -16,13 +16,12 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import maximum_filter
-
 from .blur_common import max_radius_px
 from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass
 from .pool import TexSpec
+from .tile_kernels import pixel_tiles, square_max
 from .tile_lists import FINE, moving_strips, tile_coords, tile_list, within_reach
 from .tiles import tile_passes
 
@@ -47,7 +46,7 @@ def near_outlines(frame: Frame, shape) -> np.ndarray:
     p = frame.params["hybrid"]
     k = max_radius_px(frame)
     q = -(-2 * k // FINE) + 1
-    around = maximum_filter(lists.longest, size=2 * q + 1, mode="constant", cval=0.0)
+    around = square_max(lists.longest, q)
     reach = 0.5 * np.minimum(around.astype(np.float64), 2.0 * k) + p.tolerance + 1.0
     return within_reach(lists.boundary, reach, FINE)
 
@@ -72,10 +71,10 @@ STILL_PX = 5e-4
 def split_tiles(active: np.ndarray, masked_ij: np.ndarray, height: int, reach: int):
     """(time, bucket) boolean tile maps (GL rows): the active tiles within `reach` tiles
     (Chebyshev) of a tile holding a masked pixel, and the other active tiles."""
-    near = np.zeros_like(active)
-    if len(masked_ij):
-        near[(height - 1 - masked_ij[:, 1]) // FINE, masked_ij[:, 0] // FINE] = True
-        near = maximum_filter(near, size=2 * reach + 1, mode="constant", cval=False)
+    near = pixel_tiles(np.asarray(masked_ij, np.int64).reshape(-1, 2), *active.shape, FINE,
+                       height)
+    if reach:
+        near = square_max(near, reach)
     return active & near, active & ~near
 
 

@@ -47,6 +47,14 @@ class FullscreenPass(Pass):
         outside the tiles is cleared first: tile_lists.clear_outside) unless `clear` is
         False (the caller filled them). None: the full-screen triangle."""
         ctx = frame.ctx
+        if tiles is not None and not tiles.count:
+            # No tiles: nothing to bind or draw (a program, its textures and uniforms cost
+            # ~0.1 ms of host time); only last frame's tiles go where the pass clears.
+            if clear:
+                from .tile_lists import clear_outside
+                clear_outside(frame, tuple(outputs), tiles)
+                frame.pool.mark_tiles(tuple(outputs), tiles)
+            return
         prog = self.program(frame, "fullscreen.vert" if tiles is None else tiles.vertex_shader)
         for unit, (uniform, tex_name) in enumerate(textures.items()):
             frame.pool.get(tex_name).use(unit)

@@ -165,3 +165,52 @@ def chessboard_distance(sources):
                 m = min(m, d[y, x + 1] + 1)
             d[y, x] = m
     return d
+
+
+@njit(**_JIT)
+def square_max(a, r):
+    """The largest value within r tiles (Chebyshev) of each tile, 0 past the edges, for
+    a map of values >= 0 (scipy's maximum_filter(a, size=2 r + 1, mode="constant",
+    cval=0)); a boolean map gives "any within r"."""
+    th, tw = a.shape
+    rows = np.zeros((th, tw), a.dtype)
+    for y in range(th):
+        for x in range(tw):
+            m = a[y, x]
+            for u in range(max(0, x - r), min(tw, x + r + 1)):
+                m = max(m, a[y, u])
+            rows[y, x] = m
+    out = np.zeros((th, tw), a.dtype)
+    for y in range(th):
+        for x in range(tw):
+            m = rows[y, x]
+            for v in range(max(0, y - r), min(th, y + r + 1)):
+                m = max(m, rows[v, x])
+            out[y, x] = m
+    return out
+
+
+@njit(**_JIT)
+def pixel_tiles(ij, rows, cols, tile, height):
+    """(rows, cols) boolean map, GL rows, of the tile x tile tiles holding an image pixel
+    (i, j) of `ij` (row j from the top of an image `height` pixels high)."""
+    out = np.zeros((rows, cols), np.bool_)
+    for k in range(ij.shape[0]):
+        out[(height - 1 - ij[k, 1]) // tile, ij[k, 0] // tile] = True
+    return out
+
+
+@njit(**_JIT)
+def true_coords(selected):
+    """(n, 2) int64 (x, y) of the True entries of a boolean map (rows = y), row by row
+    (np.stack(np.nonzero(selected)[::-1], axis=1))."""
+    th, tw = selected.shape
+    out = np.empty((selected.sum(), 2), np.int64)
+    k = 0
+    for y in range(th):
+        for x in range(tw):
+            if selected[y, x]:
+                out[k, 0] = x
+                out[k, 1] = y
+                k += 1
+    return out

@@ -265,8 +265,7 @@ def clear_outside(frame: Frame, outputs: tuple[str, ...], tiles: TileList):
 
 def tile_coords(selected: np.ndarray) -> np.ndarray:
     """(n, 2) (tx, ty) of the True entries of a GL-orientation (rows = ty) tile map."""
-    ty, tx = np.nonzero(selected)
-    return np.stack([tx, ty], axis=1)
+    return tile_kernels.true_coords(np.ascontiguousarray(selected, np.bool_))
 
 
 class MotionTiles(FullscreenPass):
