@@ -8,7 +8,8 @@ revealed moving object. Hits are clipped to the camera's [near, far] view depth,
 rasteriser clips, so the reveal sees what a raster pass without the own object would.
 
 Large batches are split into chunks over a thread pool: Embree's `run` releases the GIL
-and every ray is independent, so the result does not depend on the split.
+and every ray is independent, so the result does not depend on the split. Within a single
+chunk, its Embree calls share the threads from embree_scene.PARALLEL_RAYS rays.
 """
 from __future__ import annotations
 
