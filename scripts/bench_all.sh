@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The benchmark set of docs/performance.md: every real-time mode on the built-in and the
 # conformance scenes at 640x360 and 1280x720, JSON into docs/perf/, then the tables.
-# About 2 minutes on 2 cores. Run after scripts/setup.sh (or `bash scripts/test.sh`).
+# About 3-5 minutes on 2 cores. Run after scripts/setup.sh (or `bash scripts/test.sh`).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 H=.venv/bin/hmblur
@@ -27,3 +27,5 @@ for s in living_room spinner thin pan $C/basic.toml $C/vase_pan.toml; do
     --json "$out/${n}_640x360_animated.json"
 done
 .venv/bin/python scripts/perf_tables.py $out/*.json
+echo
+.venv/bin/python scripts/readme_table.py "$out"      # the README's table
