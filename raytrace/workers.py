@@ -34,7 +34,12 @@ def run_all(jobs: list, sizes: list[int], threads: int, purpose: str) -> list:
                 return
             results[k] = jobs[k]()
     helpers = [worker_pool(purpose, threads - 1).submit(worker) for _ in range(threads - 1)]
-    worker()
+    try:
+        worker()
+    finally:
+        pending.clear()                 # after an error here, no helper starts another job
+        for h in helpers:
+            h.exception()               # (waits for it)
     for h in helpers:
-        h.result()
+        h.result()                      # a helper's error, raised here
     return results

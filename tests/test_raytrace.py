@@ -715,3 +715,27 @@ def test_world_box_and_rotation_flag_match_numpy():
         inv = np.linalg.inv(m).astype(np.float32)
         assert kernels.turns_or_scales(inv) == (not np.array_equal(inv[:3, :3], np.eye(3)))
         assert kernels.turns_or_scales(inv) == bool(k % 2)
+
+
+def test_run_all_raises_a_jobs_error_after_every_thread_is_done():
+    import threading
+    import time
+    # A failing job and a slow one run at once on the two threads (each waits for the
+    # other to start); whichever thread fails, run_all may raise only once the slow job
+    # is done. Repeated, so that the failure falls on each thread.
+    for _ in range(8):
+        a_started, f_started, finished = threading.Event(), threading.Event(), []
+
+        def slow():
+            a_started.set()
+            f_started.wait(1.0)
+            time.sleep(0.02)
+            finished.append(1)
+
+        def fail():
+            f_started.set()
+            a_started.wait(1.0)
+            raise RuntimeError("job failed")
+        with pytest.raises(RuntimeError, match="job failed"):
+            run_all([slow, fail], [2, 1], 2, "test")
+        assert finished == [1]

@@ -16,6 +16,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from .blur_common import max_radius_px
 from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
