@@ -26,36 +26,47 @@ _JIT = dict(cache=True, nogil=True)
 _BIG = np.float32(1e30)
 
 
+@njit(inline="always")
+def _slab(l, h, inv, near, far):
+    """[near, far] cut by one axis' slab [l, h] (box bounds less the origin), float32."""
+    x = min(max(inv, -_BIG), _BIG)
+    a, b = l * x, h * x
+    return max(near, min(a, b)), min(far, max(a, b))
+
+
+@njit(inline="always")
+def _meets(l0, l1, l2, h0, h1, h2, ix, iy, iz, start, best):
+    near, far = _slab(l0, h0, ix, np.float32(start), np.float32(best))
+    near, far = _slab(l1, h1, iy, near, far)
+    near, far = _slab(l2, h2, iz, near, far)
+    return near <= far
+
+
 @njit(**_JIT)
 def box_rows(o, inv_d, shared, lo, hi, start, best, excl, skip_id):
     """Rows of the rays o + s d that meet the box [lo, hi] for some s in [start, best]
-    and are not excluded (excl != skip_id): the slab test in float32. shared: every ray
-    starts at o[0]."""
-    n = inv_d.shape[0]
+    and are not excluded (excl != skip_id): the slab test in float32. inv_d: (3, n), the
+    inverse directions component by component (contiguous rows: the loop vectorises,
+    ~5x faster than over (n, 3) rows). shared: every ray starts at o[0]."""
+    n = inv_d.shape[1]
+    ix, iy, iz = inv_d[0], inv_d[1], inv_d[2]
     meets = np.empty(n, np.bool_)
     if shared:
         l0, l1, l2 = (np.float32(lo[0]) - o[0, 0], np.float32(lo[1]) - o[0, 1],
                       np.float32(lo[2]) - o[0, 2])
         h0, h1, h2 = (np.float32(hi[0]) - o[0, 0], np.float32(hi[1]) - o[0, 1],
                       np.float32(hi[2]) - o[0, 2])
-    for i in range(n):
-        if not shared:
+        for i in range(n):
+            meets[i] = (_meets(l0, l1, l2, h0, h1, h2, ix[i], iy[i], iz[i], start[i], best[i])
+                        & (excl[i] != skip_id))
+    else:
+        for i in range(n):
             l0, l1, l2 = (np.float32(lo[0]) - o[i, 0], np.float32(lo[1]) - o[i, 1],
                           np.float32(lo[2]) - o[i, 2])
             h0, h1, h2 = (np.float32(hi[0]) - o[i, 0], np.float32(hi[1]) - o[i, 1],
                           np.float32(hi[2]) - o[i, 2])
-        near = np.float32(start[i])
-        far = np.float32(best[i])
-        x = min(max(inv_d[i, 0], -_BIG), _BIG)
-        a, b = l0 * x, h0 * x
-        near, far = max(near, min(a, b)), min(far, max(a, b))
-        x = min(max(inv_d[i, 1], -_BIG), _BIG)
-        a, b = l1 * x, h1 * x
-        near, far = max(near, min(a, b)), min(far, max(a, b))
-        x = min(max(inv_d[i, 2], -_BIG), _BIG)
-        a, b = l2 * x, h2 * x
-        near, far = max(near, min(a, b)), min(far, max(a, b))
-        meets[i] = (near <= far) & (excl[i] != skip_id)
+            meets[i] = (_meets(l0, l1, l2, h0, h1, h2, ix[i], iy[i], iz[i], start[i], best[i])
+                        & (excl[i] != skip_id))
     return np.flatnonzero(meets)
 
 
@@ -63,11 +74,11 @@ def box_rows(o, inv_d, shared, lo, hi, start, best, excl, skip_id):
 def ray_arrays(o, d, start, shared):
     """The rays moved to their starts (o + start d, in float64) as Embree takes them
     (float32 origins and directions), and the directions' float32 inverses (inf for a
-    zero component). shared: every origin is o[0]."""
+    zero component) as box_rows takes them, (3, n). shared: every origin is o[0]."""
     n = d.shape[0]
     o32 = np.empty((n, 3), np.float32)
     d32 = np.empty((n, 3), np.float32)
-    inv_d = np.empty((n, 3), np.float32)
+    inv_d = np.empty((3, n), np.float32)
     one = np.float32(1.0)
     for i in range(n):
         r = 0 if shared else i
@@ -76,7 +87,7 @@ def ray_arrays(o, d, start, shared):
             o32[i, c] = np.float32(o[r, c] + d[i, c] * s)
             f = np.float32(d[i, c])
             d32[i, c] = f
-            inv_d[i, c] = one / f if f != 0 else (np.inf if not np.signbit(f) else -np.inf)
+            inv_d[c, i] = one / f if f != 0 else (np.inf if not np.signbit(f) else -np.inf)
     return o32, d32, inv_d
 
 

@@ -651,7 +651,7 @@ def test_slab_hand_values():
     o = np.array([[0, 0, 5], [0, 0, 5], [3, 0, 5], [0.5, 0, 5], [0.99, 0, 5]], np.float32)
     d = np.array([[0, 0, -1], [0, 0, 1], [0, 0, -1], [0, 0, -1], [0, 0, -1]], np.float32)
     with np.errstate(divide="ignore"):
-        inv_d = np.float32(1.0) / d
+        inv_d = np.ascontiguousarray((np.float32(1.0) / d).T)      # (3, n), as box_rows takes it
     lo, hi = np.array([-1.0, -1, -1]), np.array([1.0, 1, 1])
     t0, t1 = np.zeros(5), np.full(5, np.inf)
     excl = np.zeros(5, np.uint32)
@@ -661,7 +661,7 @@ def test_slab_hand_values():
                                   [0, 3, 4])
     # The box lies 4 to 6 along the first ray: a far limit of 3.9 misses it; an excluded
     # ray is dropped; every ray from the first origin (all but the second meet it).
-    assert not len(box_rows(o[:1], inv_d[:1], False, lo, hi, t0[:1], np.array([3.9]),
+    assert not len(box_rows(o[:1], inv_d[:, :1], False, lo, hi, t0[:1], np.array([3.9]),
                             excl[:1], 7))
     np.testing.assert_array_equal(box_rows(o, inv_d, False, lo, hi, t0, t1,
                                            np.array([7, 0, 0, 0, 0], np.uint32), 7), [3, 4])
