@@ -326,19 +326,21 @@ class RayScene:
             if passed.any():
                 rows = np.flatnonzero(~passed)
         if self._static is not None and view is not None:
-            # The view's static hits, looked up (traced first where not yet known), for
-            # the rays that pass no static object of their own.
+            # The view's static hits, looked up (where not yet known, traced, kept and then
+            # taken), for the rays that pass no static object of their own.
             hits = self.static_view(view)
             left = np.arange(n) if rows is None else rows
-            use, keys, r_new, k_new, rows = kernels.view_split(
-                left, static_own, np.asarray(pixels, dtype=np.int64).reshape(n), hits.known)
+            r_new, k_new, rows = kernels.view_lookup(
+                left, static_own, np.asarray(pixels, dtype=np.int64).reshape(n), hits.known,
+                hits.object_id, hits.prim_id, hits.u, hits.v, hits.distance, best, object_id,
+                prim_id, u, v, from_view)
             if r_new.size:
                 r = _embree_run(self._static,
                                 *kernels.gather_rays(o32, d32, start, limit, r_new), threads)
                 queries += r_new.size
                 hits.store(k_new, id_of[r["geomID"] + 1], r, start[r_new] + r["tfar"])
-            kernels.view_merge(use, keys, hits.object_id, hits.prim_id, hits.u, hits.v,
-                               hits.distance, best, object_id, prim_id, u, v, from_view)
+                kernels.view_merge(r_new, k_new, hits.object_id, hits.prim_id, hits.u, hits.v,
+                                   hits.distance, best, object_id, prim_id, u, v, from_view)
         if self._static is not None and (rows is None or rows.size):
             offset, org = start.copy(), None
             for depth in range(max_restarts + 1):

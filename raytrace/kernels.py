@@ -164,17 +164,18 @@ def member(values, table):
 
 
 @njit(**_JIT)
-def view_split(left, static_own, pixels, known):
-    """Of the rays `left`, those without a static own object (`use`) with their view
-    pixels (`keys`), the ones of those whose static hit is not yet known (rays and
-    pixels), and the rays with a static own object (`rest`)."""
+def view_lookup(left, static_own, pixels, known, v_id, v_prim, v_u, v_v, v_dist, best,
+                object_id, prim_id, u, v, from_view):
+    """Of the rays `left`, those without a static own object take the view's kept static
+    hit of their pixel where it is known and nearer than the best so far, in place (as
+    view_merge); returned: the rays whose pixel's hit is not known yet and those pixels,
+    and the rays with a static own object. One pass: a still camera's frames know them
+    all."""
     n = left.shape[0]
-    use = np.empty(n, np.int64)
-    keys = np.empty(n, np.int64)
     new_rows = np.empty(n, np.int64)
     new_keys = np.empty(n, np.int64)
     rest = np.empty(n, np.int64)
-    a = b = c = 0
+    b = c = 0
     for k in range(n):
         i = left[k]
         if static_own[i]:
@@ -182,14 +183,18 @@ def view_split(left, static_own, pixels, known):
             c += 1
             continue
         key = pixels[i]
-        use[a] = i
-        keys[a] = key
-        a += 1
         if not known[key]:
             new_rows[b] = i
             new_keys[b] = key
             b += 1
-    return use[:a], keys[:a], new_rows[:b], new_keys[:b], rest[:c]
+        elif v_id[key] != 0 and v_dist[key] < best[i]:
+            object_id[i] = v_id[key]
+            prim_id[i] = v_prim[key]
+            u[i] = v_u[key]
+            v[i] = v_v[key]
+            best[i] = v_dist[key]
+            from_view[i] = True
+    return new_rows[:b], new_keys[:b], rest[:c]
 
 
 @njit(**_JIT)
