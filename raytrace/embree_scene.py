@@ -242,9 +242,9 @@ class RayScene:
         pose, size, clipping): a ray's nearest static hit is then the same in every frame
         of that view, so it is traced once and looked up after (not for rays that must pass
         a static object of their own).
-        threads: Embree's calls run on up to this many worker threads from PARALLEL_RAYS rays:
-        the exclusion scenes' calls (each ray in one of them) side by side, another call
-        split into parts.
+        threads: Embree's calls run on up to this many worker threads from PARALLEL_RAYS
+        rays: the exclusion scenes' calls (each ray in one of them) side by side, another
+        call split into parts.
         """
         o = np.asarray(origins, dtype=np.float64).reshape(-1, 3)
         d = np.asarray(dirs, dtype=np.float64).reshape(-1, 3)

@@ -214,6 +214,26 @@ def view_merge(use, keys, v_id, v_prim, v_u, v_v, v_dist, best, object_id, prim_
 
 
 @njit(**_JIT)
+def record_inputs(px, height, object_id, prim_id, face_offset, static_view, static_key):
+    """pack_blocks' per-ray inputs in one pass: the GL pixel (gx, gy) of image pixel px
+    (i, j) in an image `height` rows high, the key (1 + object id, or static_key >= 0
+    where static_view), and the face row in the SurfaceTable (face_offset[object id] +
+    prim id; -1 on a miss, as SurfaceTable.face_index)."""
+    n = px.shape[0]
+    gx = np.empty(n, np.int64)
+    gy = np.empty(n, np.int64)
+    key = np.empty(n, np.int64)
+    face = np.empty(n, np.int64)
+    for k in range(n):
+        gx[k] = px[k, 0]
+        gy[k] = height - 1 - px[k, 1]
+        oid = object_id[k]
+        key[k] = static_key if static_key >= 0 and static_view[k] else np.int64(oid) + 1
+        face[k] = face_offset[oid] + np.int64(prim_id[k]) if oid != 0 else -1
+    return gx, gy, key, face
+
+
+@njit(**_JIT)
 def pack_blocks(gx, gy, key, face, bary, tile_bits, row_bits):
     """Hit records in blocks (viewer/render/reveal_pass.py layer_hits): for ray k at GL
     pixel (gx, gy) with key (1 + object id; small non-negative ints), face row and

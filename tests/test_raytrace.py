@@ -739,3 +739,24 @@ def test_run_all_raises_a_jobs_error_after_every_thread_is_done():
         with pytest.raises(RuntimeError, match="job failed"):
             run_all([slow, fail], [2, 1], 2, "test")
         assert finished == [1]
+
+
+@pytest.mark.parametrize("static_key", [-1, 9])
+def test_record_inputs_match_their_numpy_statements(static_key):
+    rng = np.random.default_rng(3)
+    n, height = 200, 37
+    px = np.c_[rng.integers(0, 50, n), rng.integers(0, height, n)]
+    object_id = rng.integers(0, 4, n).astype(np.uint32)
+    prim_id = np.where(object_id != 0, rng.integers(0, 30, n), -1).astype(np.int32)
+    face_offset = np.array([0, 0, 30, 70], np.int64)
+    static_view = rng.uniform(size=n) < 0.3
+    gx, gy, key, face = kernels.record_inputs(px, height, object_id, prim_id, face_offset,
+                                              static_view, static_key)
+    np.testing.assert_array_equal(gx, px[:, 0])
+    np.testing.assert_array_equal(gy, height - 1 - px[:, 1])
+    want = object_id.astype(np.int64) + 1
+    if static_key >= 0:
+        want[static_view] = static_key
+    np.testing.assert_array_equal(key, want)
+    np.testing.assert_array_equal(face, np.where(object_id != 0,
+                                                 face_offset[object_id] + prim_id, -1))

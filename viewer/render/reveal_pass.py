@@ -187,14 +187,12 @@ def layer_hits(pixels: np.ndarray, layer, height: int, static_key: int | None = 
 
     def pick(a):
         return a if every else np.take(a, rows, axis=0)
-    px = pick(pixels)
-    key = pick(layer.object_id).astype(np.int64) + 1
-    if static_key is not None:
-        key[pick(layer.static_view)] = static_key
-    gy = height - 1 - px[:, 1]              # GL rows
+    gx, gy, key, face = kernels.record_inputs(
+        pick(pixels), height, pick(layer.object_id), pick(layer.prim_id),
+        layer.table.face_offset, pick(layer.static_view), -1 if static_key is None else static_key)
     records, block_key, tiles = kernels.pack_blocks(
-        px[:, 0].astype(np.int64), gy.astype(np.int64), key, pick(layer.face_index),
-        pick(layer.barycentrics), SHADE_TILE.bit_length() - 1, BLOCKS_PER_ROW.bit_length() - 1)
+        gx, gy, key, face, pick(layer.barycentrics), SHADE_TILE.bit_length() - 1,
+        BLOCKS_PER_ROW.bit_length() - 1)
     # Each key's run of blocks: (key, first, count).
     ends = (np.flatnonzero(np.diff(block_key)) + 1).tolist() + [len(block_key)]
     starts = [0] + ends[:-1]
