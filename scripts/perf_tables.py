@@ -53,6 +53,26 @@ def pass_table(reports) -> str:
     return "\n".join(x for x in lines if x)
 
 
+def host_table(reports) -> str:
+    """Frame time against the main thread's CPU time in it (host work), McGuire and
+    hybrid, and the hybrid's host CPU by pass (the largest, ms)."""
+    lines = ["| scene | size | McGuire frame / host CPU | hybrid frame / host CPU | "
+             "frame difference | host CPU difference | hybrid host CPU by pass |",
+             "|---|---|---:|---:|---:|---:|---|"]
+    for _, r in reports:
+        m, h = r["modes"].get("mcguire", {}), r["modes"].get("hybrid", {})
+        if "frame_cpu_ms" not in m or "frame_cpu_ms" not in h:
+            continue
+        top = sorted(h.get("passes_cpu", {}).items(), key=lambda kv: -kv[1])[:5]
+        lines.append(
+            f"| {r['scene']} | {r['size'][0]}x{r['size'][1]} | "
+            f"{m['frame_ms']:.1f} / {m['frame_cpu_ms']:.1f} | "
+            f"{h['frame_ms']:.1f} / {h['frame_cpu_ms']:.1f} | "
+            f"{h['frame_ms'] - m['frame_ms']:+.1f} | {h['frame_cpu_ms'] - m['frame_cpu_ms']:+.1f} | "
+            + ", ".join(f"{n} {v:.2f}" for n, v in top) + " |")
+    return "\n".join(lines)
+
+
 def reveal_table(reports) -> str:
     lines = ["| scene | size | masked pixels | rays | reveal ms | of which tracing | "
              "M rays/s (whole / tracing) | bare Embree M rays/s | whole / bare | tracing / bare |",
@@ -88,6 +108,8 @@ def main(paths) -> int:
     print(frame_table(reports))
     print("\n### Hybrid passes (median ms)\n")
     print(pass_table(reports))
+    print("\n### Host CPU (the main thread's) in a frame, ms\n")
+    print(host_table(reports))
     print("\n### Reveal throughput\n")
     print(reveal_table(reports))
     print("\n### Reveal cost against the mask\n")

@@ -140,7 +140,11 @@ def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys):
     for mode, r in rep["modes"].items():
         assert r["frame_ms"] > 0 and r["frame"]["n"] == 2
         assert r["passes"]["gbuffer"] > 0
+        # Host CPU: no more than the frame (one thread), every pass timed.
+        assert 0 < r["frame_cpu_ms"] <= 1.05 * r["frame_ms"] + 0.5
+        assert set(r["passes_cpu"]) == set(r["passes"])
     hyb = rep["modes"]["hybrid"]
+    assert 0 < hyb["passes_cpu"]["reveal"] <= 1.05 * hyb["passes"]["reveal"] + 0.5
     assert {"select_tiles", "ray_mask", "reveal", "reveal_shade", "hybrid_composite"} <= set(hyb["passes"])
     for m in ("hybrid", "ue4"):
         assert rep["ratios"][f"{m}/mcguire"] == pytest.approx(

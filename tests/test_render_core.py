@@ -286,3 +286,20 @@ def test_camera_rays_equal_the_numpy_formula():
     i, j = rng.integers(0, 33, 100), rng.integers(0, 17, 100)
     np.testing.assert_allclose(wide.rays(0.1, i, j)[1], numpy_directions(wide, 0.1, i, j),
                                rtol=0, atol=4e-16)
+
+
+def test_pass_timer_splits_host_cpu_from_waiting(ctx):
+    # pass_cpu_ms is the main thread's CPU time: a pass that waits (sleeps) has wall time
+    # but next to no CPU time; one that computes has both.
+    import time
+    from types import SimpleNamespace
+    from viewer.render.frame import PassTimer
+    frame = SimpleNamespace(ctx=ctx, timing=True, pass_ms={}, pass_cpu_ms={})
+    with PassTimer(frame, "waits"):
+        time.sleep(0.05)
+    with PassTimer(frame, "computes"):
+        t0 = time.perf_counter()
+        while time.perf_counter() - t0 < 0.05:
+            pass
+    assert frame.pass_ms["waits"] >= 49 and frame.pass_cpu_ms["waits"] < 10
+    assert frame.pass_ms["computes"] >= 49 and frame.pass_cpu_ms["computes"] >= 25

@@ -76,7 +76,9 @@ def time_modes(r: Renderer, modes: list[str], s, frames: int, warmup: int, progr
         for _ in range(warmup):
             r.render(mode, s.time, s.params, seed=s.seed, read_image=False)
     frame_ms = {m: [] for m in modes}
+    frame_cpu = {m: [] for m in modes}
     passes = {m: {} for m in modes}
+    passes_cpu = {m: {} for m in modes}
     stats = {m: [] for m in modes}
     for k in range(frames):
         t = s.time + (k + 1) * dt
@@ -84,14 +86,19 @@ def time_modes(r: Renderer, modes: list[str], s, frames: int, warmup: int, progr
             r.render(mode, t - dt, s.params, seed=s.seed, read_image=False)
             # Frame time: one finish() at the end only, so passes overlap as they would.
             ctx.finish()
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.thread_time()
             r.render(mode, t, s.params, seed=s.seed, read_image=False)
+            c1 = time.thread_time()
             ctx.finish()
             frame_ms[mode].append((time.perf_counter() - t0) * 1e3)
+            # The main thread's CPU time in the frame (host work, not the waits for GL).
+            frame_cpu[mode].append((c1 - c0) * 1e3)
             # Pass times: the next frame, each pass timed by `clock`.
             res = clock.render(r, mode, t + dt, s.params, s.seed)
             for name, ms in res.pass_ms.items():
                 passes[mode].setdefault(name, []).append(ms)
+            for name, ms in res.pass_cpu_ms.items():
+                passes_cpu[mode].setdefault(name, []).append(ms)
             if mode == "hybrid" and res.stats.get("rays"):
                 # The ceiling on this frame's rays, timed right after it (same conditions).
                 from raytrace.bench import bare_embree_rays_per_s
@@ -99,13 +106,21 @@ def time_modes(r: Renderer, modes: list[str], s, frames: int, warmup: int, progr
                     res.host.get("reveal_batch"), repeats=1)
             stats[mode].append(res.stats)
         progress(k, frames)
-    return {m: mode_summary(frame_ms[m], passes[m], stats[m]) for m in modes}
+    return {m: mode_summary(frame_ms[m], passes[m], stats[m], frame_cpu[m], passes_cpu[m])
+            for m in modes}
 
 
-def mode_summary(frame_ms: list, passes: dict, stats: list) -> dict:
+def mode_summary(frame_ms: list, passes: dict, stats: list, frame_cpu: list | None = None,
+                 passes_cpu: dict | None = None) -> dict:
     out = {"frame_ms": float(np.median(frame_ms)), "frame": summary(frame_ms),
            "passes": {n: float(np.median(v)) for n, v in passes.items()},
            "passes_spread": {n: summary(v) for n, v in passes.items()}}
+    if frame_cpu:
+        # Host CPU (the main thread's) against the frame: on llvmpipe the draws wait for
+        # the rasteriser, so host time adds to the frame; on a GPU it may overlap it.
+        out["frame_cpu_ms"] = float(np.median(frame_cpu))
+    if passes_cpu:
+        out["passes_cpu"] = {n: float(np.median(v)) for n, v in passes_cpu.items()}
     keys = set().union(*[st.keys() for st in stats]) if stats else set()
     out["stats"] = {k: float(np.median([st[k] for st in stats if k in st])) for k in sorted(keys)
                     if all(isinstance(st.get(k, 0), (int, float)) for st in stats)}
@@ -210,10 +225,13 @@ def format_report(rep: dict) -> str:
     w, h = rep["size"]
     lines = [f"{rep['scene']} {w}x{h} on {rep['device']}; passes timed by "
              f"{rep['pass_timing']}", "",
-             "| mode | frame ms (median) | p10-p90 | passes (median ms) |", "| --- | ---: | ---: | --- |"]
+             "| mode | frame ms (median) | p10-p90 | host CPU ms | passes (median ms) |",
+             "| --- | ---: | ---: | ---: | --- |"]
     for m, r in rep["modes"].items():
         passes = ", ".join(f"{n} {v:.1f}" for n, v in r["passes"].items())
-        lines.append(f"| {m} | {r['frame_ms']:.1f} | {r['frame']['p10']:.1f}-{r['frame']['p90']:.1f} | {passes} |")
+        cpu = f"{r['frame_cpu_ms']:.1f}" if "frame_cpu_ms" in r else "-"
+        lines.append(f"| {m} | {r['frame_ms']:.1f} | {r['frame']['p10']:.1f}-{r['frame']['p90']:.1f}"
+                     f" | {cpu} | {passes} |")
     for k, v in rep["ratios"].items():
         lines.append(f"\n{k}: {v:.2f}x")
     rv = rep.get("reveal")

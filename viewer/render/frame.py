@@ -28,6 +28,10 @@ class Frame:
     timing: bool = False                       # finish() around each pass, CPU clock
     stats: dict = field(default_factory=dict)  # counters: masked pixels, rays, ...
     pass_ms: dict = field(default_factory=dict)
+    # Main-thread CPU time of each timed pass (time.thread_time: Python, numba, Embree
+    # calls on this thread and the driver's work here; not the waits for the GPU or
+    # llvmpipe's rasteriser threads): how much of a pass is host work.
+    pass_cpu_ms: dict = field(default_factory=dict)
     host: dict = field(default_factory=dict)   # host-side results (e.g. region maps)
 
     @property
@@ -80,10 +84,18 @@ class PassTimer:
         if self.frame.timing:
             self.frame.ctx.finish()
             self.t0 = _time.perf_counter()
+            self.c0 = _time.thread_time()
         return self
 
     def __exit__(self, *exc):
         if self.frame.timing and exc[0] is None:
+            add_cpu_ms(self.frame, self.name, self.c0)
             self.frame.ctx.finish()
             ms = (_time.perf_counter() - self.t0) * 1e3
             self.frame.pass_ms[self.name] = self.frame.pass_ms.get(self.name, 0.0) + ms
+
+
+def add_cpu_ms(frame: Frame, name: str, c0: float):
+    """Add the main thread's CPU time since thread_time() read c0 to pass `name`."""
+    ms = (_time.thread_time() - c0) * 1e3
+    frame.pass_cpu_ms[name] = frame.pass_cpu_ms.get(name, 0.0) + ms

@@ -7,12 +7,13 @@ queries time the passes without stalling the CPU between them.
 """
 from __future__ import annotations
 
+import time
 from contextlib import contextmanager
 
 import moderngl
 
 from ..params import ParamSet
-from .frame import Frame, PassTimer
+from .frame import Frame, PassTimer, add_cpu_ms
 from .renderer import Renderer
 
 SOFTWARE_RENDERERS = ("llvmpipe", "softpipe", "swiftshader", "software rasterizer", "swrast")
@@ -39,7 +40,8 @@ class PassClock:
 
     @contextmanager
     def measure(self, frame: Frame, name: str):
-        """Time the work inside into frame.pass_ms[name] (added up if repeated)."""
+        """Time the work inside into frame.pass_ms[name] (added up if repeated), and the
+        main thread's CPU time in it into frame.pass_cpu_ms[name]."""
         if self.method == "cpu":
             with PassTimer(frame, name):
                 yield
@@ -47,8 +49,10 @@ class PassClock:
         q = self._queries.get(name)
         if q is None:
             q = self._queries[name] = self.ctx.query(time=True)
+        c0 = time.thread_time()
         with q:
             yield
+        add_cpu_ms(frame, name, c0)
         frame.pass_ms[name] = frame.pass_ms.get(name, 0.0) + q.elapsed / 1e6
 
     def render(self, renderer: Renderer, mode: str, t: float, params: ParamSet, seed: int) -> Frame:
