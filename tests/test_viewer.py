@@ -375,6 +375,9 @@ def test_window_shows_the_scene_and_the_panel(display, tmp_path, ctx):
     panel = np.abs(img[y:y + h, x:x + w].astype(int) - ref[y:y + h, x:x + w].astype(int))
     assert panel.mean() > 10                     # the panel is drawn over the scene
     assert stats["rss_kb"] and stats["pass_ms"].get("gbuffer", 0) > 0
+    # Every timed pass also has its host CPU time (the overlay's second column).
+    assert set(stats["pass_cpu_ms"]) == set(stats["pass_ms"])
+    assert all(0 <= stats["pass_cpu_ms"][k] <= stats["pass_ms"][k] + 0.5 for k in stats["pass_ms"])
 
 
 def test_mode_switch_changes_the_window_to_that_mode(display, tmp_path, ctx):

@@ -81,6 +81,7 @@ class App:
         self.timeline = Timeline(options.script)
         self.times = FrameTimes()
         self.pass_ms: dict = {}
+        self.pass_cpu_ms: dict = {}           # the main thread's CPU time in each pass
         self.stats: dict = {}
         self.shown_name = self.shown_kind = ""
         self.panel_rect = self.overlay_rect = (0.0, 0.0, 0.0, 0.0)
@@ -268,6 +269,7 @@ class App:
             else:
                 frame = self.clock.render(self.renderer, s.mode, s.time, s.params, s.seed)
             self.pass_ms, self.stats = dict(frame.pass_ms), dict(frame.stats)
+            self.pass_cpu_ms = dict(frame.pass_cpu_ms)
             output = self.renderer.output_name(s.mode)
             name = s.buffer if s.buffer in self.renderer.pool.names() else output
             s.view.gain = self.progressive.gain if (name == output and self.is_progressive()) else 1.0
@@ -308,7 +310,8 @@ class App:
             self.render_scene()
             if self.state.show_panel:
                 self.panel_rect = draw_panel(self)
-            self.overlay_rect = draw_overlay(self.times, self.pass_ms, self.stats, self.clock.method,
+            self.overlay_rect = draw_overlay(self.times, self.pass_ms, self.pass_cpu_ms,
+                                             self.stats, self.clock.method,
                                              self.ctx.info["GL_RENDERER"], self.window.size[0])
             self.window.end_gui()
             self.frame_index += 1
@@ -331,7 +334,7 @@ class App:
             "size": list(self.renderer.size), "window": list(self.window.size),
             "fps": self.times.fps, "frame_ms": self.times.recent().tolist(),
             "timing": self.clock.method, "device": self.device,
-            "pass_ms": self.pass_ms, "stats": self.stats,
+            "pass_ms": self.pass_ms, "pass_cpu_ms": self.pass_cpu_ms, "stats": self.stats,
             "rss_kb": self.rss, "errors": s.errors, "screenshots": s.shots,
             "panel_rect": list(self.panel_rect) if s.show_panel else None,
             "overlay_rect": list(self.overlay_rect),

@@ -38,9 +38,15 @@ def format_stat(value) -> str:
     return str(value)
 
 
-def draw_overlay(times: FrameTimes, pass_ms: dict, stats: dict, method: str, device: str,
-                 window_width: int) -> tuple[float, float, float, float]:
-    """Draw at the window's top right; returns its rectangle (x, y, w, h) in window pixels."""
+def cpu_text(ms) -> str:
+    """A pass's host CPU column: 8 characters, blank where it was not measured."""
+    return f"{ms:8.2f}" if ms is not None else " " * 8
+
+
+def draw_overlay(times: FrameTimes, pass_ms: dict, pass_cpu_ms: dict, stats: dict, method: str,
+                 device: str, window_width: int) -> tuple[float, float, float, float]:
+    """Draw at the window's top right; returns its rectangle (x, y, w, h) in window pixels.
+    Each pass: its time, and the main thread's CPU time in it (host work)."""
     imgui.set_next_window_pos(imgui.ImVec2(window_width - 8, 8), imgui.Cond_.always,
                               imgui.ImVec2(1.0, 0.0))     # pivot: the top-right corner
     imgui.set_next_window_bg_alpha(0.65)
@@ -58,11 +64,13 @@ def draw_overlay(times: FrameTimes, pass_ms: dict, stats: dict, method: str, dev
     imgui.text(f"timing: {describe(method)}")
     if method == "cpu":
         imgui.text_disabled("(software GL: timer queries untrusted)")
-    total = sum(pass_ms.values())
-    for name, ms in pass_ms.items():
-        imgui.text(f"{name:<22s}{ms:8.2f} ms")
     if pass_ms:
-        imgui.text(f"{'passes':<22s}{total:8.2f} ms")
+        imgui.text_disabled(f"{'pass':<22s}{'ms':>8s}{'host':>8s}")
+    for name, ms in pass_ms.items():
+        imgui.text(f"{name:<22s}{ms:8.2f}{cpu_text(pass_cpu_ms.get(name))}")
+    if pass_ms:
+        total, host = sum(pass_ms.values()), sum(pass_cpu_ms.values()) if pass_cpu_ms else None
+        imgui.text(f"{'passes':<22s}{total:8.2f}{cpu_text(host)}")
     if stats:
         imgui.separator()
         for name, value in stats.items():
