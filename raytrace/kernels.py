@@ -163,6 +163,20 @@ def member(values, table):
     return out
 
 
+@njit(inline="always")
+def _take_view_hit(i, key, v_id, v_prim, v_u, v_v, v_dist, best, object_id, prim_id, u, v,
+                   from_view):
+    """Ray i takes the view's kept static hit of pixel `key` where there is one nearer
+    than its best so far; from_view marks it."""
+    if v_id[key] != 0 and v_dist[key] < best[i]:
+        object_id[i] = v_id[key]
+        prim_id[i] = v_prim[key]
+        u[i] = v_u[key]
+        v[i] = v_v[key]
+        best[i] = v_dist[key]
+        from_view[i] = True
+
+
 @njit(**_JIT)
 def view_lookup(left, static_own, pixels, known, v_id, v_prim, v_u, v_v, v_dist, best,
                 object_id, prim_id, u, v, from_view):
@@ -187,13 +201,9 @@ def view_lookup(left, static_own, pixels, known, v_id, v_prim, v_u, v_v, v_dist,
             new_rows[b] = i
             new_keys[b] = key
             b += 1
-        elif v_id[key] != 0 and v_dist[key] < best[i]:
-            object_id[i] = v_id[key]
-            prim_id[i] = v_prim[key]
-            u[i] = v_u[key]
-            v[i] = v_v[key]
-            best[i] = v_dist[key]
-            from_view[i] = True
+        else:
+            _take_view_hit(i, key, v_id, v_prim, v_u, v_v, v_dist, best, object_id, prim_id,
+                           u, v, from_view)
     return new_rows[:b], new_keys[:b], rest[:c]
 
 
@@ -203,14 +213,8 @@ def view_merge(use, keys, v_id, v_prim, v_u, v_v, v_dist, best, object_id, prim_
     """The view's kept static hits for rays `use` (pixels `keys`) where nearer than the
     best so far, in place; from_view marks the rays that took one."""
     for k in range(use.shape[0]):
-        i, key = use[k], keys[k]
-        if v_id[key] != 0 and v_dist[key] < best[i]:
-            object_id[i] = v_id[key]
-            prim_id[i] = v_prim[key]
-            u[i] = v_u[key]
-            v[i] = v_v[key]
-            best[i] = v_dist[key]
-            from_view[i] = True
+        _take_view_hit(use[k], keys[k], v_id, v_prim, v_u, v_v, v_dist, best, object_id,
+                       prim_id, u, v, from_view)
 
 
 @njit(**_JIT)

@@ -167,27 +167,26 @@ def chessboard_distance(sources):
     return d
 
 
-@njit(**_JIT)
-def square_max(a, r):
-    """The largest value within r tiles (Chebyshev) of each tile, 0 past the edges, for
-    a map of values >= 0 (scipy's maximum_filter(a, size=2 r + 1, mode="constant",
-    cval=0)); a boolean map gives "any within r"."""
+@njit(inline="always")
+def _max_along_rows(a, r):
+    """Each entry's largest value within r entries along its row, 0 past the ends."""
     th, tw = a.shape
-    rows = np.zeros((th, tw), a.dtype)
+    out = np.zeros((th, tw), a.dtype)
     for y in range(th):
         for x in range(tw):
             m = a[y, x]
             for u in range(max(0, x - r), min(tw, x + r + 1)):
                 m = max(m, a[y, u])
-            rows[y, x] = m
-    out = np.zeros((th, tw), a.dtype)
-    for y in range(th):
-        for x in range(tw):
-            m = rows[y, x]
-            for v in range(max(0, y - r), min(th, y + r + 1)):
-                m = max(m, rows[v, x])
             out[y, x] = m
     return out
+
+
+@njit(**_JIT)
+def square_max(a, r):
+    """The largest value within r tiles (Chebyshev) of each tile, 0 past the edges, for
+    a map of values >= 0 (scipy's maximum_filter(a, size=2 r + 1, mode="constant",
+    cval=0)); a boolean map gives "any within r". Separable: along rows, then columns."""
+    return np.ascontiguousarray(_max_along_rows(_max_along_rows(a, r).T, r).T)
 
 
 @njit(**_JIT)
