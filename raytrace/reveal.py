@@ -137,8 +137,9 @@ def primary_view(camera: Camera, t: float) -> tuple | None:
 
 
 def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
-                  own_ids: np.ndarray, layers: int, max_depth: int,
+                  own_ids: np.ndarray, layers: int, max_depth: int, view: tuple | None,
                   call_threads: int = 1) -> RevealResult:
+    """view: primary_view(camera, t), asked once by reveal() for every chunk."""
     n = len(pixels_ij)
     origin, direction = camera.rays(t, pixels_ij[:, 0], pixels_ij[:, 1])
     _, fwd, _ = camera.spec.pose(t)
@@ -154,8 +155,7 @@ def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
     for k in range(layers):
         pick = (lambda a: a) if rows is None else (lambda a: a[rows])
         # Layer 1's rays are the view's primary rays: their static hits are kept.
-        view = None if k else primary_view(camera, t)
-        primary = {} if view is None else {
+        primary = {} if k or view is None else {
             "view": view, "pixels": pixels_ij[:, 1] * camera.width + pixels_ij[:, 0]}
         hits = rs.intersect(pick(origin), pick(direction), t, exclude,
                             max_restarts=max_depth, tnear=tnear, tfar=pick(far),
@@ -224,12 +224,14 @@ def reveal(rs: RayScene, camera: Camera, t: float, pixels_ij, own_ids, layers: i
     n_chunks = max(-(-n // max(1, max_chunk)),
                    min(threads * 4, n // max(1, min_chunk)) if threads > 1 else 1)
     if n_chunks <= 1:     # one chunk: its independent Embree calls may share the threads
-        return _reveal_chunk(rs, camera, t, pixels_ij, own_ids, layers, max_depth, threads)
+        return _reveal_chunk(rs, camera, t, pixels_ij, own_ids, layers, max_depth, view,
+                             threads)
     bounds = np.linspace(0, n, n_chunks + 1).astype(np.int64)
 
     def run(k):
         a, b = bounds[k], bounds[k + 1]
-        return _reveal_chunk(rs, camera, t, pixels_ij[a:b], own_ids[a:b], layers, max_depth)
+        return _reveal_chunk(rs, camera, t, pixels_ij[a:b], own_ids[a:b], layers, max_depth,
+                             view)
 
     if threads == 1:
         return _concatenate([run(k) for k in range(n_chunks)])
