@@ -415,3 +415,101 @@ def test_tile_coords_list_the_true_tiles_row_by_row():
     ty, tx = np.nonzero(sel)
     np.testing.assert_array_equal(tile_lists.tile_coords(sel), np.stack([tx, ty], axis=1))
     assert tile_lists.tile_coords(np.zeros((3, 4), bool)).shape == (0, 2)
+
+
+def _boundary_tiles(ids: np.ndarray, tile: int) -> np.ndarray:
+    """motion_tiles.frag's flag (GL rows = array rows here): a tile holding a pixel whose
+    right or upper neighbour shows another object."""
+    h, w = ids.shape
+    pair = np.zeros((h, w), bool)
+    pair[:, :-1] |= ids[:, :-1] != ids[:, 1:]
+    pair[:-1, :] |= ids[:-1, :] != ids[1:, :]
+    rows, cols = -(-h // tile), -(-w // tile)
+    out = np.zeros((rows, cols), bool)
+    yy, xx = np.nonzero(pair)
+    out[yy // tile, xx // tile] = True
+    return out
+
+
+def _line_leaves_object(ids, vn, k, max_len):
+    """Per pixel (GL rows), brute force: does any point of its neighbourhood line, as
+    glsl/hybrid_bucket.frag taps it (the pixel holding x + 0.5 + s dir, clamped, |s| <=
+    |vn| / 2, run where that exceeds 0.5), show another object?"""
+    h, w = ids.shape
+    yy, xx = np.mgrid[0:h, 0:w]
+    v = vn[yy // k, xx // k].astype(np.float64)
+    length = np.linalg.norm(v, axis=-1)
+    r = 0.5 * np.minimum(length, max_len)
+    d = v / np.maximum(length, 1e-12)[..., None]
+    leaves = np.zeros((h, w), bool)
+    for u in np.linspace(-1.0, 1.0, 801):
+        s = u * r
+        px = np.clip(np.floor(xx + 0.5 + s * d[..., 0]).astype(int), 0, w - 1)
+        py = np.clip(np.floor(yy + 0.5 + s * d[..., 1]).astype(int), 0, h - 1)
+        leaves |= ids[py, px] != ids
+    return leaves & (r > 0.5)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_outlines_along_holds_every_tile_whose_line_can_leave_its_object(seed):
+    # Random rectangles over a background, random NeighborMax vectors: every pixel whose
+    # line reaches another object lies in a tile outlines_along sets, and the directional
+    # test leaves out tiles an isotropic reach would keep.
+    rng = np.random.default_rng(seed)
+    h, w, tile, k = 72, 104, 8, 12
+    ids = np.zeros((h, w), np.int64)
+    for n in range(1, 6):
+        x0, y0 = rng.integers(0, w - 10), rng.integers(0, h - 10)
+        ids[y0:y0 + rng.integers(4, 30), x0:x0 + rng.integers(4, 30)] = n
+    vn = np.zeros((-(-h // k), -(-w // k), 2), np.float32)
+    vn[..., 0] = rng.uniform(-20, 20, vn.shape[:2])
+    vn[..., 1] = rng.uniform(-4, 4, vn.shape[:2])
+    vn[0, 0] = 0.0                                         # a still k-tile: no line
+    boundary = _boundary_tiles(ids, tile)
+    got = tile_kernels.outlines_along(boundary, vn, tile, k, w, h, 2.0 * k, 0.05)
+    leaves = _line_leaves_object(ids, vn, k, 2.0 * k)
+    yy, xx = np.nonzero(leaves)
+    assert len(yy) > 100
+    assert got[yy // tile, xx // tile].all()
+    assert not got.all() and got.sum() < boundary.sum() * 9
+
+
+def test_outlines_along_follows_the_line_direction():
+    # A horizontal outline (object above the middle row) and horizontal motion: the lines
+    # never cross it, so only the row of tiles holding it is set; vertical motion of 16 px
+    # reaches 8 px, a tile: the rows beside it too, and no others.
+    h, w, tile, k = 64, 64, 8, 16
+    ids = np.zeros((h, w), np.int64)
+    ids[32:, :] = 1
+    boundary = _boundary_tiles(ids, tile)
+    assert boundary[3].all() and boundary.sum() == 8       # pairs (31, 32): row of tiles 3
+    vn = np.zeros((h // k, w // k, 2), np.float32)
+    vn[..., 0] = 16.0
+    got = tile_kernels.outlines_along(boundary, vn, tile, k, w, h, 32.0, 0.05)
+    np.testing.assert_array_equal(got, boundary)
+    vn = vn[..., ::-1].copy()
+    got = tile_kernels.outlines_along(boundary, vn, tile, k, w, h, 32.0, 0.05)
+    np.testing.assert_array_equal(np.nonzero(got.all(axis=1))[0], [2, 3, 4])
+    assert got.sum() == 24
+    # A screen border: a line running off the left edge is clamped there, so an outline
+    # in the border column reaches every tile whose line leaves the screen.
+    ids = np.zeros((h, w), np.int64)
+    ids[40:48, 0] = 1
+    boundary = _boundary_tiles(ids, tile)
+    vn = np.zeros((h // k, w // k, 2), np.float32)
+    vn[..., 0] = 16.0
+    got = tile_kernels.outlines_along(boundary, vn, tile, k, w, h, 32.0, 0.05)
+    leaves = _line_leaves_object(ids, vn, k, 32.0)
+    yy, xx = np.nonzero(leaves)
+    assert got[yy // tile, xx // tile].all() and got[:, 1].sum() == 2
+    # A line that leaves the screen at the bottom, clamped onto an object further along the
+    # bottom row: its segment never meets that object's boundary tiles, only their
+    # extension past the screen's edge does.
+    ids = np.zeros((h, w), np.int64)
+    ids[0:4, 32:41] = 1
+    vn = np.zeros((h // k, w // k, 2), np.float32)
+    vn[0, 0] = (60.0 / np.sqrt(2.0), -60.0 / np.sqrt(2.0))
+    assert _line_leaves_object(ids, vn, k, 64.0)[4, 14]
+    boundary = _boundary_tiles(ids, tile)
+    assert not boundary[0, :3].any() and not boundary[1:].any()
+    assert tile_kernels.outlines_along(boundary, vn, tile, k, w, h, 64.0, 0.05)[0, 1]

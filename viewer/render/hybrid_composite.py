@@ -22,34 +22,37 @@ from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass
 from .pool import TexSpec
-from .tile_kernels import pixel_tiles, square_max
-from .tile_lists import FINE, moving_strips, tile_coords, tile_list, within_reach
+from .tile_kernels import outlines_along, pixel_tiles, square_max
+from .tile_lists import FINE, moving_strips, tile_coords, tile_list
 from .tiles import tile_passes
 
 # Which noise stream of glsl/noise.glsl's hash01 jitters the time samples or taps.
 JITTER_STREAM = 2
+# outlines_along's widening of the tiles' pixel centres: float rounding of a tap's point
+# (float32 on the GPU: ~1e-5 px over the longest line).
+OUTLINE_MARGIN_PX = 0.05
 FRAGMENTS = {"time": "hybrid_time.frag", "bucket": "hybrid_bucket.frag"}
 
 
 def near_outlines(frame: Frame, shape) -> np.ndarray:
-    """FINE tiles (GL rows) whose composite lines can reach another object: a tile that
-    may hold an id boundary (motion_tiles' flag); all of them without tile lists. A
-    pixel's lines reach half its neighbourhood's largest displacement or half its own,
-    clamped to the blur limit 2k, and a tap lands within half a pixel of its point: the
-    neighbourhood (McGuire's 3 x 3 tiles of k px) lies within 2k px, so tile T's lines
-    reach at most R_T = min(M_T, 2k) / 2 + the landing tolerance + a pixel, M_T the
-    longest |D| within 2k px of T (tile_lists.within_reach of a boundary tile).
-    Elsewhere every tap of the neighbourhood's line lands on the pixel's own object, where it adds nothing unless that line is also the own line: the
-    SIMPLE variant, which skips it then, gives the same image."""
+    """FINE tiles (GL rows) where a tap of the neighbourhood's line can land on another
+    object than its pixel's: all of them without tile lists. The line runs along the
+    pixel's NeighborMax vector (read back: a few hundred floats), so a tile is near an
+    outline only where a boundary tile (motion_tiles' flag) lies along that line within
+    its reach (tile_kernels.outlines_along: a camera pan's horizontal lines miss the
+    outlines above and below). Elsewhere every tap of that line lands on the pixel's own
+    object, where it adds nothing unless the line is also the own line: the SIMPLE
+    variant, which skips it then, gives the same image."""
     lists = frame.host.get("tile_lists")
     if lists is None or lists.boundary.shape != shape:
         return np.ones(shape, bool)
-    p = frame.params["hybrid"]
+    if not lists.boundary.any():
+        return np.zeros(shape, bool)
+    tex = frame.pool.get("hybrid_neighbormax")
+    vn = np.frombuffer(tex.read(), np.float32).reshape(tex.size[1], tex.size[0], 2)
     k = max_radius_px(frame)
-    q = -(-2 * k // FINE) + 1
-    around = square_max(lists.longest, q)
-    reach = 0.5 * np.minimum(around.astype(np.float64), 2.0 * k) + p.tolerance + 1.0
-    return within_reach(lists.boundary, reach, FINE)
+    return outlines_along(lists.boundary, vn, FINE, k, frame.size[0], frame.size[1],
+                          2.0 * k, OUTLINE_MARGIN_PX)
 
 
 def composite_kind(frame: Frame) -> str:

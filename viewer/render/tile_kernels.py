@@ -213,3 +213,76 @@ def true_coords(selected):
                 out[k, 1] = y
                 k += 1
     return out
+
+
+@njit(inline="always")
+def _segment_meets_box(cx, cy, dx, dy, x0, y0, x1, y1):
+    """Does the segment (cx, cy) +- (dx, dy) meet the closed box [x0, x1] x [y0, y1]?
+    (slabs: the segment's parameter range inside each axis' slab, intersected)."""
+    lo, hi = -1.0, 1.0
+    for c, d, a, b in ((cx, dx, x0, x1), (cy, dy, y0, y1)):
+        if d == 0.0:
+            if c < a or c > b:
+                return False
+        else:
+            t0, t1 = (a - c) / d, (b - c) / d
+            if t0 > t1:
+                t0, t1 = t1, t0
+            lo, hi = max(lo, t0), min(hi, t1)
+            if lo > hi:
+                return False
+    return True
+
+
+@njit(**_JIT)
+def outlines_along(boundary, vn, tile, k, w, h, max_len, margin):
+    """FINE tiles (GL rows, `tile` px) where a tap of the composite's neighbourhood line
+    may land on another object than its pixel's: the line of pixel x runs through its
+    centre along vn, the NeighborMax vector (GL rows, k px tiles) of x's k-tile clamped
+    to max_len, to +- |vn| / 2 (run only where |vn| / 2 > 0.5), and a tap takes the pixel
+    holding its point, clamped to the screen. A tap on another object has an id boundary
+    between it and x on the pixels the segment crosses, so a `boundary` tile (one holding
+    a pixel whose right or upper neighbour shows another object) meets the segment: tile
+    T is set when the box of T's pixel centres (per k-tile part), widened by `margin` px
+    for rounding, swept along +- vn / 2, meets a boundary tile's box; a border tile's box
+    runs on to infinity outward (a clamped tap)."""
+    rows, cols = boundary.shape
+    out = np.zeros((rows, cols), np.bool_)
+    big = 1e30
+    for ty in range(rows):
+        for tx in range(cols):
+            x0, y0 = tx * tile, ty * tile
+            x1, y1 = min(x0 + tile, w), min(y0 + tile, h)
+            hit = False
+            for ky in range(y0 // k, (y1 - 1) // k + 1):
+                for kx in range(x0 // k, (x1 - 1) // k + 1):
+                    vx, vy = vn[ky, kx, 0], vn[ky, kx, 1]
+                    length = np.sqrt(vx * vx + vy * vy)
+                    if hit or 0.5 * min(length, max_len) <= 0.5:
+                        continue
+                    s = 0.5 * min(length, max_len) / length
+                    dx, dy = vx * s, vy * s
+                    # The centres of T's pixels in this k-tile, widened by the margin.
+                    px0 = max(x0, kx * k) + 0.5 - margin
+                    px1 = min(x1, (kx + 1) * k) - 0.5 + margin
+                    py0 = max(y0, ky * k) + 0.5 - margin
+                    py1 = min(y1, (ky + 1) * k) - 0.5 + margin
+                    cx, cy = 0.5 * (px0 + px1), 0.5 * (py0 + py1)
+                    hx, hy = 0.5 * (px1 - px0), 0.5 * (py1 - py0)
+                    reach = int((max(abs(dx) + hx, abs(dy) + hy)) // tile) + 2
+                    for by in range(max(0, ty - reach), min(rows, ty + reach + 1)):
+                        for bx in range(max(0, tx - reach), min(cols, tx + reach + 1)):
+                            if not boundary[by, bx]:
+                                continue
+                            bx0 = -big if bx == 0 else bx * tile
+                            bx1 = big if bx == cols - 1 else min(bx * tile + tile, w)
+                            by0 = -big if by == 0 else by * tile
+                            by1 = big if by == rows - 1 else min(by * tile + tile, h)
+                            if _segment_meets_box(cx, cy, dx, dy, bx0 - hx, by0 - hy,
+                                                  bx1 + hx, by1 + hy):
+                                hit = True
+                                break
+                        if hit:
+                            break
+            out[ty, tx] = hit
+    return out
