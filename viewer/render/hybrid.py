@@ -6,12 +6,13 @@ background behind them, shades it like the raster layer, and resolves both layer
 
   gbuffer (colour, normal, hybrid_front = D, depth, id) -> motion_tiles -> select_tiles
           (host: which tiles move, which any motion reaches) (viewer/render/tile_lists.py)
+          -> hybrid tiles (+ NeighborMax read back)      (viewer/render/hybrid_composite.py)
           -> mask_displacement (+ the edge test) -> mask_edge tiles -> ray_mask (+ tiles),
           on the moving tiles                                (viewer/render/raymask.py)
           -> reveal (CPU rays) -> reveal_shade (hybrid_back*: packed D, depth, id, colour)
                                                              (viewer/render/reveal_pass.py)
-          -> hybrid tiles -> hybrid_composite (bucketed; time-sampled or split by
-          setting), on the active tiles
+          -> hybrid_composite (bucketed; time-sampled or split by setting), on the
+          active tiles
                                                              (viewer/render/hybrid_composite.py)
 
 Parameters: the `hybrid` group (viewer/render/hybrid_params.py) and the shared `blur` limit.
@@ -20,7 +21,7 @@ Stats: masked_pixels, rays, revealed_pixels, reveal_ms (host work) and its parts
 from __future__ import annotations
 
 from .gbuffer import GBufferPass
-from .hybrid_composite import composite_passes
+from .hybrid_composite import Composite, composite_tile_passes
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .modes import mode
 from .passes import Pipeline
@@ -30,8 +31,10 @@ from .tile_lists import selection_passes
 
 
 def hybrid_passes() -> list:
-    """Everything after the G-buffer."""
-    return [*selection_passes(), *raymask_passes(), *reveal_passes(), *composite_passes()]
+    """Everything after the G-buffer (the composite's tiles early: they need only the
+    G-buffer, and their host read-back then waits for little)."""
+    return [*selection_passes(), *composite_tile_passes(), *raymask_passes(),
+            *reveal_passes(), Composite()]
 
 
 @mode("hybrid", groups=("blur", "hybrid"))

@@ -20,7 +20,7 @@ import numpy as np
 from .blur_common import max_radius_px
 from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
-from .passes import FullscreenPass
+from .passes import FullscreenPass, Pass
 from .pool import TexSpec
 from .tile_kernels import outlines_along, pixel_tiles, square_max
 from .tile_lists import FINE, moving_strips, tile_coords, tile_list
@@ -48,11 +48,30 @@ def near_outlines(frame: Frame, shape) -> np.ndarray:
         return np.ones(shape, bool)
     if not lists.boundary.any():
         return np.zeros(shape, bool)
-    tex = frame.pool.get("hybrid_neighbormax")
-    vn = np.frombuffer(tex.read(), np.float32).reshape(tex.size[1], tex.size[0], 2)
+    vn = frame.host.get("neighbormax")
+    if vn is None:                      # (not read back: the composite run on its own)
+        vn = read_neighbormax(frame)
     k = max_radius_px(frame)
     return outlines_along(lists.boundary, vn, FINE, k, frame.size[0], frame.size[1],
                           2.0 * k, OUTLINE_MARGIN_PX)
+
+
+def read_neighbormax(frame: Frame) -> np.ndarray:
+    """hybrid_neighbormax on the host (GL rows): a few hundred floats."""
+    tex = frame.pool.get("hybrid_neighbormax")
+    return np.frombuffer(tex.read(), np.float32).reshape(tex.size[1], tex.size[0], 2)
+
+
+class ReadNeighborMax(Pass):
+    """Host side: hybrid_neighbormax read back for near_outlines, right after it is drawn
+    (the hybrid runs the tile passes before the ray mask), so a GPU driver waits only for
+    those passes, not for the reveal's, as a read in the composite would."""
+    name = "hybrid_neighbormax_read"
+    inputs = ("hybrid_neighbormax",)
+    produces = ("neighbormax",)         # host-side: frame.host["neighbormax"]
+
+    def execute(self, frame: Frame):
+        frame.host["neighbormax"] = read_neighbormax(frame)
 
 
 def composite_kind(frame: Frame) -> str:
@@ -161,6 +180,12 @@ class Composite(FullscreenPass):
                   tiles=tiles, clear=False)
 
 
+def composite_tile_passes() -> list:
+    """The raster displacement's tiles for the composite (and NeighborMax on the host):
+    they need only the G-buffer and the tile lists."""
+    return [*tile_passes("hybrid_front", "hybrid", select_x=moving_strips), ReadNeighborMax()]
+
+
 def composite_passes() -> list:
-    """The displacement tiles and the composite, after the reveal."""
-    return [*tile_passes("hybrid_front", "hybrid", select_x=moving_strips), Composite()]
+    """The displacement tiles and the composite (the composite after the reveal)."""
+    return [*composite_tile_passes(), Composite()]
