@@ -132,7 +132,7 @@ def range_check(dmask, edge, ids, disp, rel, min_speed: float, relative_reach: f
 
 
 def tile_summary(mask, tile: int) -> np.ndarray:
-    """ray_mask_tiles (reveal_pass.mask_tiles): per k x k tile (GL origin), (0, 1 if any
+    """ray_mask_tiles (hybrid_composite.mask_tiles): per k x k tile (GL origin), (0, 1 if any
     pixel is masked)."""
     h, w = mask.shape
     th, tw = -(-h // tile), -(-w // tile)

@@ -19,11 +19,11 @@ from viewer.metrics import image_metrics
 from viewer.params import ParamSet
 from viewer.render.blur_common import max_radius_px
 from viewer.render.gbuffer import GBUFFER
-from viewer.render.hybrid_composite import composite_kind, composite_passes
+from viewer.render.hybrid_composite import composite_kind, composite_passes, mask_tiles
 from viewer.render.modes import MODES
 from viewer.render.pool import TexSpec
 from viewer.render.renderer import Renderer
-from viewer.render.reveal_pass import PACKED, mask_tiles, packed_names
+from viewer.render.reveal_pass import PACKED, packed_names
 from viewer.scene_loader import load_scene
 
 SMALL = (160, 90)
@@ -472,6 +472,26 @@ def test_split_composite_is_time_near_the_mask_and_bucket_elsewhere(ctx):
         for tx, ty in tiles:
             sl = np.s_[ty * FINE:(ty + 1) * FINE, tx * FINE:(tx + 1) * FINE]
             assert gl[0][sl].tobytes() == want[sl].tobytes(), (tx, ty)
+
+
+def test_mask_tiles_are_made_only_where_the_time_composite_reads_them(ctx):
+    # ray_mask_tiles, the time composite's summary of the ray mask, holds the k-tiles of
+    # the pixels masked this frame, and is dropped where the bucketed composite runs.
+    scene = load_scene(CONFORMANCE / "basic.toml")
+    r = Renderer(ctx, scene, SMALL)
+    try:
+        r.render("hybrid", 0.013, params(composite="time"))
+        mask = r.buffers()["ray_mask"] != 0            # image rows, as buffers() reads
+        k = max_radius_px(r.frame(0.0, ParamSet()))
+        tiles = r.buffers()["ray_mask_tiles"][..., 1]
+        r.render("hybrid", 0.013, params(composite="bucket"))
+        assert "ray_mask_tiles" not in r.pool.names()
+    finally:
+        r.release()
+    jj, ii = np.nonzero(mask)
+    want = mask_tiles(np.c_[ii, jj], SMALL, k)[..., 1]
+    assert mask.sum() > 50 and want.sum() > 1 and not want.all()
+    np.testing.assert_array_equal(tiles, want)
 
 
 def test_split_tiles_hand_values():

@@ -191,7 +191,7 @@ def test_random_layers_match_numpy(synthetic_frame, seed):
     assert np.count_nonzero(mask == 2) > 10 and np.count_nonzero(mask == 3) > 5
     k = max_radius_px(frame)
     # The reveal's tile summary, from the masked pixels it reads back (image rows).
-    from viewer.render.reveal_pass import mask_tiles
+    from viewer.render.hybrid_composite import mask_tiles
     jj, ii = np.nonzero(got["ray_mask"])
     np.testing.assert_array_equal(mask_tiles(np.c_[ii, jj], (w, h), k),
                                   to_image(nh.tile_summary(mask, k)))

@@ -449,24 +449,28 @@ def test_open_scene_replaces_the_scene(display, tmp_path, ctx):
 
 
 def test_memory_stays_flat_over_mode_switches_and_resizes(display, tmp_path):
+    # RSS climbs while the allocator meets each mode and size for the first times (it is
+    # asked to keep freed memory: viewer/render/allocator.py), ~30-40 MB up to frame
+    # ~250 here, then stays flat (measured to frame 900); a leak of a texture or a frame's
+    # arrays per frame or per switch would keep it climbing.
     from viewer.render.modes import MODES
     modes = list(MODES)
     lines = ["1 subframes 4", "1 set reference.samples=8"]
-    for f in range(10, 300, 10):
+    for f in range(10, 450, 10):
         lines.append(f"{f} mode {modes[(f // 10) % len(modes)]}")
-    for f in range(15, 300, 30):
+    for f in range(15, 450, 30):
         lines.append(f"{f} resize {'400x260' if (f // 30) % 2 == 0 else '480x300'}")
-    lines.append("298 resize 440x280")
-    img, stats = view(display, tmp_path, script="\n".join(lines) + "\n", frames=300,
+    lines.append("448 resize 440x280")
+    img, stats = view(display, tmp_path, script="\n".join(lines) + "\n", frames=450,
                       size="480x300", name="mem")
-    assert stats["errors"] == [] and stats["frames"] == 300
+    assert stats["errors"] == [] and stats["frames"] == 450
     assert stats["size"] == [440, 280] and stats["window"] == [440, 280]
     assert img.shape == (280, 440, 3)
     rss = dict(stats["rss_kb"])
-    growth_mb = (rss[300] - rss[50]) / 1024
-    print(f"RSS frame 50: {rss[50] / 1024:.1f} MB, frame 300: {rss[300] / 1024:.1f} MB, "
-          f"growth {growth_mb:.1f} MB")
-    assert growth_mb < 40
+    growth_mb = (rss[450] - rss[275]) / 1024
+    print(f"RSS frame 50: {rss[50] / 1024:.1f} MB, 275: {rss[275] / 1024:.1f} MB, "
+          f"450: {rss[450] / 1024:.1f} MB, growth after 275: {growth_mb:.1f} MB")
+    assert growth_mb < 16
 
 
 def test_no_display_is_one_line_and_exit_2(tmp_path):

@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from raytrace import kernels
+
 from .blur_common import max_radius_px
 from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
@@ -101,13 +103,34 @@ def split_tiles(active: np.ndarray, masked_ij: np.ndarray, height: int, reach: i
     return active & near, active & ~near
 
 
+MASK_TILES = "ray_mask_tiles"
+
+
+def mask_tiles(pixels: np.ndarray, size: tuple[int, int], tile: int) -> np.ndarray:
+    """Per tile x tile tile (image orientation), (0, 1 if it holds a masked pixel): the
+    ray mask's tile summary, for the time-sampled composite."""
+    w, h = size
+    return kernels.mark_tiles(pixels, -(-h // tile), -(-w // tile), tile)
+
+
+def write_mask_tiles(frame: Frame):
+    """ray_mask_tiles (k px tiles), which only the time-sampled composite reads, made
+    where it runs, from the pixels the reveal read back; a composite run on its own (no
+    reveal) reads what its caller wrote there."""
+    k = max_radius_px(frame)
+    frame.pool.texture(MASK_TILES, TexSpec(2, "f4", tile=k))
+    pixels = frame.host.get("masked_pixels")
+    if pixels is not None:
+        frame.write(MASK_TILES, mask_tiles(pixels, frame.size, k))
+
+
 class Composite(FullscreenPass):
     """The composite composite_kind picks: "time" (glsl/hybrid_time.frag), "bucket"
     (glsl/hybrid_bucket.frag), or "split" between them by tiles."""
     name = "hybrid_composite"
     inputs = ("color", "hybrid_front", "hybrid_back", "hybrid_back_color", "hybrid_back2",
-              "hybrid_back2_color", "hybrid_tilemax", "hybrid_neighbormax", "ray_mask_tiles")
-    produces = ("hybrid",)
+              "hybrid_back2_color", "hybrid_tilemax", "hybrid_neighbormax")
+    produces = ("hybrid", MASK_TILES)   # ray_mask_tiles: held only while "time" draws
 
     def __init__(self):
         self._kind = "time"
@@ -128,6 +151,8 @@ class Composite(FullscreenPass):
 
     def execute(self, frame: Frame):
         kind = composite_kind(frame)
+        if kind == "bucket":
+            frame.pool.discard(MASK_TILES)     # (made by an earlier time composite)
         tiles = tile_list(frame, "active")
         if tiles is not None:
             # Outside the active tiles nothing reaches a pixel: its sharp colour stands.
@@ -166,12 +191,14 @@ class Composite(FullscreenPass):
         p = frame.params["hybrid"]
         k = max_radius_px(frame)
         self._kind, self._back, self._still, self._simple = kind, back, own_still, simple
-        self.draw(frame, self.produces,
-                  {"u_front_color": "color", "u_front": "hybrid_front",
-                   "u_back_color": "hybrid_back_color", "u_back": "hybrid_back",
-                   "u_back2_color": "hybrid_back2_color", "u_back2": "hybrid_back2",
-                   "u_tilemax": "hybrid_tilemax", "u_neighbormax": "hybrid_neighbormax",
-                   "u_mask_tiles": "ray_mask_tiles"},
+        textures = {"u_front_color": "color", "u_front": "hybrid_front",
+                    "u_back_color": "hybrid_back_color", "u_back": "hybrid_back",
+                    "u_back2_color": "hybrid_back2_color", "u_back2": "hybrid_back2",
+                    "u_tilemax": "hybrid_tilemax", "u_neighbormax": "hybrid_neighbormax"}
+        if kind == "time":
+            write_mask_tiles(frame)
+            textures["u_mask_tiles"] = MASK_TILES
+        self.draw(frame, ("hybrid",), textures,
                   {"u_tile": k, "u_max_disp": 2.0 * k,
                    "u_samples_min": int(p.samples_min),
                    "u_samples_max": int(max(p.samples_max, p.samples_min)),

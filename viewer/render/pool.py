@@ -147,6 +147,13 @@ class ResourcePool:
             self._written[n] = tiles.box
             self._tiles[n] = (key, grid)
 
+    def discard(self, name: str):
+        """Release `name` if held (a buffer a pass writes only in some settings)."""
+        if name in self._tex:
+            self._drop(name)
+            self._written.pop(name, None)
+            self._tiles.pop(name, None)
+
     def _drop(self, name: str):
         park_framebuffer(self.ctx)
         for key in [k for k in self._fbo if name in k[0]]:

@@ -30,7 +30,6 @@ import numpy as np
 from raytrace import RayScene, kernels
 from raytrace.reveal import primary_view
 
-from .blur_common import max_radius_px
 from .frame import Frame
 from .gbuffer import GBufferPass
 from .gpu_scene import MAX_LIGHTS, set_uniform
@@ -163,13 +162,6 @@ def read_masked_pixels(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
     return kernels.nonzero_pixels(gl_rows, i0, h - y1)
 
 
-def mask_tiles(pixels: np.ndarray, size: tuple[int, int], tile: int) -> np.ndarray:
-    """Per tile x tile tile (image orientation), (0, 1 if it holds a masked pixel): the
-    ray mask's tile summary, for the time-sampled composite."""
-    w, h = size
-    return kernels.mark_tiles(pixels, -(-h // tile), -(-w // tile), tile)
-
-
 BLOCKS_PER_ROW = 256     # record blocks (SHADE_TILE x SHADE_TILE) per row; both powers of 2
 
 
@@ -201,21 +193,16 @@ def layer_hits(pixels: np.ndarray, layer, height: int, static_key: int | None = 
 
 
 class RevealTrace(Pass):
-    """Host side: mask read-back, ray casting, and the hit records of every layer; also
-    the mask's tile summary (ray_mask_tiles), made from the pixels read back."""
+    """Host side: mask read-back, ray casting, and the hit records of every layer."""
     name = "reveal"
     inputs = ("ray_mask",)
-    produces = ("reveal_hits", "ray_mask_tiles")    # reveal_hits: RevealState.layers
-
-    def outputs(self, frame: Frame):
-        return {"ray_mask_tiles": TexSpec(2, "f4", tile=max_radius_px(frame))}
+    produces = ("reveal_hits",)         # host-side: RevealState.layers
 
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
         t0 = time.perf_counter()
         st = reveal_state(frame)
         pixels, own = read_masked_pixels(frame)
-        frame.write("ray_mask_tiles", mask_tiles(pixels, frame.size, max_radius_px(frame)))
         t1 = time.perf_counter()
         result = None
         if len(pixels) and p.trace:
