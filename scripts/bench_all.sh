@@ -15,7 +15,7 @@ for s in thin pan $C/basic.toml $C/vase_pan.toml; do
   n=$(basename "$s" .toml)
   $H bench "$s" --size 640x360 --frames 15 --json "$out/${n}_640x360.json"
 done
-for s in spinner $C/basic.toml $C/vase_pan.toml; do
+for s in spinner pan $C/basic.toml $C/vase_pan.toml; do
   n=$(basename "$s" .toml)
   $H bench "$s" --size 1280x720 --frames 8 --modes mcguire,hybrid --json "$out/${n}_1280x720.json"
 done

@@ -450,6 +450,12 @@ def _line_leaves_object(ids, vn, k, max_len):
     return leaves & (r > 0.5)
 
 
+def _outlines(boundary, vn, tile, k, w, h, max_len):
+    """tile_kernels.outlines_along over every tile, with the composite's margin."""
+    return tile_kernels.outlines_along(boundary, np.ones_like(boundary), vn, tile, k, w, h,
+                                       max_len, 0.05)
+
+
 @pytest.mark.parametrize("seed", range(6))
 def test_outlines_along_holds_every_tile_whose_line_can_leave_its_object(seed):
     # Random rectangles over a background, random NeighborMax vectors: every pixel whose
@@ -466,7 +472,7 @@ def test_outlines_along_holds_every_tile_whose_line_can_leave_its_object(seed):
     vn[..., 1] = rng.uniform(-4, 4, vn.shape[:2])
     vn[0, 0] = 0.0                                         # a still k-tile: no line
     boundary = _boundary_tiles(ids, tile)
-    got = tile_kernels.outlines_along(boundary, vn, tile, k, w, h, 2.0 * k, 0.05)
+    got = _outlines(boundary, vn, tile, k, w, h, 2.0 * k)
     leaves = _line_leaves_object(ids, vn, k, 2.0 * k)
     yy, xx = np.nonzero(leaves)
     assert len(yy) > 100
@@ -485,11 +491,15 @@ def test_outlines_along_follows_the_line_direction():
     assert boundary[3].all() and boundary.sum() == 8       # pairs (31, 32): row of tiles 3
     vn = np.zeros((h // k, w // k, 2), np.float32)
     vn[..., 0] = 16.0
-    got = tile_kernels.outlines_along(boundary, vn, tile, k, w, h, 32.0, 0.05)
+    got = _outlines(boundary, vn, tile, k, w, h, 32.0)
     np.testing.assert_array_equal(got, boundary)
     vn = vn[..., ::-1].copy()
-    got = tile_kernels.outlines_along(boundary, vn, tile, k, w, h, 32.0, 0.05)
+    got = _outlines(boundary, vn, tile, k, w, h, 32.0)
     np.testing.assert_array_equal(np.nonzero(got.all(axis=1))[0], [2, 3, 4])
+    todo = np.zeros_like(boundary)
+    todo[:, :3] = True                                     # only these tiles are decided
+    np.testing.assert_array_equal(tile_kernels.outlines_along(
+        boundary, todo, vn, tile, k, w, h, 32.0, 0.05), got & todo)
     assert got.sum() == 24
     # A screen border: a line running off the left edge is clamped there, so an outline
     # in the border column reaches every tile whose line leaves the screen.
@@ -498,7 +508,7 @@ def test_outlines_along_follows_the_line_direction():
     boundary = _boundary_tiles(ids, tile)
     vn = np.zeros((h // k, w // k, 2), np.float32)
     vn[..., 0] = 16.0
-    got = tile_kernels.outlines_along(boundary, vn, tile, k, w, h, 32.0, 0.05)
+    got = _outlines(boundary, vn, tile, k, w, h, 32.0)
     leaves = _line_leaves_object(ids, vn, k, 32.0)
     yy, xx = np.nonzero(leaves)
     assert got[yy // tile, xx // tile].all() and got[:, 1].sum() == 2
@@ -512,4 +522,4 @@ def test_outlines_along_follows_the_line_direction():
     assert _line_leaves_object(ids, vn, k, 64.0)[4, 14]
     boundary = _boundary_tiles(ids, tile)
     assert not boundary[0, :3].any() and not boundary[1:].any()
-    assert tile_kernels.outlines_along(boundary, vn, tile, k, w, h, 64.0, 0.05)[0, 1]
+    assert _outlines(boundary, vn, tile, k, w, h, 64.0)[0, 1]

@@ -36,7 +36,7 @@ OUTLINE_MARGIN_PX = 0.05
 FRAGMENTS = {"time": "hybrid_time.frag", "bucket": "hybrid_bucket.frag"}
 
 
-def near_outlines(frame: Frame, shape) -> np.ndarray:
+def near_outlines(frame: Frame, todo: np.ndarray) -> np.ndarray:
     """FINE tiles (GL rows) where a tap of the neighbourhood's line can land on another
     object than its pixel's: all of them without tile lists. The line runs along the
     pixel's NeighborMax vector (read back: a few hundred floats), so a tile is near an
@@ -44,17 +44,18 @@ def near_outlines(frame: Frame, shape) -> np.ndarray:
     its reach (tile_kernels.outlines_along: a camera pan's horizontal lines miss the
     outlines above and below). Elsewhere every tap of that line lands on the pixel's own
     object, where it adds nothing unless the line is also the own line: the SIMPLE
-    variant, which skips it then, gives the same image."""
+    variant, which skips it then, gives the same image. Decided for the tiles of `todo`
+    only."""
     lists = frame.host.get("tile_lists")
-    if lists is None or lists.boundary.shape != shape:
-        return np.ones(shape, bool)
+    if lists is None or lists.boundary.shape != todo.shape:
+        return np.ones(todo.shape, bool)
     if not lists.boundary.any():
-        return np.zeros(shape, bool)
+        return np.zeros(todo.shape, bool)
     vn = frame.host.get("neighbormax")
     if vn is None:                      # (not read back: the composite run on its own)
         vn = read_neighbormax(frame)
     k = max_radius_px(frame)
-    return outlines_along(lists.boundary, vn, FINE, k, frame.size[0], frame.size[1],
+    return outlines_along(lists.boundary, todo, vn, FINE, k, frame.size[0], frame.size[1],
                           2.0 * k, OUTLINE_MARGIN_PX)
 
 
@@ -177,7 +178,7 @@ class Composite(FullscreenPass):
         # needed only where it is the own line (SIMPLE).
         still = plain & (lists.longest < STILL_PX)
         moving = plain & ~still
-        simple = moving & ~near_outlines(frame, moving.shape)
+        simple = moving & ~near_outlines(frame, moving)
         parts = (first, ("bucket", moving & ~simple, 0, 0, 0), ("bucket", simple, 0, 0, 1),
                  ("bucket", still, 0, 1, 0))
         for which, selected, back, own_still, single in parts:

@@ -235,7 +235,7 @@ def _segment_meets_box(cx, cy, dx, dy, x0, y0, x1, y1):
 
 
 @njit(**_JIT)
-def outlines_along(boundary, vn, tile, k, w, h, max_len, margin):
+def outlines_along(boundary, todo, vn, tile, k, w, h, max_len, margin):
     """FINE tiles (GL rows, `tile` px) where a tap of the composite's neighbourhood line
     may land on another object than its pixel's: the line of pixel x runs through its
     centre along vn, the NeighborMax vector (GL rows, k px tiles) of x's k-tile clamped
@@ -245,12 +245,15 @@ def outlines_along(boundary, vn, tile, k, w, h, max_len, margin):
     a pixel whose right or upper neighbour shows another object) meets the segment: tile
     T is set when the box of T's pixel centres (per k-tile part), widened by `margin` px
     for rounding, swept along +- vn / 2, meets a boundary tile's box; a border tile's box
-    runs on to infinity outward (a clamped tap)."""
+    runs on to infinity outward (a clamped tap). Only the tiles of `todo` are decided
+    (the others read False)."""
     rows, cols = boundary.shape
     out = np.zeros((rows, cols), np.bool_)
     big = 1e30
     for ty in range(rows):
         for tx in range(cols):
+            if not todo[ty, tx]:
+                continue
             x0, y0 = tx * tile, ty * tile
             x1, y1 = min(x0 + tile, w), min(y0 + tile, h)
             hit = False
