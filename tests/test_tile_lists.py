@@ -417,20 +417,6 @@ def test_tile_coords_list_the_true_tiles_row_by_row():
     assert tile_lists.tile_coords(np.zeros((3, 4), bool)).shape == (0, 2)
 
 
-def _boundary_tiles(ids: np.ndarray, tile: int) -> np.ndarray:
-    """motion_tiles.frag's flag (GL rows = array rows here): a tile holding a pixel whose
-    right or upper neighbour shows another object."""
-    h, w = ids.shape
-    pair = np.zeros((h, w), bool)
-    pair[:, :-1] |= ids[:, :-1] != ids[:, 1:]
-    pair[:-1, :] |= ids[:-1, :] != ids[1:, :]
-    rows, cols = -(-h // tile), -(-w // tile)
-    out = np.zeros((rows, cols), bool)
-    yy, xx = np.nonzero(pair)
-    out[yy // tile, xx // tile] = True
-    return out
-
-
 def _line_leaves_object(ids, vn, k, max_len):
     """Per pixel (GL rows), brute force: does any point of its neighbourhood line, as
     glsl/hybrid_bucket.frag taps it (the pixel holding x + 0.5 + s dir, clamped, |s| <=
@@ -471,7 +457,7 @@ def test_outlines_along_holds_every_tile_whose_line_can_leave_its_object(seed):
     vn[..., 0] = rng.uniform(-20, 20, vn.shape[:2])
     vn[..., 1] = rng.uniform(-4, 4, vn.shape[:2])
     vn[0, 0] = 0.0                                         # a still k-tile: no line
-    boundary = _boundary_tiles(ids, tile)
+    boundary = true_boundary_tiles(ids, tile)
     got = _outlines(boundary, vn, tile, k, w, h, 2.0 * k)
     leaves = _line_leaves_object(ids, vn, k, 2.0 * k)
     yy, xx = np.nonzero(leaves)
@@ -487,7 +473,7 @@ def test_outlines_along_follows_the_line_direction():
     h, w, tile, k = 64, 64, 8, 16
     ids = np.zeros((h, w), np.int64)
     ids[32:, :] = 1
-    boundary = _boundary_tiles(ids, tile)
+    boundary = true_boundary_tiles(ids, tile)
     assert boundary[3].all() and boundary.sum() == 8       # pairs (31, 32): row of tiles 3
     vn = np.zeros((h // k, w // k, 2), np.float32)
     vn[..., 0] = 16.0
@@ -505,7 +491,7 @@ def test_outlines_along_follows_the_line_direction():
     # in the border column reaches every tile whose line leaves the screen.
     ids = np.zeros((h, w), np.int64)
     ids[40:48, 0] = 1
-    boundary = _boundary_tiles(ids, tile)
+    boundary = true_boundary_tiles(ids, tile)
     vn = np.zeros((h // k, w // k, 2), np.float32)
     vn[..., 0] = 16.0
     got = _outlines(boundary, vn, tile, k, w, h, 32.0)
@@ -520,6 +506,6 @@ def test_outlines_along_follows_the_line_direction():
     vn = np.zeros((h // k, w // k, 2), np.float32)
     vn[0, 0] = (60.0 / np.sqrt(2.0), -60.0 / np.sqrt(2.0))
     assert _line_leaves_object(ids, vn, k, 64.0)[4, 14]
-    boundary = _boundary_tiles(ids, tile)
+    boundary = true_boundary_tiles(ids, tile)
     assert not boundary[0, :3].any() and not boundary[1:].any()
     assert _outlines(boundary, vn, tile, k, w, h, 64.0)[0, 1]

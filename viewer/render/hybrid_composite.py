@@ -49,8 +49,6 @@ def near_outlines(frame: Frame, todo: np.ndarray) -> np.ndarray:
     lists = frame.host.get("tile_lists")
     if lists is None or lists.boundary.shape != todo.shape:
         return np.ones(todo.shape, bool)
-    if not lists.boundary.any():
-        return np.zeros(todo.shape, bool)
     vn = frame.host.get("neighbormax")
     if vn is None:                      # (not read back: the composite run on its own)
         vn = read_neighbormax(frame)

@@ -57,10 +57,7 @@ class ResourcePool:
         have = self._tex.get(name)
         if have and have[0] == spec and have[1] == size:
             return have[2]
-        if have:
-            self._drop(name)
-        self._written.pop(name, None)
-        self._tiles.pop(name, None)
+        self.discard(name)
         tex = self.ctx.texture(size, spec.components, dtype=spec.dtype)
         f = moderngl.LINEAR if spec.filter == "linear" else moderngl.NEAREST
         tex.filter = (f, f)
@@ -148,11 +145,12 @@ class ResourcePool:
             self._tiles[n] = (key, grid)
 
     def discard(self, name: str):
-        """Release `name` if held (a buffer a pass writes only in some settings)."""
+        """Release `name` if held, and forget what was written to it (a reallocation, or a
+        buffer a pass writes only in some settings)."""
         if name in self._tex:
             self._drop(name)
-            self._written.pop(name, None)
-            self._tiles.pop(name, None)
+        self._written.pop(name, None)
+        self._tiles.pop(name, None)
 
     def _drop(self, name: str):
         park_framebuffer(self.ctx)
