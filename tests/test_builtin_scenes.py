@@ -171,3 +171,24 @@ def test_spinner_blade_tips_move_fast_on_arcs(scenes):
         chord = c - a
         off = abs(chord[0] * (m - a)[1] - chord[1] * (m - a)[0]) / np.linalg.norm(chord)
         assert off > 2.0, off
+
+
+def test_bench_scenes_hold_many_visible_movers():
+    """scenes/bench (scripts/bench_all.sh, not built-ins): 32 movers, each blurred on
+    screen; crowd_pan's camera moves, crowd's does not, and the movers are the same."""
+    from pathlib import Path
+    bench = Path(builtin_scene_path("pan")).parent / "bench"
+    crowd, crowd_pan = (load_scene(str(bench / f"{n}.toml")) for n in ("crowd", "crowd_pan"))
+    assert "bench" not in builtin_scene_names()
+    assert not crowd.camera.moving and crowd_pan.camera.moving
+    for scene in (crowd, crowd_pan):
+        movers = [o for o in scene.objects if o.moving]
+        assert len(movers) == 32
+    still = [o for o in crowd.objects if o.moving]
+    blur = np.array([displacement(crowd, o, centre(o))[0] for o in still])
+    assert (blur > 2.0).all(), blur          # px at 1280x720: every mover blurs
+    cam = Camera(crowd.camera, 1280, 720)
+    xy, _ = cam.project(0.0, np.array([o.matrix(0.0)[:3, 3] for o in still]))
+    on_screen = ((xy >= 0) & (xy < [1280, 720])).all(axis=1)
+    assert on_screen.sum() >= 24, on_screen.sum()
+    assert [o.name for o in crowd.objects] == [o.name for o in crowd_pan.objects]
