@@ -103,6 +103,59 @@ def test_reveal_equals_raster_without_the_own_object(ctx, name, t):
         assert 0 < res.stats["static_layer_hits"] <= res.stats["masked_pixels"]
 
 
+IMAGE_WALL = """
+    name = "image_wall"
+    background = [0.02, 0.02, 0.03]
+    ambient = [0.2, 0.2, 0.2]
+    [camera]
+    position = [0.0, 0.0, 5.0]
+    look_at = [0.0, 0.0, 0.0]
+    fov_y = 40.0
+    shutter = 0.04
+    velocity = [0.5, 0.0, 0.0]
+    [[lights]]
+    direction = [-0.3, -0.4, -1.0]
+    [[objects]]
+    name = "painted wall"
+    mesh = "{assets}/quad_uv.obj"
+    position = [0.0, 0.0, -1.0]
+    scale = [6.0, 4.0, 1.0]
+    shading = "flat"
+    material = {{ albedo = [1.0, 1.0, 1.0], texture = {{ kind = "image", path = "{assets}/painting.png" }} }}
+    [[objects]]
+    name = "box"
+    mesh = {{ box = [0.8, 0.8, 0.3] }}
+    position = [-0.2, 0.1, 1.0]
+    material = {{ albedo = [0.7, 0.2, 0.1] }}
+    velocity = [12.0, 3.0, 0.0]
+    [[objects]]
+    name = "striped box"
+    mesh = {{ box = [0.6, 0.6, 0.3] }}
+    position = [0.9, -0.6, 0.5]
+    material = {{ albedo = [0.2, 0.6, 0.3], texture = {{ kind = "stripes", axis = 0, size = 0.1, albedo2 = [0.9, 0.9, 0.8] }} }}
+    velocity = [-10.0, 0.0, 0.0]
+"""
+
+
+def test_reveal_shades_image_textured_surfaces_like_the_raster(ctx, tmp_path):
+    """A moving camera: every revealed surface is shaded (no static layer), here an
+    image-textured wall behind two movers; the image and the faces' table are bound to
+    texture units of their own, whichever object's draw comes first."""
+    from viewer.scene_loader import builtin_dir
+    path = tmp_path / "image_wall.toml"
+    path.write_text(textwrap.dedent(IMAGE_WALL.format(assets=builtin_dir() / "assets")))
+    scene = load_scene(path)
+    res, bufs = render(ctx, scene, "hybrid", 0.0)
+    mask = bufs["ray_mask"]
+    owners = [int(k) for k in np.unique(mask[mask > 0])]
+    assert owners == [2, 3]
+    ids, *_ = revealed(bufs)
+    assert (ids[mask > 0] == 1).sum() > 50          # the wall is what most rays reveal
+    for oid in owners:
+        _, oracle = render(ctx, without(scene, {oid}), "off", 0.0)
+        assert_layer_matches(bufs, 0, oracle, mask == oid)
+
+
 SAME_COLOUR = """
     name = "same_colour"
     background = [0.02, 0.02, 0.03]

@@ -48,7 +48,9 @@ TEXELS_PER_FACE = 6      # per corner: (position, normal.x), (normal.yz, uv)
 # Whole faces to a row of the face texture (4092 texels wide): a fragment finds its face's
 # six texels with one integer division, not six (llvmpipe divides lane by lane).
 FACES_PER_ROW = 682
-FACE_UNIT = 7
+# Texture units of reveal_shade: draw() binds the pass's own textures from unit 0 up, an
+# image-textured object's image goes to gpu_scene.TEXTURE_UNIT_IMAGE (7): each its own.
+FACE_UNIT = 5
 RECORD_UNIT = 6
 # Tile side for reveal_shade's draws: finer than the tile lists' FINE, so fewer fragments
 # outside the revealed pixels run the shader (the quads themselves cost next to nothing).
