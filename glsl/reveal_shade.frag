@@ -2,19 +2,23 @@
 // The revealed layer, shaded exactly as the raster G-buffer shades (gbuffer.frag): the same
 // shade() with the same GpuScene uniforms, the object's M(t) for position and normal, and
 // its M at shutter open and close for the displacement, so the filter can blur it.
-// Drawn over the tiles holding traced pixels (viewer/render/reveal_pass.py), once per
-// revealed object over its own tiles, each of whose pixels it writes: its record's
-// key is this object's (shaded), 0 (no ray: cleared), or -1 (another object's draw
-// writes it). The hit
+// Drawn over the tiles holding traced pixels (viewer/render/reveal_pass.py), in draws
+// of one or more revealed objects over their own tiles, each of whose pixels a draw
+// writes: its record's key is one of the draw's (shaded), 0 (no ray: cleared), or -1
+// (another draw writes it). The hit
 // (face row, Embree u, v) is turned into mesh-space position, normal and uv here, from the
 // face's three corners in u_faces, with the weights (1 - u - v, u, v).
-// u_miss draws the rays that left the scene: the background colour, as the G-buffer's
-// background pass writes it. STATIC_LAYER compiles the draw of the rays whose hit is the
+// OBJECT_TABLE compiles the draw of several objects at once: each fragment takes its
+// object's transforms and material from u_objects by the id in its record (llvmpipe
+// charges ~0.1 ms a draw, whatever its size), and id 0, a ray that left the scene, gets
+// the background colour as the G-buffer's background pass writes it. Without it the draw
+// is one image-textured object's, from its uniforms (a draw samples one image). STATIC_LAYER compiles the draw of the rays whose hit is the
 // first static surface along the pixel's primary ray (a still camera): that surface is
 // what the raster of the static objects alone shows at the pixel, kept while the view
 // holds (u_static_*), so it is copied, not shaded. The targets are packed for the composite
 // (glsl/hybrid_layers.glsl): (D, depth, 1 + id) and (colour, 1); cleared ones hold 0,
 // "nothing revealed here".
+#define MATERIAL_PER_FRAGMENT OBJECT_TABLE
 #include "shading.glsl"
 #include "motion.glsl"
 
@@ -22,13 +26,23 @@ noperspective in vec2 v_record; // this pixel's hit record (glsl/reveal_tiles.ve
 uniform sampler2D u_hits;       // (face row, u, v, 1 + object id); 0 where no ray
 uniform sampler2D u_faces;      // 6 texels per face, FACES_PER_ROW faces a row: corner c at
                                 // 2c: (position, normal.x), at 2c + 1: (normal.yz, uv)
-uniform mat4 u_model;
 uniform mat4 u_view;
-uniform mat3 u_normal_matrix;
 uniform vec3 u_eye;
-uniform uint u_object_id;
-uniform bool u_miss;
 uniform vec3 u_background;
+#if OBJECT_TABLE
+uniform sampler2D u_objects;    // a row per object id (reveal_pass.ObjectTable): M(t), the
+                                // modelviews at shutter open and close, the normal matrix,
+                                // the material
+vec4 object_texel(int id, int k) { return texelFetch(u_objects, ivec2(k, id), 0); }
+mat4 object_mat4(int id, int k) {
+    return mat4(object_texel(id, k), object_texel(id, k + 1), object_texel(id, k + 2),
+                object_texel(id, k + 3));
+}
+#else
+uniform mat4 u_model;
+uniform mat3 u_normal_matrix;
+uniform uint u_object_id;
+#endif
 #if STATIC_LAYER
 uniform sampler2D u_static_front;   // the static objects' raster: (D, depth, id), colour
 uniform sampler2D u_static_color;
@@ -52,11 +66,14 @@ void main() {
     out_packed = vec4(f.xyz, f.w + 1.0);
     out_packed_color = vec4(texelFetch(u_static_color, p, 0).rgb, 1.0);
 #else
-    if (u_miss) {
+#if OBJECT_TABLE
+    int id = int(hit.w) - 1;            // the record's key, 1 + object id
+    if (id == 0) {
         out_packed = vec4(0.0, 0.0, BACKGROUND_DEPTH, 1.0);     // id 0: the sky
         out_packed_color = vec4(u_background, 1.0);
         return;
     }
+#endif
     float weight[3] = float[3](1.0 - hit.y - hit.z, hit.y, hit.z);
     int face = int(hit.x);
     int row = face / FACES_PER_ROW;
@@ -70,12 +87,32 @@ void main() {
         normal_local += weight[c] * vec3(a.w, b.xy);
         uv += weight[c] * b.zw;
     }
-    vec4 world = u_model * vec4(local, 1.0);
+#if OBJECT_TABLE
+    mat4 model = object_mat4(id, 0);
+    mat4 modelview_open = object_mat4(id, 4), modelview_close = object_mat4(id, 8);
+    mat3 normal_matrix = mat3(object_texel(id, 12).xyz, object_texel(id, 13).xyz,
+                              object_texel(id, 14).xyz);
+    vec4 m0 = object_texel(id, 15), m1 = object_texel(id, 16), m2 = object_texel(id, 17);
+    m_albedo = m0.rgb;
+    m_specular = m0.a;
+    m_albedo2 = m1.rgb;
+    m_shininess = m1.a;
+    m_tex_kind = int(m2.x);
+    m_tex_size = m2.y;
+    m_tex_axis = int(m2.z);
+    float packed_id = hit.w;
+#else
+    mat4 model = u_model, modelview_open = u_modelview_open, modelview_close = u_modelview_close;
+    mat3 normal_matrix = u_normal_matrix;
+    float packed_id = 1.0 + float(u_object_id);
+#endif
+    vec4 world = model * vec4(local, 1.0);
     vec4 view_now = u_view * world;
-    vec3 n = normalize(u_normal_matrix * normal_local);
+    vec3 n = normalize(normal_matrix * normal_local);
     if (dot(n, u_eye - world.xyz) < 0.0) n = -n;
-    out_packed = vec4(exposure_displacement(local, view_now), -view_now.z,
-                      1.0 + float(u_object_id));
+    vec2 d = displacement_between(modelview_open * vec4(local, 1.0),
+                                  modelview_close * vec4(local, 1.0), view_now);
+    out_packed = vec4(d, -view_now.z, packed_id);
     out_packed_color = vec4(shade(world.xyz, n, local, uv, u_eye), 1.0);
 #endif
 }

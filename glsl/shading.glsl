@@ -7,6 +7,21 @@ uniform int u_num_lights;
 uniform vec3 u_light_dir[MAX_LIGHTS];      // direction the light travels (unit)
 uniform vec3 u_light_color[MAX_LIGHTS];
 
+// The material: uniforms (GpuScene.bind_material), or with MATERIAL_PER_FRAGMENT globals
+// that the includer sets before shade() (reveal_shade's object table). Not a struct: the
+// G-buffer pass with its uniforms copied into one ran at half speed on llvmpipe.
+#ifndef MATERIAL_PER_FRAGMENT
+#define MATERIAL_PER_FRAGMENT 0
+#endif
+#if MATERIAL_PER_FRAGMENT
+vec3 m_albedo;
+float m_specular;
+float m_shininess;
+int m_tex_kind;
+float m_tex_size;
+int m_tex_axis;
+vec3 m_albedo2;
+#else
 uniform vec3 u_albedo;
 uniform float u_specular;
 uniform float u_shininess;
@@ -14,21 +29,29 @@ uniform int u_tex_kind;                    // 0 none, 1 checker, 2 stripes, 3 im
 uniform float u_tex_size;
 uniform int u_tex_axis;
 uniform vec3 u_albedo2;
+#define m_albedo u_albedo
+#define m_specular u_specular
+#define m_shininess u_shininess
+#define m_tex_kind u_tex_kind
+#define m_tex_size u_tex_size
+#define m_tex_axis u_tex_axis
+#define m_albedo2 u_albedo2
+#endif
 uniform sampler2D u_tex_image;             // linear RGB, repeat, bilinear
 
 vec3 surface_albedo(vec3 p_local, vec2 uv) {
-    if (u_tex_kind == 1) {
-        vec3 c = floor(p_local / u_tex_size);
-        return mod(c.x + c.y + c.z, 2.0) == 0.0 ? u_albedo : u_albedo2;
+    if (m_tex_kind == 1) {
+        vec3 c = floor(p_local / m_tex_size);
+        return mod(c.x + c.y + c.z, 2.0) == 0.0 ? m_albedo : m_albedo2;
     }
-    if (u_tex_kind == 2) {
-        float c = floor(p_local[u_tex_axis] / u_tex_size);
-        return mod(c, 2.0) == 0.0 ? u_albedo : u_albedo2;
+    if (m_tex_kind == 2) {
+        float c = floor(p_local[m_tex_axis] / m_tex_size);
+        return mod(c, 2.0) == 0.0 ? m_albedo : m_albedo2;
     }
-    if (u_tex_kind == 3) {
+    if (m_tex_kind == 3) {
         return texture(u_tex_image, uv).rgb;
     }
-    return u_albedo;
+    return m_albedo;
 }
 
 // n: world normal (any length); eye: the camera eye at the frame's time.
@@ -43,12 +66,12 @@ vec3 shade(vec3 p_world, vec3 n, vec3 p_local, vec2 uv, vec3 eye) {
         float ndl = max(0.0, dot(n, l));
         diffuse += ndl * u_light_color[k];
         // Skipped (exactly 0 anyway) where the material has no specular: pow is costly.
-        if (ndl > 0.0 && u_specular > 0.0) {
+        if (ndl > 0.0 && m_specular > 0.0) {
             float ndh = max(0.0, dot(n, normalize(l + v)));
             // pow(0, 0) is undefined in GLSL; the contract's value is 1.
-            float s = (u_shininess == 0.0) ? 1.0 : pow(ndh, u_shininess);
+            float s = (m_shininess == 0.0) ? 1.0 : pow(ndh, m_shininess);
             spec += s * u_light_color[k];
         }
     }
-    return surface_albedo(p_local, uv) * diffuse + u_specular * spec;
+    return surface_albedo(p_local, uv) * diffuse + m_specular * spec;
 }

@@ -23,7 +23,7 @@ from viewer.render.hybrid_composite import composite_kind, composite_passes, mas
 from viewer.render.modes import MODES
 from viewer.render.pool import TexSpec
 from viewer.render.renderer import Renderer
-from viewer.render.reveal_pass import PACKED, packed_names
+from viewer.render.reveal_pass import PACKED, packed_names, shade_draws
 from viewer.scene_loader import load_scene
 
 SMALL = (160, 90)
@@ -153,6 +153,35 @@ def test_reveal_shades_image_textured_surfaces_like_the_raster(ctx, tmp_path):
     assert (ids[mask > 0] == 1).sum() > 50          # the wall is what most rays reveal
     for oid in owners:
         _, oracle = render(ctx, without(scene, {oid}), "off", 0.0)
+        assert_layer_matches(bufs, 0, oracle, mask == oid)
+
+
+def test_shade_draws_join_runs_of_table_keys():
+    """Keys with a table row side by side share a draw; an image-textured object's and
+    the static layer's key (no row) are drawn alone and cut the runs."""
+    image, static = 5, 9
+    keys = [(1, 0, 3), (2, 3, 1), (4, 4, 2), (image, 6, 4), (6, 10, 1), (7, 11, 5),
+            (static, 16, 7)]
+    draws = shade_draws(keys, lambda k: k not in (image, static))
+    assert draws == [([1, 2, 4], 0, 6), ([image], 6, 4), ([6, 7], 10, 6), ([static], 16, 7)]
+    assert shade_draws([(image, 0, 2), (image + 1, 2, 3)], lambda k: k != image) == [
+        ([image], 0, 2), ([image + 1], 2, 3)]
+    assert shade_draws([], lambda k: True) == []
+
+
+def test_many_revealed_objects_are_shaded_by_few_draws_like_the_raster(ctx):
+    """crowd_pan (32 movers, moving camera): every revealed object in one draw of the
+    object table, each the raster without the pixel's own object."""
+    from viewer.scene_loader import builtin_dir
+    scene = load_scene(builtin_dir() / "bench" / "crowd_pan.toml")
+    res, bufs = render(ctx, scene, "hybrid", 0.0, size=(320, 180))
+    mask = bufs["ray_mask"]
+    ids, *_ = revealed(bufs)
+    shown = np.unique(ids[mask > 0])
+    assert len(shown) >= 8, shown                   # objects revealed (with the sky, 0)
+    assert res.stats["shade_draws0"] == 1
+    for oid in np.unique(mask[mask > 0]):
+        _, oracle = render(ctx, without(scene, {int(oid)}), "off", 0.0, size=(320, 180))
         assert_layer_matches(bufs, 0, oracle, mask == oid)
 
 

@@ -135,15 +135,24 @@ class GpuScene:
             self.images[obj.id].use(TEXTURE_UNIT_IMAGE)
             set_uniform(prog, "u_tex_image", TEXTURE_UNIT_IMAGE)
 
+    @staticmethod
+    def object_matrices(obj: SceneObject, cam, t: float, t_open: float, t_close: float
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """M(t), V(t_open) M(t_open), V(t_close) M(t_close) (glsl/motion.glsl) and the
+        normal matrix of M(t): what bind_object sets and reveal_shade's object table holds."""
+        model = obj.matrix(t)
+        return (model, cam.view(t_open) @ obj.matrix(t_open),
+                cam.view(t_close) @ obj.matrix(t_close), tf.normal_matrix(model))
+
     def bind_object(self, prog: moderngl.Program, obj: SceneObject, cam, t: float,
                     t_open: float, t_close: float):
         """Transforms of `obj` at the frame time, and seen by the camera `cam` at shutter
         open and close (glsl/motion.glsl)."""
-        model = obj.matrix(t)
+        model, open_, close, normal = self.object_matrices(obj, cam, t, t_open, t_close)
         set_uniform(prog, "u_model", model)
-        set_uniform(prog, "u_modelview_open", cam.view(t_open) @ obj.matrix(t_open))
-        set_uniform(prog, "u_modelview_close", cam.view(t_close) @ obj.matrix(t_close))
-        set_uniform(prog, "u_normal_matrix", tf.normal_matrix(model))
+        set_uniform(prog, "u_modelview_open", open_)
+        set_uniform(prog, "u_modelview_close", close)
+        set_uniform(prog, "u_normal_matrix", normal)
         set_uniform(prog, "u_object_id", obj.id)
         self.bind_material(prog, obj)
 

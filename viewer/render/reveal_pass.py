@@ -7,8 +7,10 @@ shade what they reveal on the GPU exactly as the raster layer is shaded.
       raytrace.RayScene (built once per scene, kept in the renderer's host state), and
       write each hit as (face row, u, v, 1 + object id) into a record texture, one
       8 x 8 block per (object, screen tile) holding its pixels (layer_hits);
-  reveal_shade (GPU): a fragment pass over the tiles holding those pixels, one draw per
-      revealed object with that object's GpuScene uniforms: it interpolates the face's
+  reveal_shade (GPU): a fragment pass over the tiles holding those pixels, each
+      fragment with its revealed object's transforms and material from a table of every
+      object (one draw for all, but an image-textured object's, drawn alone with its
+      GpuScene uniforms and image): it interpolates the face's
       corners (a texture of every mesh's faces, uploaded once) and shades with the same
       glsl/shading.glsl and glsl/motion.glsl as the G-buffer, into the composite's packed
       layers hybrid_back (D, depth, 1 + id) and hybrid_back_color (colour, 1), hybrid_back2*
@@ -32,7 +34,7 @@ from raytrace.reveal import primary_view
 
 from .frame import Frame
 from .gbuffer import GBufferPass
-from .gpu_scene import MAX_LIGHTS, set_uniform
+from .gpu_scene import MAX_LIGHTS, TEX_KINDS, set_uniform
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
@@ -50,11 +52,74 @@ TEXELS_PER_FACE = 6      # per corner: (position, normal.x), (normal.yz, uv)
 FACES_PER_ROW = 682
 # Texture units of reveal_shade: draw() binds the pass's own textures from unit 0 up, an
 # image-textured object's image goes to gpu_scene.TEXTURE_UNIT_IMAGE (7): each its own.
+OBJECT_UNIT = 4
 FACE_UNIT = 5
 RECORD_UNIT = 6
 # Tile side for reveal_shade's draws: finer than the tile lists' FINE, so fewer fragments
 # outside the revealed pixels run the shader (the quads themselves cost next to nothing).
 SHADE_TILE = 8
+class ObjectTable:
+    """reveal_shade's per-object uniforms as a texture, a row per object id (row 0 unused:
+    the background), TEXELS RGBA32F texels: the columns of M(t), of V M at shutter open
+    and close, of the normal matrix (xyz), then (albedo, specular), (albedo2, shininess),
+    (texture kind, size, axis, 0) as glsl/reveal_shade.frag's OBJECT_TABLE reads them.
+    Image-textured objects have no row (a draw samples one image): they keep their own."""
+    TEXELS = 18
+
+    def __init__(self, ctx: moderngl.Context, scene):
+        self.objects = {o.id: o for o in scene.objects}
+        n = max(self.objects, default=0) + 1
+        self.data = np.zeros((n, self.TEXELS, 4), np.float32)
+        for o in scene.objects:
+            m, tex = o.material, o.material.texture
+            self.data[o.id, 15] = (*m.albedo, m.specular)
+            self.data[o.id, 16, 3] = m.shininess
+            self.data[o.id, 17, 0] = TEX_KINDS[tex.kind if tex else None]
+            if tex is not None and tex.kind != "image":
+                self.data[o.id, 16, :3] = tex.albedo2
+                self.data[o.id, 17, 1:3] = tex.size, tex.axis
+        self.texture = ctx.texture((self.TEXELS, n), 4, dtype="f4")
+        self.texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+
+    def has_row(self, key: int) -> bool:
+        """Whether key (1 + object id; 1 the background, above every id the static layer)
+        is shaded from the table."""
+        if key == 1:
+            return True
+        obj = self.objects.get(key - 1)
+        return obj is not None and not (obj.material.texture is not None
+                                         and obj.material.texture.kind == "image")
+
+    def write(self, frame: Frame, ids):
+        """The transforms of objects `ids` at the frame's time, uploaded."""
+        t_open, t_close = frame.exposure
+        for i in ids:
+            mats = frame.gpu.object_matrices(self.objects[i], frame.camera, frame.time,
+                                             t_open, t_close)
+            for k, m in enumerate(mats):       # columns: (model, open, close, normal)
+                cols = np.asarray(m, np.float32).T
+                self.data[i, 4 * k:4 * k + len(cols), :cols.shape[1]] = cols
+        self.texture.write(self.data.tobytes())
+
+    def release(self):
+        self.texture.release()
+
+
+def shade_draws(keys, has_row) -> list[tuple[list[int], int, int]]:
+    """reveal_shade's draws for a layer's keys [(key, first, count)], in order: (keys,
+    first, count) per draw, a run of keys side by side with table rows in one draw (the
+    object table: llvmpipe charges ~0.1 ms a draw however small, crowd_pan's 15 draws are
+    4, and reading 18 texels a fragment costs no more than uniforms on pan's 39 k), any
+    other key (an image-textured object, the static layer) alone."""
+    draws = []                  # [table?, keys, first, count]
+    for key, first, count in keys:
+        row = has_row(key)
+        if row and draws and draws[-1][0]:
+            draws[-1][1].append(key)
+            draws[-1][3] += count
+        else:
+            draws.append([row, [key], first, count])
+    return [(ks, first, count) for _, ks, first, count in draws]
 
 
 class RevealState:
@@ -73,6 +138,12 @@ class RevealState:
         self._static_gbuffer = GBufferPass(prefix=STATIC_PREFIX, layout="front",
                                            static_only=True)
         self._static_stamp = None
+        self._table: ObjectTable | None = None
+
+    def object_table(self) -> ObjectTable:
+        if self._table is None:
+            self._table = ObjectTable(self.ctx, self.scene)
+        return self._table
 
     def static_layer(self, frame: Frame) -> tuple[str, str]:
         """The pool names of the static objects' raster (colour, packed front) for the
@@ -123,6 +194,9 @@ class RevealState:
         if self._faces is not None:
             self._faces.release()
             self._faces = None
+        if self._table is not None:
+            self._table.release()
+            self._table = None
         for tl in self.tiles.values():
             tl.release()
         for tex in self.records.values():
@@ -251,11 +325,11 @@ class RevealShade(FullscreenPass):
     produces = tuple(n for k in range(MAX_LAYERS) for n in packed_names(k))
 
     def __init__(self):
-        self._static = 0
+        self._static = self._table = 0
 
     def defines(self, frame: Frame):
         return {"MAX_LIGHTS": MAX_LIGHTS, "FACES_PER_ROW": FACES_PER_ROW,
-                "STATIC_LAYER": self._static}
+                "STATIC_LAYER": self._static, "OBJECT_TABLE": self._table}
 
     def outputs(self, frame: Frame):
         return {n: PACKED for n in self.produces}
@@ -288,8 +362,16 @@ class RevealShade(FullscreenPass):
             objects = {o.id: o for o in frame.scene.objects}
             if any(key == st.static_key for key, _, _ in hits.keys):
                 colour, front = st.static_layer(frame)
-            for key, first, count in hits.keys:
+            table = st.object_table()
+            draws = shade_draws(hits.keys, table.has_row)
+            ids = [k - 1 for k, _, _ in hits.keys if k > 1 and table.has_row(k)]
+            if ids:
+                table.write(frame, ids)
+            table.texture.use(OBJECT_UNIT)
+            for keys, first, count in draws:
+                key = keys[0]
                 self._static = int(key == st.static_key)
+                self._table = int(table.has_row(key))
                 textures = ({"u_static_front": front, "u_static_color": colour}
                             if self._static else {})
                 prog = self.program(frame, tl.vertex_shader)
@@ -299,11 +381,13 @@ class RevealShade(FullscreenPass):
                     set_uniform(prog, "u_background", frame.scene.background)
                     gpu.bind_lights(prog)
                     set_uniform(prog, "u_faces", FACE_UNIT)
-                    set_uniform(prog, "u_miss", key == 1)
-                    if key > 1:
-                        gpu.bind_object(prog, objects[key - 1], cam, t, t_open, t_close)
+                if self._table:
+                    set_uniform(prog, "u_objects", OBJECT_UNIT)
+                elif not self._static:          # an image-textured object
+                    gpu.bind_object(prog, objects[key - 1], cam, t, t_open, t_close)
                 self.draw(frame, names, textures, tiles=tl.part(first, count), clear=False)
-            self._static = 0
+            self._static = self._table = 0
+            frame.stats[f"shade_draws{k}"] = len(draws)
             frame.pool.mark_tiles(names, tl)
 
 
