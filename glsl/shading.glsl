@@ -4,7 +4,8 @@
 
 uniform vec3 u_ambient;
 uniform int u_num_lights;
-uniform vec3 u_light_dir[MAX_LIGHTS];      // direction the light travels (unit)
+uniform vec3 u_light_dir[MAX_LIGHTS];      // direction the light travels (unit); MAX_LIGHTS
+                                           // from gpu_scene.light_slots
 uniform vec3 u_light_color[MAX_LIGHTS];
 
 // The material: uniforms (GpuScene.bind_material), or with MATERIAL_PER_FRAGMENT globals

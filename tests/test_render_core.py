@@ -1,5 +1,6 @@
 """The G-buffer and the `off` / `reference` modes against numpy, analytic cases and an
 independent ray cast."""
+import dataclasses
 import textwrap
 
 import numpy as np
@@ -303,3 +304,62 @@ def test_pass_timer_splits_host_cpu_from_waiting(ctx):
             pass
     assert frame.pass_ms["waits"] >= 49 and frame.pass_cpu_ms["waits"] < 10
     assert frame.pass_ms["computes"] >= 49 and frame.pass_cpu_ms["computes"] >= 25
+
+
+@pytest.mark.parametrize("mode", ["off", "hybrid"])
+def test_any_number_of_lights_adds_up_light_by_light(ctx, tmp_path, mode):
+    """SCENE_FORMAT.md: any number of lights. Shading is linear in them, and so is every
+    blur of it: the frame lit by 20 lights (more than one shader array of 16) is the sum
+    of the frames lit by each alone, plus the ambient term (the background black: it is
+    in every frame), on every object pixel (the hybrid's revealed surfaces lit by all 20
+    too)."""
+    rng = np.random.default_rng(7)
+    dirs = rng.normal(size=(20, 3))
+    dirs[:, 1] = -np.abs(dirs[:, 1])
+    cols = rng.uniform(0.02, 0.12, size=(20, 3))
+    base = TWO_BOXES.replace("""    [[lights]]
+    direction = [-0.3, -1.0, -0.5]
+""", "{lights}").replace("background = [0.1, 0.2, 0.3]", "background = [0.0, 0.0, 0.0]")
+
+    def lit(k_lights, ambient=True):
+        def vec(v):
+            return "[" + ", ".join(f"{x:.6f}" for x in v) + "]"
+        lights = "".join(f"    [[lights]]\n    direction = {vec(dirs[k])}\n"
+                         f"    color = {vec(cols[k])}\n" for k in k_lights)
+        text = base.replace("{lights}", lights)
+        if not ambient:
+            text = text.replace("ambient = [0.2, 0.2, 0.2]", "ambient = [0.0, 0.0, 0.0]")
+        sc = scene_from(tmp_path, text, f"l{len(k_lights)}{ambient}")
+        r = Renderer(ctx, sc, (96, 54))
+        try:
+            ids = r.render("off", 0.0, ParamSet()) and r.buffers()["id"]
+            return r.render(mode, 0.0, ParamSet()).image.astype(np.float64), ids
+        finally:
+            r.release()
+
+    every, ids = lit(range(20))
+    total, _ = lit([])                          # ambient alone
+    for k in range(20):
+        total += lit([k], ambient=False)[0]
+    objects = ids > 0
+    assert objects.sum() > 400
+    np.testing.assert_allclose(every[objects], total[objects], atol=5e-6)
+    assert np.abs(every[objects] - lit([], True)[0][objects]).max() > 0.3   # the lights count
+
+
+def test_lights_beyond_the_drivers_uniform_storage_are_a_scene_error():
+    from viewer.errors import SceneError
+    from viewer.render.gpu_scene import light_slots
+
+    class Info:                                  # only the limit light_slots reads
+        def __init__(self, vectors):
+            self.info = {"GL_MAX_FRAGMENT_UNIFORM_VECTORS": vectors}
+    scene = load_scene(CONFORMANCE / "basic.toml")
+    assert light_slots(Info(4096), scene) == 16
+    many = dataclasses.replace(scene, lights=scene.lights * 200)
+    n = len(many.lights)
+    assert light_slots(Info(4096), many) == -(-n // 16) * 16
+    with pytest.raises(SceneError) as info:
+        light_slots(Info(256), many)
+    assert "lights" in str(info.value) and f"{n} lights" in str(info.value)
+    assert "at most 96" in str(info.value)

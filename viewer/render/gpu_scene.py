@@ -8,9 +8,14 @@ import moderngl
 import numpy as np
 
 from .. import transforms as tf
+from ..errors import SceneError
 from ..scene import Scene, SceneObject
 
-MAX_LIGHTS = 16
+# The shaders' light arrays hold a multiple of this many lights (the define MAX_LIGHTS):
+# one program per 16, not per light count.
+LIGHT_SLOTS = 16
+# Uniform vectors left to the rest of a fragment shader beside the light arrays.
+OTHER_UNIFORM_VECTORS = 64
 TEX_KINDS = {None: 0, "checker": 1, "stripes": 2, "image": 3}
 TEXTURE_UNIT_IMAGE = 7
 
@@ -53,10 +58,24 @@ def set_uniform(prog: moderngl.Program, name: str, value):
     prog.extra = last
 
 
+def light_slots(ctx: moderngl.Context, scene: Scene) -> int:
+    """The length of the shaders' light arrays for `scene` (MAX_LIGHTS): its light count
+    rounded up to LIGHT_SLOTS. Any number of lights up to what the driver's uniform
+    storage holds (two vec3 arrays: 2016 lights on llvmpipe, 480 where it holds 1024
+    vectors, 96 at GL's least, 256); a clear error beyond."""
+    n = len(scene.lights)
+    slots = max(LIGHT_SLOTS, -(-n // LIGHT_SLOTS) * LIGHT_SLOTS)
+    vectors = int(ctx.info.get("GL_MAX_FRAGMENT_UNIFORM_VECTORS") or 256)
+    most = (vectors - OTHER_UNIFORM_VECTORS) // 2 // LIGHT_SLOTS * LIGHT_SLOTS
+    if slots > most:
+        raise SceneError(scene.path or scene.name, "lights",
+                         f"{n} lights; this GL driver's shaders hold at most {most}")
+    return slots
+
+
 class GpuScene:
     def __init__(self, ctx: moderngl.Context, scene: Scene):
-        if len(scene.lights) > MAX_LIGHTS:
-            raise ValueError(f"at most {MAX_LIGHTS} lights are supported")
+        self.max_lights = light_slots(ctx, scene)
         self.ctx, self.scene = ctx, scene
         self.buffers = [ctx.buffer(vertex_data(o).tobytes()) for o in scene.objects]
         self.images: dict[int, moderngl.Texture] = {}
@@ -112,8 +131,8 @@ class GpuScene:
         s = self.scene
         set_uniform(prog, "u_ambient", s.ambient)
         set_uniform(prog, "u_num_lights", len(s.lights))
-        dirs = np.zeros((MAX_LIGHTS, 3), np.float32)
-        cols = np.zeros((MAX_LIGHTS, 3), np.float32)
+        dirs = np.zeros((self.max_lights, 3), np.float32)
+        cols = np.zeros((self.max_lights, 3), np.float32)
         for k, light in enumerate(s.lights):
             dirs[k], cols[k] = light.direction, light.color
         if prog.get("u_light_dir", None) is not None:

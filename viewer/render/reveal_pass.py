@@ -34,7 +34,7 @@ from raytrace.reveal import primary_view
 
 from .frame import Frame
 from .gbuffer import GBufferPass
-from .gpu_scene import MAX_LIGHTS, TEX_KINDS, set_uniform
+from .gpu_scene import TEX_KINDS, set_uniform
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
@@ -328,7 +328,7 @@ class RevealShade(FullscreenPass):
         self._static = self._table = 0
 
     def defines(self, frame: Frame):
-        return {"MAX_LIGHTS": MAX_LIGHTS, "FACES_PER_ROW": FACES_PER_ROW,
+        return {"MAX_LIGHTS": frame.gpu.max_lights, "FACES_PER_ROW": FACES_PER_ROW,
                 "STATIC_LAYER": self._static, "OBJECT_TABLE": self._table}
 
     def outputs(self, frame: Frame):
