@@ -33,6 +33,9 @@ class Frame:
     # llvmpipe's rasteriser threads): how much of a pass is host work.
     pass_cpu_ms: dict = field(default_factory=dict)
     host: dict = field(default_factory=dict)   # host-side results (e.g. region maps)
+    # GpuScene.object_matrices of this frame's objects by (id, t, t_open, t_close): the
+    # camera and the objects hold still for a frame, and several passes ask.
+    object_matrices: dict = field(default_factory=dict)
 
     @property
     def scene(self):

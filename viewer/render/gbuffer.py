@@ -68,6 +68,6 @@ class GBufferPass(Pass):
         for obj in gpu.front_to_back(cam.eye(t), t):
             if self.static_only and obj.moving:
                 continue
-            gpu.bind_object(prog, obj, cam, t, t_open, t_close)
+            gpu.bind_object(prog, obj, cam, t, t_open, t_close, frame.object_matrices)
             gpu.vao(prog, obj).render(moderngl.TRIANGLES)
         ctx.disable(moderngl.DEPTH_TEST)

@@ -155,19 +155,28 @@ class GpuScene:
             set_uniform(prog, "u_tex_image", TEXTURE_UNIT_IMAGE)
 
     @staticmethod
-    def object_matrices(obj: SceneObject, cam, t: float, t_open: float, t_close: float
+    def object_matrices(obj: SceneObject, cam, t: float, t_open: float, t_close: float,
+                        memo: dict | None = None
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """M(t), V(t_open) M(t_open), V(t_close) M(t_close) (glsl/motion.glsl) and the
-        normal matrix of M(t): what bind_object sets and reveal_shade's object table holds."""
-        model = obj.matrix(t)
-        return (model, cam.view(t_open) @ obj.matrix(t_open),
-                cam.view(t_close) @ obj.matrix(t_close), tf.normal_matrix(model))
+        normal matrix of M(t): what bind_object sets and reveal_shade's object table holds.
+        `memo`: a dict that lives one frame (camera and objects fixed), shared by the passes
+        that ask for the same times (the hybrid's G-buffer and reveal_shade)."""
+        key = (obj.id, t, t_open, t_close)
+        mats = None if memo is None else memo.get(key)
+        if mats is None:
+            model = obj.matrix(t)
+            mats = (model, cam.view(t_open) @ obj.matrix(t_open),
+                    cam.view(t_close) @ obj.matrix(t_close), tf.normal_matrix(model))
+            if memo is not None:
+                memo[key] = mats
+        return mats
 
     def bind_object(self, prog: moderngl.Program, obj: SceneObject, cam, t: float,
-                    t_open: float, t_close: float):
+                    t_open: float, t_close: float, memo: dict | None = None):
         """Transforms of `obj` at the frame time, and seen by the camera `cam` at shutter
-        open and close (glsl/motion.glsl)."""
-        model, open_, close, normal = self.object_matrices(obj, cam, t, t_open, t_close)
+        open and close (glsl/motion.glsl); `memo` as object_matrices'."""
+        model, open_, close, normal = self.object_matrices(obj, cam, t, t_open, t_close, memo)
         set_uniform(prog, "u_model", model)
         set_uniform(prog, "u_modelview_open", open_)
         set_uniform(prog, "u_modelview_close", close)

@@ -95,7 +95,7 @@ class ObjectTable:
         t_open, t_close = frame.exposure
         for i in ids:
             mats = frame.gpu.object_matrices(self.objects[i], frame.camera, frame.time,
-                                             t_open, t_close)
+                                             t_open, t_close, frame.object_matrices)
             for k, m in enumerate(mats):       # columns: (model, open, close, normal)
                 cols = np.asarray(m, np.float32).T
                 self.data[i, 4 * k:4 * k + len(cols), :cols.shape[1]] = cols
@@ -384,7 +384,8 @@ class RevealShade(FullscreenPass):
                 if self._table:
                     set_uniform(prog, "u_objects", OBJECT_UNIT)
                 elif not self._static:          # an image-textured object
-                    gpu.bind_object(prog, objects[key - 1], cam, t, t_open, t_close)
+                    gpu.bind_object(prog, objects[key - 1], cam, t, t_open, t_close,
+                                    frame.object_matrices)
                 self.draw(frame, names, textures, tiles=tl.part(first, count), clear=False)
             self._static = self._table = 0
             frame.stats[f"shade_draws{k}"] = len(draws)
