@@ -8,7 +8,8 @@ from pathlib import Path
 
 ROWS = [("living_room", "living_room"), ("thin", "thin"), ("basic", "basic (conformance)"),
         ("spinner", "spinner"), ("vase_pan", "vase_pan (conformance, camera moves)"),
-        ("pan", "pan (camera moves)")]
+        ("pan", "pan (camera moves)"), ("crowd", "crowd (32 movers, bench scene)"),
+        ("crowd_pan", "crowd_pan (32 movers, camera moves)")]
 
 
 def main(folder: str = "docs/perf") -> None:
