@@ -155,8 +155,10 @@ class EdgeIdTiles(FullscreenPass):
         return tile_list(frame, "moving") is not None
 
     def defines(self, frame: Frame):
-        return {"STAGE": self._stage,
-                "MOTION_TILES": int(self._stage == 0 and self._motion_tiles(frame))}
+        survivors = self._stage == 0 and reach_test(frame)
+        return {"STAGE": self._stage, "SURVIVOR_TILES": int(survivors),
+                "MOTION_TILES": int(self._stage == 0 and not survivors
+                                    and self._motion_tiles(frame))}
 
     def outputs(self, frame: Frame):
         return {"mask_edge_ids_x": StripSpec(2, "u4", tile=FINE),
@@ -168,7 +170,9 @@ class EdgeIdTiles(FullscreenPass):
     def execute(self, frame: Frame):
         first = {"u_probe": "mask_edge_probe"}
         uniforms = {"u_tile": FINE, "u_radius": reach_tiles(frame)}
-        if self._motion_tiles(frame):
+        if reach_test(frame):           # edges only in the survivors' tiles (SurfaceTests)
+            first["u_survivor_tiles"] = "mask_survivors"
+        elif self._motion_tiles(frame):
             first["u_motion_tiles"] = "motion_tiles"
             uniforms["u_min_speed"] = moving_threshold(frame)
         steps = [(0, first, "mask_edge_ids_x"),
