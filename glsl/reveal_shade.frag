@@ -30,10 +30,13 @@ uniform mat4 u_view;
 uniform vec3 u_eye;
 uniform vec3 u_background;
 #if OBJECT_TABLE
-uniform sampler2D u_objects;    // a row per object id (reveal_pass.ObjectTable): M(t), the
+uniform sampler2D u_objects;    // 18 texels per object id (reveal_pass.ObjectTable): M(t), the
                                 // modelviews at shutter open and close, the normal matrix,
                                 // the material
-vec4 object_texel(int id, int k) { return texelFetch(u_objects, ivec2(k, id), 0); }
+vec4 object_texel(int id, int k) {          // (OBJECTS_PER_ROW: a power of two)
+    ivec2 at = ivec2((id % OBJECTS_PER_ROW) * 18 + k, id / OBJECTS_PER_ROW);
+    return texelFetch(u_objects, at, 0);
+}
 mat4 object_mat4(int id, int k) {
     return mat4(object_texel(id, k), object_texel(id, k + 1), object_texel(id, k + 2),
                 object_texel(id, k + 3));

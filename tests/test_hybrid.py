@@ -169,10 +169,15 @@ def test_shade_draws_join_runs_of_table_keys():
     assert shade_draws([], lambda k: True) == []
 
 
-def test_many_revealed_objects_are_shaded_by_few_draws_like_the_raster(ctx):
+@pytest.mark.parametrize("per_row", [256, 4])
+def test_many_revealed_objects_are_shaded_by_few_draws_like_the_raster(ctx, monkeypatch,
+                                                                        per_row):
     """crowd_pan (32 movers, moving camera): every revealed object in one draw of the
-    object table, each the raster without the pixel's own object."""
+    object table, each the raster without the pixel's own object; with 4 objects to a
+    row of the table too (its records over 9 rows, as past 256 objects)."""
+    from viewer.render.reveal_pass import ObjectTable
     from viewer.scene_loader import builtin_dir
+    monkeypatch.setattr(ObjectTable, "OBJECTS_PER_ROW", per_row)
     scene = load_scene(builtin_dir() / "bench" / "crowd_pan.toml")
     res, bufs = render(ctx, scene, "hybrid", 0.0, size=(320, 180))
     mask = bufs["ray_mask"]

@@ -59,17 +59,21 @@ RECORD_UNIT = 6
 # outside the revealed pixels run the shader (the quads themselves cost next to nothing).
 SHADE_TILE = 8
 class ObjectTable:
-    """reveal_shade's per-object uniforms as a texture, a row per object id (row 0 unused:
-    the background), TEXELS RGBA32F texels: the columns of M(t), of V M at shutter open
-    and close, of the normal matrix (xyz), then (albedo, specular), (albedo2, shininess),
-    (texture kind, size, axis, 0) as glsl/reveal_shade.frag's OBJECT_TABLE reads them.
-    Image-textured objects have no row (a draw samples one image): they keep their own."""
+    """reveal_shade's per-object uniforms as a texture, a record per object id (record 0
+    unused: the background), TEXELS RGBA32F texels: the columns of M(t), of V M at shutter
+    open and close, of the normal matrix (xyz), then (albedo, specular), (albedo2,
+    shininess), (texture kind, size, axis, 0) as glsl/reveal_shade.frag's OBJECT_TABLE
+    reads them; OBJECTS_PER_ROW records a texture row (a power of two: the shader finds
+    its record with a shift), so any number of objects fits. Image-textured objects have
+    no record (a draw samples one image): they keep their own draw."""
     TEXELS = 18
+    OBJECTS_PER_ROW = 256
 
     def __init__(self, ctx: moderngl.Context, scene):
         self.objects = {o.id: o for o in scene.objects}
-        n = max(self.objects, default=0) + 1
-        self.data = np.zeros((n, self.TEXELS, 4), np.float32)
+        per_row = self.OBJECTS_PER_ROW
+        rows = -(-(max(self.objects, default=0) + 1) // per_row)
+        self.data = np.zeros((rows * per_row, self.TEXELS, 4), np.float32)
         for o in scene.objects:
             m, tex = o.material, o.material.texture
             self.data[o.id, 15] = (*m.albedo, m.specular)
@@ -78,7 +82,7 @@ class ObjectTable:
             if tex is not None and tex.kind != "image":
                 self.data[o.id, 16, :3] = tex.albedo2
                 self.data[o.id, 17, 1:3] = tex.size, tex.axis
-        self.texture = ctx.texture((self.TEXELS, n), 4, dtype="f4")
+        self.texture = ctx.texture((self.TEXELS * per_row, rows), 4, dtype="f4")
         self.texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
 
     def has_row(self, key: int) -> bool:
@@ -109,7 +113,7 @@ def shade_draws(keys, has_row) -> list[tuple[list[int], int, int]]:
     """reveal_shade's draws for a layer's keys [(key, first, count)], in order: (keys,
     first, count) per draw, a run of keys side by side with table rows in one draw (the
     object table: llvmpipe charges ~0.1 ms a draw however small, crowd_pan's 15 draws are
-    4, and reading 18 texels a fragment costs no more than uniforms on pan's 39 k), any
+    1, and reading 18 texels a fragment costs no more than uniforms on pan's 39 k), any
     other key (an image-textured object, the static layer) alone."""
     draws = []                  # [table?, keys, first, count]
     for key, first, count in keys:
@@ -329,6 +333,7 @@ class RevealShade(FullscreenPass):
 
     def defines(self, frame: Frame):
         return {"MAX_LIGHTS": frame.gpu.max_lights, "FACES_PER_ROW": FACES_PER_ROW,
+                "OBJECTS_PER_ROW": ObjectTable.OBJECTS_PER_ROW,
                 "STATIC_LAYER": self._static, "OBJECT_TABLE": self._table}
 
     def outputs(self, frame: Frame):
