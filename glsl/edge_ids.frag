@@ -15,16 +15,6 @@ uniform int u_tile;
 out uvec2 out_near;
 #if STAGE == 0
 uniform sampler2D u_probe;
-#if MOTION_TILES
-// Edges exist only on moving pixels: a strip texel (one u_tile-wide run of one tile) whose
-// tile has no pixel moving at least u_min_speed is empty without reading its run.
-uniform sampler2D u_motion_tiles;
-uniform float u_min_speed;
-#elif SURVIVOR_TILES
-// Where the edge test ran only on the tiles holding a survivor of the displacement test
-// (a moving camera: raymask.py), mask_edge_probe is 0 in every other tile.
-uniform usampler2D u_survivor_tiles;
-#endif
 #else
 uniform usampler2D u_source;
 uniform int u_radius;
@@ -36,11 +26,6 @@ void main() {
 #if STAGE == 0
     ivec2 size = textureSize(u_probe, 0);
     int x0 = p.x * u_tile, x1 = min(x0 + u_tile, size.x);
-#if MOTION_TILES
-    if (texelFetch(u_motion_tiles, ivec2(p.x, p.y / u_tile), 0).x < u_min_speed) x1 = x0;
-#elif SURVIVOR_TILES
-    if (texelFetch(u_survivor_tiles, ivec2(p.x, p.y / u_tile), 0).x == 0u) x1 = x0;
-#endif
     for (int x = x0; x < x1; ++x) {
         vec2 e = texelFetch(u_probe, ivec2(x, p.y), 0).xy;
         uint id = uint(e.y);

@@ -30,7 +30,7 @@ from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass
 from .pool import TexSpec
-from .tile_lists import FINE, moving_threshold, tile_coords, tile_list, within_reach
+from .tile_lists import FINE, tile_coords, tile_list, tile_strips, within_reach
 from .tiles import StripSpec
 
 MASK = TexSpec(1, "u1")
@@ -77,6 +77,8 @@ class SurfaceTests(FullscreenPass):
         second = {"u_edge_depth": float(p.edge_depth), "u_edge_normal": float(p.edge_normal)}
         if not reach_test(frame):
             self._step = 0
+            if tiles is not None:       # where the edge outputs were written (EdgeIdTiles)
+                frame.host["edge_tiles_written"] = frame.host["tile_lists"].surface_tiles
             return self.draw(frame, self.produces[:4],
                              {"u_front": "hybrid_front", "u_normal": "normal"},
                              {**first, **second}, tiles=tiles)
@@ -88,7 +90,7 @@ class SurfaceTests(FullscreenPass):
         tl = lists.extra("survivors")
         tl.set(tile_coords(survivors), FINE, frame.size)
         frame.stats["survivor_tiles"] = tl.count
-        frame.host["survivor_tiles"] = survivors
+        frame.host["survivor_tiles"] = frame.host["edge_tiles_written"] = survivors
         self._step = 2
         self.draw(frame, ("mask_edge", "mask_edge_probe"),
                   {"u_front": "hybrid_front", "u_normal": "normal",
@@ -149,16 +151,8 @@ class EdgeIdTiles(FullscreenPass):
     produces = ("mask_edge_ids_x", "mask_edge_ids", "mask_edge_near", "mask_edge_reach_x",
                 "mask_edge_reach")
 
-    @staticmethod
-    def _motion_tiles(frame: Frame) -> bool:
-        """With tile lists, motion_tiles says which strips can hold an edge."""
-        return tile_list(frame, "moving") is not None
-
     def defines(self, frame: Frame):
-        survivors = self._stage == 0 and reach_test(frame)
-        return {"STAGE": self._stage, "SURVIVOR_TILES": int(survivors),
-                "MOTION_TILES": int(self._stage == 0 and not survivors
-                                    and self._motion_tiles(frame))}
+        return {"STAGE": self._stage}
 
     def outputs(self, frame: Frame):
         return {"mask_edge_ids_x": StripSpec(2, "u4", tile=FINE),
@@ -168,15 +162,19 @@ class EdgeIdTiles(FullscreenPass):
                 "mask_edge_reach": TexSpec(2, "u4", tile=FINE)}
 
     def execute(self, frame: Frame):
-        first = {"u_probe": "mask_edge_probe"}
         uniforms = {"u_tile": FINE, "u_radius": reach_tiles(frame)}
-        if reach_test(frame):           # edges only in the survivors' tiles (SurfaceTests)
-            first["u_survivor_tiles"] = "mask_survivors"
-        elif self._motion_tiles(frame):
-            first["u_motion_tiles"] = "motion_tiles"
-            uniforms["u_min_speed"] = moving_threshold(frame)
-        steps = [(0, first, "mask_edge_ids_x"),
-                 (1, {"u_source": "mask_edge_ids_x"}, "mask_edge_ids"),
+        # The edge test wrote mask_edge_probe only on some tiles (SurfaceTests: the surface
+        # tiles, or under a moving camera those holding a survivor), 0 elsewhere: the
+        # first step reads only their strips, the rest of the strip is 0.
+        written = frame.host.get("edge_tiles_written")
+        strips = None if written is None else tile_strips(frame, written, "edge_strips")
+        self._stage = 0
+        first = dict(uniforms)
+        if strips is not None:
+            first["u_viewport"] = tuple(float(x) for x in strips.size)
+        self.draw(frame, ("mask_edge_ids_x",), {"u_probe": "mask_edge_probe"}, first,
+                  tiles=strips)
+        steps = [(1, {"u_source": "mask_edge_ids_x"}, "mask_edge_ids"),
                  (2, {"u_source": "mask_edge_ids"}, "mask_edge_near")]
         if reach_test(frame):
             steps += [(3, {"u_source": "mask_edge_ids"}, "mask_edge_reach_x"),

@@ -309,6 +309,7 @@ class SelectTiles(Pass):
         lists.shape = longest.shape
         lists.longest = longest
         lists.moving_tiles = moving
+        lists.surface_tiles = surface
         lists.boundary = boundary
         lists.moving.set(tile_coords(moving), FINE, frame.size)
         lists.active.set(tile_coords(active), FINE, frame.size)
@@ -337,6 +338,15 @@ def moving_strips(frame: Frame, k: int) -> TileList | None:
     meets = csum[:, t1 + 1] - csum[:, t0] > 0                          # (FINE rows, strips)
     tl = lists.extra("tilemax_strips")
     tl.set(tile_coords(meets), 1, (sw, h), tile_h=FINE)
+    return tl
+
+
+def tile_strips(frame: Frame, tiles: np.ndarray, name: str) -> TileList:
+    """The texels of a FINE x 1 strip (ceil(W / FINE) x H) under the FINE tiles `tiles`
+    (GL rows), as 1 x FINE quads: the extra list `name`."""
+    w, h = frame.size
+    tl = frame.host["tile_lists"].extra(name)
+    tl.set(tile_coords(tiles), 1, (-(-w // FINE), h), tile_h=FINE)
     return tl
 
 
