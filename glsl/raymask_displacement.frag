@@ -20,16 +20,26 @@
 // STEP 0 runs both steps in one pass. Where the camera moves, most moving tiles hold no
 // survivor of step 1 and llvmpipe would pay the Sobel kernel in every 8-pixel group
 // holding one: STEP 1 then runs the displacement test alone, and STEP 2 the edge test on
-// the tiles that hold a survivor (viewer/render/raymask.py).
+// the tiles that hold a survivor (viewer/render/raymask.py). STEP 3 is the mask without
+// the range check (hybrid.range_check off): the displacement test alone, its survivors
+// written straight into the ray mask as their object ids.
 #include "raymask_common.glsl"
+#define DISPLACEMENT_TEST (STEP != 2)
+#define EDGE_TEST (STEP == 0 || STEP == 2)
 uniform sampler2D u_front;          // the G-buffer's hybrid_front: (D, depth, id)
-#if STEP != 2
+#if DISPLACEMENT_TEST
 uniform float u_min_speed;          // px over the exposure
 uniform float u_depth_threshold;    // relative
+#if STEP == 3
+layout(location = 0) out uint out_ray_mask;
+uint out_mask;                      // (the test's results, not targets here)
+vec2 out_relative;
+#else
 layout(location = 0) out uint out_mask;
 layout(location = 1) out vec2 out_relative;
 #endif
-#if STEP != 1
+#endif
+#if EDGE_TEST
 uniform sampler2D u_normal;         // the G-buffer's (normal, log depth)
 uniform float u_edge_depth;
 uniform float u_edge_normal;
@@ -46,7 +56,7 @@ uniform usampler2D u_displacement_mask;
 uniform sampler2D u_relative;
 #endif
 
-#if STEP != 2
+#if DISPLACEMENT_TEST
 float own_id;
 float own_depth;
 
@@ -82,7 +92,7 @@ void displacement_test(ivec2 x, ivec2 size) {
 }
 #endif
 
-#if STEP != 1
+#if EDGE_TEST
 // Step 2 at x: is it on a depth or normal edge?
 bool on_edge(ivec2 x, ivec2 size) {
     vec2 gz = vec2(0.0);
@@ -108,8 +118,11 @@ bool on_edge(ivec2 x, ivec2 size) {
 void main() {
     ivec2 x = ivec2(gl_FragCoord.xy);
     ivec2 size = textureSize(u_front, 0);
-#if STEP != 2
+#if DISPLACEMENT_TEST
     displacement_test(x, size);
+#endif
+#if STEP == 3
+    out_ray_mask = out_mask != 0u ? uint(own_id) : 0u;
 #endif
 #if STEP == 0
     bool survivor = out_mask != 0u;
@@ -120,7 +133,7 @@ void main() {
     vec2 relative = texelFetch(u_relative, x, 0).xy;
     float id = texelFetch(u_front, x, 0).w;
 #endif
-#if STEP != 1
+#if EDGE_TEST
     out_edge = 0u;
     out_probe = vec2(0.0);
     if (survivor && on_edge(x, size)) {

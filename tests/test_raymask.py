@@ -21,8 +21,10 @@ BAR = (12, 24)                 # columns of the bar, [x0, x1)
 
 
 def params(**hy):
+    """The poster's three steps (hybrid.range_check on) unless told otherwise."""
     p = ParamSet()
     p.set("blur.max_radius", 0.25)          # k = 10 px at W = 40
+    p.set("hybrid.range_check", True)
     for key, value in hy.items():
         p.set(f"hybrid.{key}", value)
     return p
@@ -196,6 +198,32 @@ def test_random_layers_match_numpy(synthetic_frame, seed):
     np.testing.assert_array_equal(mask_tiles(np.c_[ii, jj], (w, h), k),
                                   to_image(nh.tile_summary(mask, k)))
     assert not np.any(mask[bufs[1] == 0])                   # the sky is never traced
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_without_the_range_check_the_mask_is_the_displacement_tests_survivors(
+        synthetic_frame, seed):
+    """hybrid.range_check off (the default): ray_mask holds the displacement test's
+    survivors (as their object ids) and nothing else; no edge test, no range check, and
+    a frame that ran them before leaves nothing in their targets."""
+    rng = np.random.default_rng(seed)
+    w, h = 30, 16
+    frame = synthetic_frame((w, h), params(edge_depth=0.04, edge_normal=0.25))
+    bufs = random_layers(rng, w, h)
+    upload(frame, *bufs)
+    three = run(frame)                                      # the poster's steps first
+    frame.params.set("hybrid.range_check", False)
+    got = run(frame)
+    dm, _, _, with_range = numpy_mask(frame, *bufs)
+    want = np.where(dm != 0, bufs[1], 0).astype(np.uint32)
+    np.testing.assert_array_equal(got["ray_mask"], want)
+    np.testing.assert_array_equal(three["ray_mask"], with_range)
+    assert np.count_nonzero(want) > 10 and np.count_nonzero(with_range != want) > 5
+    for name in ("mask_displacement", "mask_relative", "mask_edge"):
+        assert not got[name].any(), name
+    assert three["mask_edge"].any()
+    for name in ("mask_edge_probe", "mask_edge_ids", "mask_edge_near"):
+        assert not frame.read(name).any(), name
 
 
 def test_masked_pixels_read_in_image_order_from_gl_rows():

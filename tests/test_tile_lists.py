@@ -29,14 +29,16 @@ def render_buffers(ctx, scene, p, full_screen: bool, monkeypatch, size=SIZE):
         monkeypatch.undo()
 
 
+@pytest.mark.parametrize("range_check", [False, True])
 @pytest.mark.parametrize("name, composite", [
     ("living_room", "bucket"), ("spinner", "time"), ("thin", "bucket"), ("pan", "time"),
     ("pan", "bucket"), (str(CONFORMANCE / "basic.toml"), "time")])
-def test_tiled_passes_equal_full_screen(ctx, monkeypatch, name, composite):
+def test_tiled_passes_equal_full_screen(ctx, monkeypatch, name, composite, range_check):
     # (The "split" composite exists only with tile lists: tests/test_hybrid.py checks it.)
     scene = load_scene(name)
     p = ParamSet()
     p.set("hybrid.composite", composite)
+    p.set("hybrid.range_check", range_check)
     tiled, a = render_buffers(ctx, scene, p, False, monkeypatch)
     full, b = render_buffers(ctx, scene, p, True, monkeypatch)
     assert "active_tiles" in tiled.stats and "active_tiles" not in full.stats
@@ -275,6 +277,7 @@ def test_range_check_tiles_keep_survivors_far_from_edges(ctx, monkeypatch):
     # range check's tile list (edges in reach, or a survivor) must still hold their tiles.
     scene = load_scene(str(CONFORMANCE / "vase_pan.toml"))
     p = ParamSet()
+    p.set("hybrid.range_check", True)
     p.set("hybrid.edge_depth", 10.0)
     p.set("hybrid.edge_normal", 4.0)
     tiled, a = render_buffers(ctx, scene, p, False, monkeypatch)

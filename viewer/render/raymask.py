@@ -1,6 +1,11 @@
 """The hybrid mode's ray mask (ALGORITHMS.md 4.1-4.2): which pixels get a ray.
 
-The paper's three steps, adapted to the contract's centred exposure, in two fragment
+By default (hybrid.range_check off) the mask is the displacement test's survivors, written
+as ray_mask by that test's pass alone (STEP 3): measured on every benched scene, the
+poster's two further steps below change FLIP by less than .001 except on `pan`'s inner
+blur (.0575 -> .0524), mask 2-36% more pixels, mostly outside the inner blur, and cost
+10-25% of the hybrid's frame (docs/performance.md). With hybrid.range_check on, the
+paper's three steps, adapted to the contract's centred exposure, in two fragment
 passes (the first two steps read nothing but the pixel's own neighbourhood):
 
   mask_displacement (+ mask_relative): a moving pixel whose displaced position, looking
@@ -51,7 +56,7 @@ class SurfaceTests(FullscreenPass):
     fragment = "raymask_displacement.frag"
     inputs = ("hybrid_front", "normal")
     produces = ("mask_displacement", "mask_relative", "mask_edge", "mask_edge_probe",
-                "mask_survivors_x", "mask_survivors")
+                "mask_survivors_x", "mask_survivors", "ray_mask")
 
     def __init__(self):
         self._step = 0
@@ -64,7 +69,7 @@ class SurfaceTests(FullscreenPass):
         return {"mask_displacement": MASK, "mask_relative": RELATIVE, "mask_edge": MASK,
                 "mask_edge_probe": EDGE_PROBE,
                 "mask_survivors_x": StripSpec(1, "u1", tile=FINE),
-                "mask_survivors": TexSpec(1, "u1", tile=FINE)}
+                "mask_survivors": TexSpec(1, "u1", tile=FINE), "ray_mask": RAY_MASK}
 
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
@@ -75,6 +80,13 @@ class SurfaceTests(FullscreenPass):
         first = {"u_min_speed": float(p.min_speed),
                  "u_depth_threshold": float(p.depth_threshold)}
         second = {"u_edge_depth": float(p.edge_depth), "u_edge_normal": float(p.edge_normal)}
+        if not p.range_check:
+            # The mask is the displacement test's survivors, written as ray_mask at once;
+            # the other mask targets hold nothing this frame.
+            self._step = 3
+            clear_unwritten(frame, self.produces[:-1] + EdgeIdTiles.produces)
+            return self.draw(frame, ("ray_mask",), {"u_front": "hybrid_front"}, first,
+                             tiles=tiles)
         if not reach_test(frame):
             self._step = 0
             if tiles is not None:       # where the edge outputs were written (EdgeIdTiles)
@@ -96,6 +108,14 @@ class SurfaceTests(FullscreenPass):
                   {"u_front": "hybrid_front", "u_normal": "normal",
                    "u_displacement_mask": "mask_displacement", "u_relative": "mask_relative"},
                   second, tiles=tl)
+
+
+def clear_unwritten(frame: Frame, names):
+    """Zero the targets `names` that a frame's mask passes leave unwritten (nothing is
+    done where they are clear already), so that none shows an older frame's mask."""
+    for n in names:
+        if n in frame.pool.names() and frame.pool.written_box(n) is not None:
+            frame.pool.clear((n,))
 
 
 class AnyTiles(FullscreenPass):
@@ -162,6 +182,8 @@ class EdgeIdTiles(FullscreenPass):
                 "mask_edge_reach": TexSpec(2, "u4", tile=FINE)}
 
     def execute(self, frame: Frame):
+        if not frame.params["hybrid"].range_check:
+            return                      # (SurfaceTests wrote the ray mask)
         uniforms = {"u_tile": FINE, "u_radius": reach_tiles(frame)}
         # The edge test wrote mask_edge_probe only on some tiles (SurfaceTests: the surface
         # tiles, or under a moving camera those holding a survivor), 0 elsewhere: the
@@ -200,6 +222,8 @@ class RangeCheck(FullscreenPass):
 
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
+        if not p.range_check:
+            return                      # (SurfaceTests wrote the ray mask)
         tiles = tile_list(frame, "moving")
         if reach_test(frame):
             # Only the moving tiles with an edge within their search's reach, or a
