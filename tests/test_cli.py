@@ -132,9 +132,18 @@ def test_no_gl_driver_names_what_to_install(tmp_path):
 def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys):
     out = tmp_path / "bench.json"
     assert main(["bench", BASIC, "--size", "96x54", "--frames", "2", "--warmup", "0",
-                 "--json", str(out), "--speeds", "0.5,1"]) == 0
+                 "--json", str(out), "--speeds", "0.5,1",
+                 "--set", "hybrid.range_check=true"]) == 0
     rep = json.loads(out.read_text())
     assert rep["size"] == [96, 54] and rep["device"]
+    # The settings measured, readable back by --params.
+    assert rep["params"]["hybrid"]["range_check"] is True and rep["seed"] == 0
+    from argparse import Namespace
+
+    from viewer.cliargs import setup
+    back = setup(Namespace(params=str(out), scene=BASIC, size=None, time=None, seed="0",
+                           set=[]))
+    assert back.params["hybrid"].range_check is True and back.size == (96, 54)
     assert rep["pass_timing"] == "CPU clock + ctx.finish()"      # llvmpipe: not its queries
     assert set(rep["modes"]) == {"off", "mcguire", "ue4", "hybrid"}
     for mode, r in rep["modes"].items():

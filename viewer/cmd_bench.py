@@ -208,7 +208,8 @@ def run(args) -> int:
     device = f"{device_name(ctx)}; CPU {cpu_name()}"
     report = {"device": device, "size": list(s.size), "scene": s.scene.name, "time": s.time,
               "animate_fps": fps, "frames": frames, "pass_timing": describe(method),
-              "modes": results, "reveal": reveal, "ratios": {}}
+              "modes": results, "reveal": reveal, "ratios": {}, "seed": s.seed,
+              "params": s.params.to_dict()}     # (--params of shot/compare reads these back)
     base = results.get("mcguire", {}).get("frame_ms")
     for m in ("hybrid", "ue4"):
         if base and m in results:
