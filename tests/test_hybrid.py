@@ -103,18 +103,21 @@ def test_reveal_equals_raster_without_the_own_object(ctx, name, t):
         assert 0 < res.stats["static_layer_hits"] <= res.stats["masked_pixels"]
 
 
-IMAGE_WALL = """
-    name = "image_wall"
+# A camera 5 m before a wall, one light: the stage of the scenes below (named by their
+# files), which add the camera's motion and the objects.
+STAGE = """
     background = [0.02, 0.02, 0.03]
     ambient = [0.2, 0.2, 0.2]
+    [[lights]]
+    direction = [-0.3, -0.4, -1.0]
     [camera]
     position = [0.0, 0.0, 5.0]
     look_at = [0.0, 0.0, 0.0]
     fov_y = 40.0
     shutter = 0.04
-    velocity = [0.5, 0.0, 0.0]
-    [[lights]]
-    direction = [-0.3, -0.4, -1.0]
+"""
+
+IMAGE_WALL = STAGE + """    velocity = [0.5, 0.0, 0.0]
     [[objects]]
     name = "painted wall"
     mesh = "{assets}/quad_uv.obj"
@@ -190,18 +193,7 @@ def test_many_revealed_objects_are_shaded_by_few_draws_like_the_raster(ctx, monk
         assert_layer_matches(bufs, 0, oracle, mask == oid)
 
 
-SAME_COLOUR = """
-    name = "same_colour"
-    background = [0.02, 0.02, 0.03]
-    ambient = [0.2, 0.2, 0.2]
-    [camera]
-    position = [0.0, 0.0, 5.0]
-    look_at = [0.0, 0.0, 0.0]
-    fov_y = 40.0
-    shutter = 0.04
-    [[lights]]
-    direction = [-0.3, -0.4, -1.0]
-    [[objects]]
+SAME_COLOUR = STAGE + """    [[objects]]
     name = "wall"
     mesh = {{ box = [8.0, 6.0, 0.1] }}
     position = [0.0, 0.0, -2.0]
