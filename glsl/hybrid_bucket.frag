@@ -10,22 +10,24 @@
 // at a jittered point inside it. A fragment moving |D| px over the exposure covers the
 // pixel while the pixel lies within its box-shaped spread: a fraction
 // overlap([a, b], [-|D|/2, |D|/2]) / |D| of the exposure. So a surface filling the line
-// sums to exactly 1 whatever the jitter. Lines: the neighbourhood's largest displacement
-// (others passing over; the own object too where it moves that way, or along
-// that line within its reach), the pixel's own
-// displacement (its own object), and the revealed layer's displacement (the background
-// blurred along its own motion). A bucket's coverage is min(1, sum of weights); the
-// revealed colour fills what the background bucket leaves (centre fill); fragments of the
-// revealed object seen beside the pixel's own object belong to line 3 only. Without a
-// revealed background, the farther fragments' plain mean fills instead (the mirrored
-// background of post-process filters).
+// sums to exactly 1 whatever the jitter. Lines, in the order they run: the pixel's own
+// displacement (its own object; its taps also record where the own object lies along
+// its path, for the time pairing of the other two), the neighbourhood's largest
+// displacement (others passing over; the own object too where it moves along that line
+// within its reach), and the revealed layer's displacement (the background blurred along
+// its own motion). A bucket's coverage is min(1, sum of weights); the revealed colour
+// fills what the background bucket leaves (centre fill); fragments of the revealed
+// object seen beside the pixel's own object belong to line 3 only. Without a revealed
+// background, the farther fragments' plain mean fills instead (the mirrored background
+// of post-process filters).
 // BACK_LAYER 0 compiles the variant for tiles without a revealed pixel (line 3 never runs
 // there), OWN_STILL 1 the one for tiles where no pixel moves (|D| < 1e-3: no own line, no
 // time pairing): llvmpipe would still pay for them (a branch in a loop costs even where
-// no pixel takes it; both sides run where an 8-wide group disagrees). SIMPLE 1 compiles the one for tiles with no other object within the
-// lines' reach (viewer/render/hybrid_composite.py near_outlines): every tap of the
-// neighbourhood's line lands on the own object and adds nothing, so it runs only where
-// it is the own line. All three give the image the full variant gives.
+// no pixel takes it; both sides run where an 8-wide group disagrees). SIMPLE 1 compiles
+// the one for tiles with no other object within the lines' reach
+// (viewer/render/hybrid_composite.py near_outlines): every tap of the neighbourhood's
+// line lands on the own object and adds nothing, so it runs only where it is the own
+// line. All three give the image the full variant gives.
 #include "noise.glsl"
 #include "hybrid_layers.glsl"
 uniform sampler2D u_neighbormax;
@@ -39,7 +41,6 @@ out vec4 out_color;
 const int NEAR = 0, OWN = 1, BETWEEN = 2, BACK = 3;
 vec3 g_sum[4];
 float g_weight[4];
-float g_own_id;
 float g_near_free;        // NEAR weight at times the own object is away from the pixel
 vec3 g_far_sum;           // unweighted farther fragments: the fill without a reveal
 float g_far_count;
@@ -66,11 +67,24 @@ float coverage(float a, float b, float len) {
 // Does the own object cover pixel x at the time the tap's fragment (at signed distance
 // g_s along the line, moving len px) passes it, u = -g_s / len? Its own fragment then is
 // the frame-time one at x - u D_own. A (nearly) still own surface covers at every time.
-bool own_covers(ivec2 x, vec2 d_own, float len) {
-    if (len < 1e-3 || length(d_own) < 1e-3) return true;
+// Answered from the own object's presence along its path, sampled once per pixel: bit i
+// of g_own_bits says whether tap i of n on the own line (the own displacement's line, at
+// its jittered point in piece i) landed on the own object, and the own fragment at time u
+// lies in piece floor((1/2 - u) n). The bits come from the own line where it runs, from a
+// presence walk (one fetch a tap) otherwise. A fetch here instead would run for every tap
+// of lines 1 and 3 in every pixel: llvmpipe runs a branch in a loop whether taken or not.
+const int BITS = 32;
+uint g_own_bits;
+int g_bits_n;
+void presence_reset(int n) { g_own_bits = 0u; g_bits_n = n; }
+void presence_add(int i, bool own) { g_own_bits |= own ? (1u << uint(i)) : 0u; }
+bool own_covers(float len, float lo) {
+    if (len < 1e-3 || lo < 1e-3) return true;
     float u = clamp(-g_s / len, -0.5, 0.5);
-    ivec2 q = clamp(ivec2(floor(vec2(x) + 0.5 - u * d_own)), ivec2(0), g_size - 1);
-    return texelFetch(u_front, q, 0).w == g_own_id;
+    // (+1e-3: uniform motion puts u on piece boundaries exactly; rounding then decides,
+    // so ties are moved off them, for every float precision alike)
+    int i = min(int(floor((0.5 - u) * float(g_bits_n) + 1e-3)), g_bits_n - 1);
+    return ((g_own_bits >> uint(i)) & 1u) != 0u;
 }
 
 int taps_for(float half_len) {
@@ -120,7 +134,6 @@ void main() {
     g_near_free = 0.0;
     bool revealed = bx.w > 0.5;
     float own_id = fx.w, own_depth = fx.z;
-    g_own_id = own_id;
     // A (nearly) still own surface covers the pixel at every time: no pairing to do.
 #if OWN_STILL
     const bool own_moves = false;
@@ -142,7 +155,43 @@ void main() {
             own_line = false;
     }
     float a, b;
+    float ro = 0.5 * lo;
+    presence_reset(1);
 
+    // Line 2: the pixel's own displacement: its own object's coverage and colour.
+#if !OWN_STILL
+    int n_own = taps_for(ro);
+    bool own_walk = own_line && ro > 0.5;
+    if (own_moves && (!own_walk || n_own > BITS)) {
+        // The own object's presence along its path without its line (or past BITS taps).
+        vec2 dir = fx.xy / lo;
+        int n = min(n_own, BITS);
+        presence_reset(n);
+        for (int i = 0; i < n; ++i) {
+            ivec2 y = tap(x, dir, ro, i, n, a, b);
+            presence_add(i, texelFetch(u_front, y, 0).w == own_id);
+        }
+    }
+    if (own_walk) {
+        vec2 dir = fx.xy / lo;
+        int n = n_own;
+        if (n <= BITS) presence_reset(n);
+        for (int i = 0; i < n; ++i) {
+            ivec2 y = tap(x, dir, ro, i, n, a, b);
+            vec4 m = texelFetch(u_front, y, 0);
+            vec3 c = texelFetch(u_front_color, y, 0).rgb;
+            bool own = m.w == own_id;
+            presence_add(min(i, BITS - 1), own && n <= BITS);
+            add(OWN, c, own ? coverage(a, b, min(length(m.xy), u_max_disp)) : 0.0);
+            bool far = !own && m.z >= own_depth;
+            g_far_sum += far ? c : vec3(0.0);
+            g_far_count += far ? 1.0 : 0.0;
+        }
+    } else
+#endif
+    if (own_line) {
+        add(OWN, own_colour, 1.0);            // the own object (nearly) still
+    }
     // Line 1: the neighbourhood's largest displacement: what passes over the pixel.
     // (llvmpipe pays for a branch in a loop whether taken or not: each tap fetches its
     // colour once, unconditionally, and every bucket takes it with a weight of 0 or w.)
@@ -165,32 +214,11 @@ void main() {
             bool between = !own && !near && m.w != back_id && m.z < back_depth;
             add(OWN, c, own && !own_line ? w : 0.0);
             add(NEAR, c, near ? w : 0.0);
-            if (own_moves && near && w > 0.0 && !own_covers(x, fx.xy, len)) g_near_free += w;
+            g_near_free += own_moves && near && !own_covers(len, lo) ? w : 0.0;
             add(BETWEEN, c, between ? w : 0.0);
             g_far_sum += between ? c : vec3(0.0);
             g_far_count += between ? 1.0 : 0.0;
         }
-    }
-    // Line 2: the pixel's own displacement: its own object's coverage and colour.
-    float ro = 0.5 * length(fx.xy);
-#if !OWN_STILL
-    if (own_line && ro > 0.5) {
-        vec2 dir = fx.xy / length(fx.xy);
-        int n = taps_for(ro);
-        for (int i = 0; i < n; ++i) {
-            ivec2 y = tap(x, dir, ro, i, n, a, b);
-            vec4 m = texelFetch(u_front, y, 0);
-            vec3 c = texelFetch(u_front_color, y, 0).rgb;
-            bool own = m.w == own_id;
-            add(OWN, c, own ? coverage(a, b, min(length(m.xy), u_max_disp)) : 0.0);
-            bool far = !own && m.z >= own_depth;
-            g_far_sum += far ? c : vec3(0.0);
-            g_far_count += far ? 1.0 : 0.0;
-        }
-    } else
-#endif
-    if (own_line) {
-        add(OWN, own_colour, 1.0);            // the own object (nearly) still
     }
     // Line 3: the revealed layer blurred along its own motion (merged with the raster
     // where nothing was revealed, so the line may run out of the mask).
@@ -225,7 +253,7 @@ void main() {
                 // passes x; it counts only if the own object does not cover x then (the
                 // own fragment that would be at x then is at x - u D, frame time). With a
                 // still background every time sees the same fragment: no pairing.
-                if (own_moves && w > 0.0 && len >= 1e-3 && own_covers(x, fx.xy, len)) w = 0.0;
+                w = own_moves && len >= 1e-3 && own_covers(len, lo) ? 0.0 : w;
                 add(BACK, c, w);
             }
         } else {

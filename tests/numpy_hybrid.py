@@ -292,9 +292,10 @@ def bucket_composite(front, front_color, back, back_color, neighbormax, tile: in
     def taps_for(half):
         return int(np.clip(int(np.ceil(2.0 * half / spacing)), samples_min, samples_max))
 
-    def line(x, y, d, half):
-        """(a, b, s, pixel) of each tap of the line through (x, y) along d."""
-        n = taps_for(half)
+    def line(x, y, d, half, n=None):
+        """(a, b, s, pixel) of each tap of the line through (x, y) along d (n taps, or
+        taps_for(half))."""
+        n = taps_for(half) if n is None else n
         direction = d / np.hypot(*d)
         hh = half / n
         for i in range(n):
@@ -341,15 +342,22 @@ def bucket_composite(front, front_color, back, back_color, neighbormax, tile: in
                 sums[k] += wt * c
                 weights[k] += wt
 
+            # The own object's presence along its own line's taps (at most 32): at time
+            # u the own fragment over the pixel lies in the piece floor((1/2 - u) n).
+            presence = []
+            if lo >= 1e-3:
+                n_own = min(taps_for(0.5 * lo), 32)
+                presence = [front[p][3] == own_id
+                            for _, _, _, p in line(x, y, fx[:2], 0.5 * lo, n_own)]
+
             def own_covers(s, length):
                 """Does the own object cover the pixel at the time u = -s / length that
                 a fragment s along the line, moving `length` px, passes it?"""
-                if length < 1e-3 or np.hypot(*fx[:2]) < 1e-3:
+                if length < 1e-3 or lo < 1e-3:
                     return True
                 u = np.clip(-s / length, -0.5, 0.5)
-                q = np.floor(np.array([x + 0.5, y + 0.5]) - u * fx[:2]).astype(int)
-                q = np.clip(q, 0, [w - 1, h - 1])
-                return front[q[1], q[0]][3] == own_id
+                return presence[min(int(np.floor((0.5 - u) * len(presence) + 1e-3)),
+                                    len(presence) - 1)]
 
             near_free = 0.0
 

@@ -419,14 +419,18 @@ def test_numpy_bucket_composite_with_an_exact_background_is_the_box_shutter():
         np.testing.assert_allclose(got[y], want, atol=1e-12)
 
 
-@pytest.mark.parametrize("case", ["exact", "no_reveal", "moving_wall", "parallel_wall"])
+@pytest.mark.parametrize("case", ["exact", "no_reveal", "moving_wall", "parallel_wall",
+                                  "many_taps"])
 def test_bucket_composite_matches_numpy(synthetic_frame, case):
     rng = np.random.default_rng(10)
-    p = composite_params(composite="bucket", samples_min=3, samples_max=12)
+    # many_taps: lines of 40 taps, past the 32 own-presence bits (a separate presence walk)
+    taps = {"many_taps": dict(samples_min=40, samples_max=40, sample_spacing=0.5)}
+    p = composite_params(composite="bucket", **taps.get(case, dict(samples_min=3,
+                                                                     samples_max=12)))
     frame = synthetic_frame((W, H), p)
     d = {"exact": (9.0, 0.0), "parallel_wall": (-15.4, 2.6)}.get(case, (-7.7, 1.3))
     b = bar_layers(rng, d=d, reveal_cols=() if case == "no_reveal" else range(12, 24))
-    if case == "moving_wall":
+    if case in ("moving_wall", "many_taps"):
         b["disp"][:, :12] = b["disp"][:, 24:] = (2.3, 0.4)
         b["rev_v"][:, 12:24] = (2.3, 0.4)
     if case == "parallel_wall":
