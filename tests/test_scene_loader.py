@@ -15,7 +15,7 @@ from PIL import Image
 
 from viewer.errors import SceneError, UserError
 from viewer.scene import Scene
-from viewer.scene_loader import load_scene, srgb_to_linear
+from viewer.scene_loader import image_srgb, load_scene, srgb_to_linear
 
 CONFORMANCE = Path(__file__).resolve().parent / "conformance"
 
@@ -351,6 +351,31 @@ def test_obj_mesh_file_with_uvs_and_image_texture(tmp_path):
     np.testing.assert_allclose(img[0, 0, 2], 0.2158605, rtol=1e-6)
 
 
+@pytest.mark.parametrize("mode", ["I;16", "L", "LA", "P", "RGBA"])
+def test_image_texture_modes_decode_at_their_precision(tmp_path, mode):
+    """Grey and palette images become grey RGB; 16-bit grey keeps its 16 bits (Pillow's
+    RGB conversion clipped every 16-bit value to 255: a white texture); alpha is dropped."""
+    (tmp_path / "quad.obj").write_text(QUAD_OBJ)
+    if mode == "I;16":
+        raw = np.array([[0, 1000, 30000], [65535, 40000, 7]], np.uint16)
+        im = Image.fromarray(raw)
+        srgb = raw / 65535.0
+        # (older Pillows open a 16-bit grey PNG as 32-bit "I", same values)
+        np.testing.assert_array_equal(image_srgb(Image.fromarray(raw.astype(np.int32)))[..., 0],
+                                      srgb)
+    else:
+        raw = np.array([[0, 10, 128], [255, 200, 7]], np.uint8)
+        im = Image.fromarray(raw).convert(mode)
+        srgb = raw / 255.0
+    im.save(tmp_path / "tex.png")
+    with Image.open(tmp_path / "tex.png") as back:
+        assert back.mode.startswith("I;16") == (mode == "I;16")
+    p = write(tmp_path, scene_with_mesh("quad.obj", {"kind": "image", "path": "tex.png"}))
+    img = load_scene(p).objects[1].material.texture.image
+    np.testing.assert_allclose(img, np.repeat(srgb_to_linear(srgb)[..., None], 3, -1),
+                               rtol=1e-6, atol=1e-9)
+
+
 def test_srgb_decoding_is_the_standard_curve():
     c = np.array([0.0, 0.04045, 0.04046, 0.5, 1.0])
     expected = [0.0, 0.04045 / 12.92, ((0.04046 + 0.055) / 1.055) ** 2.4, 0.21404114, 1.0]
@@ -426,6 +451,7 @@ INVALID = [
     ("objects.0.material.texture.axis", 1, "objects[1] (floor).material.texture.axis"),
     ("objects.2.mesh.sphere.segments", 8, "objects[3] (ball).mesh.sphere.segments"),
     ("objects.2.mesh.sections", 8, "objects[3] (ball).mesh.sections"),
+    ("objects.2.mesh.cube", [1.0, 1.0, 1.0], "objects[3] (ball).mesh.cube"),
     # wrong types; a boolean is not a number
     ("name", 3, "name"),
     ("background", "black", "background"),
@@ -506,7 +532,7 @@ INVALID = [
     ("objects.0.mesh.box", [1.0, 1.0, -2.0], "objects[1] (floor).mesh.box"),
     ("objects.0.mesh", {}, "objects[1] (floor).mesh"),
     ("objects.0.mesh", {"box": [1, 1, 1], "sphere": {}}, "objects[1] (floor).mesh"),
-    ("objects.0.mesh", {"cone": [1, 1]}, "objects[1] (floor).mesh"),
+    ("objects.0.mesh", {"cone": [1, 1]}, "objects[1] (floor).mesh.cone"),
     ("objects.1.mesh.revolve", [[0.0, 0.0], [0.0, 1.0]], "objects[2] (vase).mesh.revolve"),
     ("objects.1.mesh.revolve", [[0.0, 0.0], [-0.2, 1.0]], "objects[2] (vase).mesh.revolve[1][0]"),
     ("objects.1.material.texture.axis", 3, "objects[2] (vase).material.texture.axis"),

@@ -363,7 +363,7 @@ class _Loader:
     def image(self, path: Path, key: str) -> np.ndarray:
         try:
             with Image.open(path) as im:
-                srgb = np.asarray(im.convert("RGB"), dtype=np.float64) / 255.0
+                srgb = image_srgb(im)
         except Exception as e:   # Pillow raises many types for bad files
             self.fail(key, f"expected a readable image, {path} failed: {type(e).__name__}: {e}")
         if srgb.size == 0:
@@ -392,6 +392,10 @@ class _Loader:
             self.fail(k, f"expected a file path or a primitive table ({', '.join(PRIMITIVES)}), "
                       f"got {_describe(v)}")
         kinds = [p for p in PRIMITIVES if p in v]
+        unknown = [key for key in v if key not in PRIMITIVES and key != "sections"]
+        if unknown:
+            self.fail(f"{k}.{unknown[0]}", f"unknown key; expected one of "
+                      f"{', '.join(PRIMITIVES)} (and sections with revolve)")
         if len(kinds) != 1:
             self.fail(k, f"expected exactly one of {', '.join(PRIMITIVES)}, got "
                       f"{', '.join(kinds) or 'none'}")
@@ -475,10 +479,27 @@ class _Loader:
         return Mesh(vertices=vertices, faces=faces, vertex_normals=vn, face_normals=fn, uv=uv)
 
 
+# Pillow's single-channel modes wider than 8 bits, and their full scale: convert("RGB")
+# would clip them to 255 (a 16-bit grey PNG opens as "I;16", or "I" in older Pillows).
+_WIDE_GREY = {"I;16": 65535.0, "I;16L": 65535.0, "I;16B": 65535.0, "I;16N": 65535.0,
+              "I": 65535.0, "F": 1.0}
+
+
+def image_srgb(im: Image.Image) -> np.ndarray:
+    """An image's sRGB-encoded values in [0, 1], (H, W, 3) float64: 8-bit modes through
+    Pillow's RGB conversion (alpha dropped, palettes expanded), 16-bit grey at its own
+    precision, float grey as is."""
+    scale = _WIDE_GREY.get(im.mode)
+    if scale is None:
+        return np.asarray(im.convert("RGB"), dtype=np.float64) / 255.0
+    grey = np.clip(np.asarray(im, dtype=np.float64) / scale, 0.0, 1.0)
+    return np.repeat(grey[..., None], 3, axis=-1)
+
+
 def srgb_to_linear(c: np.ndarray) -> np.ndarray:
     """The standard sRGB decoding (IEC 61966-2-1) of values in [0, 1]."""
     c = np.asarray(c, dtype=np.float64)
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
-__all__ = ["load_scene", "builtin_scene_names", "builtin_scene_path", "srgb_to_linear"]
+__all__ = ["load_scene", "builtin_scene_names", "builtin_scene_path", "image_srgb", "srgb_to_linear"]
