@@ -1,12 +1,26 @@
 // Surface shading of SCENE_FORMAT.md, shared by the raster G-buffer pass and the shading of
 // ray-revealed surfaces, so both layers are lit identically.
-// Needs MAX_LIGHTS defined.
+// Needs MAX_LIGHTS, LIGHTS_TEXTURE and LIGHTS_PER_ROW defined (GpuScene.light_defines).
 
 uniform vec3 u_ambient;
 uniform int u_num_lights;
+#if LIGHTS_TEXTURE
+// More lights than the uniform storage holds (gpu_scene.light_slots): light k's direction
+// at texel (2 (k % LIGHTS_PER_ROW), k / LIGHTS_PER_ROW), its colour beside it.
+uniform sampler2D u_lights;
+vec3 light_dir(int k) {
+    return texelFetch(u_lights, ivec2(2 * (k % LIGHTS_PER_ROW), k / LIGHTS_PER_ROW), 0).xyz;
+}
+vec3 light_color(int k) {
+    return texelFetch(u_lights, ivec2(2 * (k % LIGHTS_PER_ROW) + 1, k / LIGHTS_PER_ROW), 0).xyz;
+}
+#else
 uniform vec3 u_light_dir[MAX_LIGHTS];      // direction the light travels (unit); MAX_LIGHTS
                                            // from gpu_scene.light_slots
 uniform vec3 u_light_color[MAX_LIGHTS];
+vec3 light_dir(int k) { return u_light_dir[k]; }
+vec3 light_color(int k) { return u_light_color[k]; }
+#endif
 
 // The material: uniforms (GpuScene.bind_material), or with MATERIAL_PER_FRAGMENT globals
 // that the includer sets before shade() (reveal_shade's object table). Not a struct: the
@@ -63,15 +77,15 @@ vec3 shade(vec3 p_world, vec3 n, vec3 p_local, vec2 uv, vec3 eye) {
     vec3 diffuse = u_ambient;
     vec3 spec = vec3(0.0);
     for (int k = 0; k < u_num_lights; ++k) {
-        vec3 l = -u_light_dir[k];
+        vec3 l = -light_dir(k);
         float ndl = max(0.0, dot(n, l));
-        diffuse += ndl * u_light_color[k];
+        diffuse += ndl * light_color(k);
         // Skipped (exactly 0 anyway) where the material has no specular: pow is costly.
         if (ndl > 0.0 && m_specular > 0.0) {
             float ndh = max(0.0, dot(n, normalize(l + v)));
             // pow(0, 0) is undefined in GLSL; the contract's value is 1.
             float s = (m_shininess == 0.0) ? 1.0 : pow(ndh, m_shininess);
-            spec += s * u_light_color[k];
+            spec += s * light_color(k);
         }
     }
     return surface_albedo(p_local, uv) * diffuse + m_specular * spec;

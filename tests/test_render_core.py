@@ -347,19 +347,59 @@ def test_any_number_of_lights_adds_up_light_by_light(ctx, tmp_path, mode):
     assert np.abs(every[objects] - lit([], True)[0][objects]).max() > 0.3   # the lights count
 
 
-def test_lights_beyond_the_drivers_uniform_storage_are_a_scene_error():
+def test_lights_beyond_the_drivers_uniform_storage_go_in_a_texture():
     from viewer.errors import SceneError
     from viewer.render.gpu_scene import light_slots
 
-    class Info:                                  # only the limit light_slots reads
-        def __init__(self, vectors):
-            self.info = {"GL_MAX_FRAGMENT_UNIFORM_VECTORS": vectors}
+    class Info:                                  # only the limits light_slots reads
+        def __init__(self, vectors, texture=16384):
+            self.info = {"GL_MAX_FRAGMENT_UNIFORM_VECTORS": vectors,
+                         "GL_MAX_TEXTURE_SIZE": texture}
     scene = load_scene(CONFORMANCE / "basic.toml")
     assert light_slots(Info(4096), scene) == 16
     many = dataclasses.replace(scene, lights=scene.lights * 200)
     n = len(many.lights)
     assert light_slots(Info(4096), many) == -(-n // 16) * 16
-    with pytest.raises(SceneError) as info:
-        light_slots(Info(256), many)
-    assert "lights" in str(info.value) and f"{n} lights" in str(info.value)
-    assert "at most 96" in str(info.value)
+    assert light_slots(Info(256), many) == 0                   # uniforms hold only 96
+    with pytest.raises(SceneError) as info:                     # 1 row of 1024 lights
+        light_slots(Info(256, 1), dataclasses.replace(scene, lights=scene.lights * 1025))
+    assert "lights" in str(info.value) and "at most 1024" in str(info.value)
+
+
+@pytest.mark.parametrize("mode", ["off", "hybrid"])
+def test_lights_in_a_texture_shade_as_lights_in_uniforms(ctx, tmp_path, mode, monkeypatch):
+    """Past the uniform storage (2016 lights on llvmpipe) the lights are read from a
+    texture: the same 40 lights give the same image both ways, and 2100 lights (more
+    than llvmpipe's uniforms hold) render, lit by all of them."""
+    import viewer.render.gpu_scene as gs
+    rng = np.random.default_rng(11)
+
+    def lights_text(n, scale):
+        dirs = rng.normal(size=(n, 3))
+        dirs[:, 1] = -np.abs(dirs[:, 1]) - 0.1
+        cols = rng.uniform(0.2, 1.0, size=(n, 3)) * scale
+        return "".join(f"    [[lights]]\n    direction = [{d[0]:.6f}, {d[1]:.6f}, {d[2]:.6f}]\n"
+                       f"    color = [{c[0]:.6f}, {c[1]:.6f}, {c[2]:.6f}]\n"
+                       for d, c in zip(dirs, cols))
+    base = TWO_BOXES.replace("""    [[lights]]
+    direction = [-0.3, -1.0, -0.5]
+""", "{lights}")
+
+    def render(text, name):
+        r = Renderer(ctx, scene_from(tmp_path, text, name), (64, 36))
+        try:
+            return r.render(mode, 0.0, ParamSet()).image, r.gpu.light_texture is not None
+        finally:
+            r.release()
+    forty = base.replace("{lights}", lights_text(40, 0.02))
+    in_uniforms, texture = render(forty, "u")
+    assert not texture
+    monkeypatch.setattr(gs, "OTHER_UNIFORM_VECTORS", 10 ** 6)   # no room: a texture
+    in_texture, texture = render(forty, "t")
+    assert texture
+    np.testing.assert_array_equal(in_texture, in_uniforms)
+    monkeypatch.undo()
+    many, texture = render(base.replace("{lights}", lights_text(2100, 1e-3)), "m")
+    assert texture
+    none, _ = render(base.replace("{lights}", ""), "n")
+    assert np.abs(many - none).max() > 0.2

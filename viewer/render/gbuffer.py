@@ -49,7 +49,7 @@ class GBufferPass(Pass):
         t = frame.time if time is None else time
         t_open, t_close = frame.exposure if time is None else frame.scene.exposure(t)
         ctx, cam, gpu = frame.ctx, frame.camera, frame.gpu
-        defines = {**glsl_defines(), "MAX_LIGHTS": gpu.max_lights, "GBUFFER_LAYOUT": self.layout_id}
+        defines = {**glsl_defines(), **gpu.light_defines(), "GBUFFER_LAYOUT": self.layout_id}
         fbo = frame.pool.framebuffer(self.produces, depth=True)
         fbo.use()
         fbo.viewport = (0, 0) + fbo.size

@@ -18,6 +18,10 @@ LIGHT_SLOTS = 16
 OTHER_UNIFORM_VECTORS = 64
 TEX_KINDS = {None: 0, "checker": 1, "stripes": 2, "image": 3}
 TEXTURE_UNIT_IMAGE = 7
+# Lights past the uniform storage: a texture (glsl/shading.glsl LIGHTS_TEXTURE) on this
+# unit, two texels a light, this many lights a row.
+LIGHT_UNIT = 8
+LIGHTS_PER_ROW = 1024
 
 
 def vertex_data(obj: SceneObject) -> np.ndarray:
@@ -60,23 +64,45 @@ def set_uniform(prog: moderngl.Program, name: str, value):
 
 def light_slots(ctx: moderngl.Context, scene: Scene) -> int:
     """The length of the shaders' light arrays for `scene` (MAX_LIGHTS): its light count
-    rounded up to LIGHT_SLOTS. Any number of lights up to what the driver's uniform
-    storage holds (two vec3 arrays: 2016 lights on llvmpipe, 480 where it holds 1024
-    vectors, 96 at GL's least, 256); a clear error beyond."""
+    rounded up to LIGHT_SLOTS, as long as the driver's uniform storage holds them (two
+    vec3 arrays: 2016 lights on llvmpipe, 480 where it holds 1024 vectors, 96 at GL's
+    least, 256); 0 beyond that: the lights then go in a texture (light_texture), any
+    number of them (SCENE_FORMAT.md), up to LIGHTS_PER_ROW times the texture height limit."""
     n = len(scene.lights)
     slots = max(LIGHT_SLOTS, -(-n // LIGHT_SLOTS) * LIGHT_SLOTS)
     vectors = int(ctx.info.get("GL_MAX_FRAGMENT_UNIFORM_VECTORS") or 256)
     most = (vectors - OTHER_UNIFORM_VECTORS) // 2 // LIGHT_SLOTS * LIGHT_SLOTS
-    if slots > most:
+    if slots <= most:
+        return slots
+    rows = int(ctx.info.get("GL_MAX_TEXTURE_SIZE") or 1024)
+    if n > rows * LIGHTS_PER_ROW:
         raise SceneError(scene.path or scene.name, "lights",
-                         f"{n} lights; this GL driver's shaders hold at most {most}")
-    return slots
+                         f"{n} lights; this GL driver holds at most {rows * LIGHTS_PER_ROW}")
+    return 0
+
+
+def light_texels(scene: Scene) -> np.ndarray:
+    """The lights as the texture LIGHTS_TEXTURE reads: light k's direction at texel
+    (2 (k % LIGHTS_PER_ROW), k // LIGHTS_PER_ROW), its colour beside it; (rows, 2 *
+    LIGHTS_PER_ROW, 3) float32."""
+    n = len(scene.lights)
+    rows = max(1, -(-n // LIGHTS_PER_ROW))
+    texels = np.zeros((rows * LIGHTS_PER_ROW, 2, 3), np.float32)
+    for k, light in enumerate(scene.lights):
+        texels[k] = light.direction, light.color
+    return texels.reshape(rows, 2 * LIGHTS_PER_ROW, 3)
 
 
 class GpuScene:
     def __init__(self, ctx: moderngl.Context, scene: Scene):
         self.max_lights = light_slots(ctx, scene)
         self.ctx, self.scene = ctx, scene
+        self.light_texture = None
+        if not self.max_lights:
+            texels = light_texels(scene)
+            self.light_texture = ctx.texture(texels.shape[1::-1], 3, texels.tobytes(),
+                                             dtype="f4")
+            self.light_texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
         self.buffers = [ctx.buffer(vertex_data(o).tobytes()) for o in scene.objects]
         self.images: dict[int, moderngl.Texture] = {}
         for o in scene.objects:
@@ -127,10 +153,20 @@ class GpuScene:
         set_uniform(prog, "u_viewport", tuple(float(x) for x in size))
         set_uniform(prog, "u_near", float(cam.spec.near))
 
+    def light_defines(self) -> dict:
+        """What glsl/shading.glsl needs defined for this scene's lights."""
+        return {"MAX_LIGHTS": max(self.max_lights, 1),
+                "LIGHTS_TEXTURE": int(self.light_texture is not None),
+                "LIGHTS_PER_ROW": LIGHTS_PER_ROW}
+
     def bind_lights(self, prog: moderngl.Program):
         s = self.scene
         set_uniform(prog, "u_ambient", s.ambient)
         set_uniform(prog, "u_num_lights", len(s.lights))
+        if self.light_texture is not None:
+            self.light_texture.use(LIGHT_UNIT)
+            set_uniform(prog, "u_lights", LIGHT_UNIT)
+            return
         dirs = np.zeros((self.max_lights, 3), np.float32)
         cols = np.zeros((self.max_lights, 3), np.float32)
         for k, light in enumerate(s.lights):
@@ -191,4 +227,6 @@ class GpuScene:
             b.release()
         for t in self.images.values():
             t.release()
+        if self.light_texture is not None:
+            self.light_texture.release()
         self._vaos.clear()

@@ -332,7 +332,7 @@ class RevealShade(FullscreenPass):
         self._static = self._table = 0
 
     def defines(self, frame: Frame):
-        return {"MAX_LIGHTS": frame.gpu.max_lights, "FACES_PER_ROW": FACES_PER_ROW,
+        return {**frame.gpu.light_defines(), "FACES_PER_ROW": FACES_PER_ROW,
                 "OBJECTS_PER_ROW": ObjectTable.OBJECTS_PER_ROW,
                 "STATIC_LAYER": self._static, "OBJECT_TABLE": self._table}
 
