@@ -110,6 +110,41 @@ def test_params_sidecar_reproduces_the_image(tmp_path):
     assert a.read_bytes() == b.read_bytes()
 
 
+def test_compare_writes_images_regions_and_metrics_recomputable_from_them(tmp_path, capsys):
+    """`hmblur compare`: every mode's PNG and sidecar, the reference, the region map, the
+    strip, metrics.md and metrics.json (with the space the numbers are in); the same
+    outputs twice over, and the metrics those of the written PNGs and region map."""
+    from viewer.metrics import image_metrics
+    from viewer.regions import INNER, OUTER
+    runs = [tmp_path / "a", tmp_path / "b"]
+    for out in runs:
+        assert main(["compare", BASIC, "--size", "64x40", "--samples", "4",
+                     "--modes", "mcguire,hybrid", "--out", str(out)]) == 0
+    names = {"mcguire.png", "mcguire.json", "hybrid.png", "hybrid.json", "reference.png",
+             "reference.json", "regions.png", "strip.png", "metrics.md", "metrics.json"}
+    assert {f.name for f in runs[0].iterdir()} == names
+    for name in names - {"metrics.json", "metrics.md"}:
+        if name.endswith(".png"):
+            assert (runs[0] / name).read_bytes() == (runs[1] / name).read_bytes(), name
+    m = json.loads((runs[0] / "metrics.json").read_text())
+    assert "8-bit codes / 255" in m["space"] and "Space: sRGB" in (runs[0] / "metrics.md").read_text()
+    pic = np.asarray(Image.open(runs[0] / "regions.png"))
+    region = np.zeros(pic.shape[:2], np.uint8)
+    region[(pic == (230, 60, 40)).all(-1)] = INNER
+    region[(pic == (40, 110, 230)).all(-1)] = OUTER
+    assert m["regions"] == {"all": 64 * 40, "static": int((region == 0).sum()),
+                            "inner": int((region == INNER).sum()),
+                            "outer": int((region == OUTER).sum())}
+    assert m["regions"]["inner"] > 20 and m["regions"]["outer"] > 20
+    ref = np.asarray(Image.open(runs[0] / "reference.png"))
+    for mode in ("mcguire", "hybrid"):
+        got = image_metrics(np.asarray(Image.open(runs[0] / f"{mode}.png")), ref, region)
+        for part, row in got.items():
+            for key in ("psnr", "ssim", "flip"):
+                assert m["metrics"][mode][part][key] == pytest.approx(row[key], abs=1e-9)
+    assert m["metrics"]["hybrid"]["inner"]["flip"] < m["metrics"]["mcguire"]["inner"]["flip"]
+
+
 def test_buffers_are_dumped(tmp_path):
     d = tmp_path / "bufs"
     assert main(["shot", BASIC, "--size", "64x40", "--out", str(tmp_path / "o.png"),

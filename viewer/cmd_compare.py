@@ -11,7 +11,7 @@ from . import cliargs
 from .cmd_shot import sidecar
 from .glcontext import create_headless, device_name
 from .imageio import linear_to_srgb8, write_json_atomic, write_png_atomic
-from .metrics import image_metrics
+from .metrics import SPACE, image_metrics
 from .progress import Progress
 from .regions import INNER, OUTER, region_counts
 from .render.modes import MODES
@@ -94,12 +94,12 @@ def run(args) -> int:
     write_png_atomic(out / "strip.png", strip)
     md = metrics_markdown(table)
     header = (f"# {s.scene.name}: {w}x{h}, t = {s.time:g} s, shutter {s.scene.camera.shutter:g} s, "
-              f"reference {s.params['reference'].samples} sub-frames\n\n")
+              f"reference {s.params['reference'].samples} sub-frames\n\nSpace: {SPACE}.\n\n")
     write_text(out / "metrics.md", header + md)
     write_json_atomic(out / "metrics.json", {
         "scene": args.scene, "scene_name": s.scene.name, "size": [w, h], "time": s.time,
         "seed": s.seed, "device": device_name(ctx), "params": s.params.to_dict(),
-        "regions": region_counts(region), "inset": list(box), "metrics": table,
+        "regions": region_counts(region), "inset": list(box), "metrics": table, "space": SPACE,
         "ms": timings, "stats": {m: results[m].stats for m in results},
     })
     print(md)

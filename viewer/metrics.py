@@ -28,6 +28,11 @@ from viewer.regions import NAMES
 SSIM_WIN = 7
 SSIM_PAD = (SSIM_WIN - 1) // 2
 METRICS = ("psnr", "ssim", "flip")
+# The space of image_metrics' numbers (quantize=True), as `hmblur compare` states it beside
+# them (ALGORITHMS.md 5.3: each metric with its space).
+SPACE = ("sRGB, the written PNGs' 8-bit codes / 255; PSNR peak 1.0 over every channel; "
+         "SSIM scikit-image, 7x7 uniform window, data_range 1, channels averaged, pixels "
+         "3 px or more from the border; FLIP flip-evaluator LDR, 67 pixels per degree")
 
 
 def to_srgb(image, quantize: bool = True) -> np.ndarray:
