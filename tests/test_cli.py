@@ -2,6 +2,7 @@
 traceback and no output file; good input gives deterministic files."""
 import json
 import os
+import stat
 import subprocess
 import sys
 import textwrap
@@ -35,6 +36,17 @@ GOOD = """
 
 def bad_cases(tmp_path):
     out = str(tmp_path / "o.png")
+    (tmp_path / "s.json").mkdir(exist_ok=True)
+    fifo = str(tmp_path / "fifo.png")
+    if not os.path.exists(fifo):
+        os.mkfifo(fifo)
+
+    made = []
+
+    def sidecar(**kw):
+        doc = {"params": {}, "scene_name": "basic", **kw}
+        made.append(kw)
+        return write(tmp_path, f"p_{'_'.join(kw)}{len(made)}.json", json.dumps(doc))
     return {
         "unknown scene name": (["shot", "no_such_scene", "--out", out], "built-in scenes"),
         "missing file": (["shot", str(tmp_path / "missing.toml"), "--out", out], "file not found"),
@@ -58,6 +70,38 @@ def bad_cases(tmp_path):
         "--params not JSON": (["shot", BASIC, "--params", write(tmp_path, "p.json", "{oops"), "--out", out], "not JSON"),
         "unknown subcommand": (["paint", BASIC], "invalid choice"),
         "missing --out": (["shot", BASIC], "--out"),
+        "--out where its sidecar goes": (["shot", BASIC, "--out", str(tmp_path / "o.json")],
+                                         "sidecar"),
+        "a folder where the sidecar goes": (["shot", BASIC, "--out", str(tmp_path / "s.png")],
+                                            "s.json"),
+        "--out a FIFO": (["shot", BASIC, "--out", fifo], "not a regular file"),
+        "--out ending in /": (["shot", BASIC, "--out", out + "/"], "is a directory"),
+        "time past the transforms' range": (["shot", BASIC, "--time", "1e300", "--out", out],
+                                            "--time"),
+        "--params not a sidecar": (["shot", BASIC, "--params",
+                                    write(tmp_path, "foo.json", '{"foo": 1}'), "--out", out],
+                                   "params"),
+        "--params size not a list": (["shot", BASIC, "--params", sidecar(size=5), "--out", out],
+                                     "size"),
+        "--params of another scene": (["shot", BASIC, "--params", sidecar(scene_name="pan"),
+                                       "--out", out], "made for scene 'pan'"),
+        "--params camera fov 0": (["shot", BASIC, "--params", sidecar(camera={"fov_y": 0}),
+                                   "--out", out], "camera.fov_y"),
+        "--params camera up along the view": (
+            ["shot", BASIC, "--params", sidecar(camera={"up": [0.0, 0.0, 1.0],
+                                                        "position": [0.0, 0.0, 3.0],
+                                                        "look_at": [0.0, 0.0, 0.0]}),
+             "--out", out], "camera.up"),
+        "--params bad parameter": (["shot", BASIC, "--params",
+                                    sidecar(params={"hybrid": {"seeds": 100}}), "--out", out],
+                                   ".json: hybrid.seeds: expected at most"),
+        "bad --inset": (["compare", BASIC, "--inset", "abc", "--out", str(tmp_path / "c")],
+                        "--inset"),
+        "no --modes": (["compare", BASIC, "--modes", ",", "--out", str(tmp_path / "c")],
+                       "--modes"),
+        "a mode twice": (["bench", BASIC, "--modes", "mcguire,mcguire"], "listed twice"),
+        "--animate too slow": (["bench", BASIC, "--animate", "1e-300"], "--animate"),
+        "--speeds too fast": (["bench", BASIC, "--speeds", "1e308"], "--speeds"),
     }
 
 
@@ -72,6 +116,9 @@ def test_every_user_mistake_is_one_line_and_exit_2(tmp_path, capsys):
         assert needle in lines[0], (name, lines[0])
         assert "Traceback" not in err
         assert not (tmp_path / "o.png").exists(), name
+        assert not (tmp_path / "s.png").exists(), name
+        assert not (tmp_path / "c").exists(), name         # no folder made for nothing
+    assert stat.S_ISFIFO(os.stat(tmp_path / "fifo.png").st_mode)    # not replaced
 
 
 def test_unwritable_output_folder(tmp_path, capsys, monkeypatch):
@@ -143,6 +190,47 @@ def test_compare_writes_images_regions_and_metrics_recomputable_from_them(tmp_pa
             for key in ("psnr", "ssim", "flip"):
                 assert m["metrics"][mode][part][key] == pytest.approx(row[key], abs=1e-9)
     assert m["metrics"]["hybrid"]["inner"]["flip"] < m["metrics"]["mcguire"]["inner"]["flip"]
+
+
+def test_params_gives_mode_and_seed_unless_flags_say_otherwise(tmp_path):
+    side = tmp_path / "side.json"
+    side.write_text(json.dumps({"params": {}, "scene_name": "basic", "mode": "mcguire",
+                                "seed": 5, "size": [48, 30]}))
+    assert main(["shot", BASIC, "--params", str(side), "--out", str(tmp_path / "a.png")]) == 0
+    a = json.loads((tmp_path / "a.json").read_text())
+    assert a["mode"] == "mcguire" and a["seed"] == 5 and a["size"] == [48, 30]
+    assert main(["shot", BASIC, "--params", str(side), "--seed", "0", "--mode", "off",
+                 "--out", str(tmp_path / "b.png")]) == 0
+    b = json.loads((tmp_path / "b.json").read_text())
+    assert b["mode"] == "off" and b["seed"] == 0
+
+
+def test_compare_of_an_image_smaller_than_the_ssim_window(tmp_path):
+    assert main(["compare", BASIC, "--size", "6x5", "--samples", "2", "--modes", "hybrid",
+                 "--out", str(tmp_path / "c")]) == 0
+    m = json.loads((tmp_path / "c" / "metrics.json").read_text())
+    assert m["metrics"]["hybrid"]["all"]["ssim"] is None
+    assert m["metrics"]["hybrid"]["all"]["flip"] is not None
+
+
+def test_a_write_that_fails_is_one_line_and_leaves_no_output(tmp_path, capsys, monkeypatch):
+    # A full disk (ENOSPC) while compare writes its files: none of them appears.
+    import viewer.imageio as io
+    real = io._write_temp
+    calls = []
+
+    def failing(path, write):
+        calls.append(path)
+        if len(calls) == 3:
+            raise OSError(28, "No space left on device", str(path))
+        return real(path, write)
+    monkeypatch.setattr(io, "_write_temp", failing)
+    out = tmp_path / "c"
+    assert main(["compare", BASIC, "--size", "32x20", "--samples", "2", "--modes", "mcguire",
+                 "--out", str(out)]) == 2
+    err = [x for x in capsys.readouterr().err.splitlines() if x.startswith("hmblur")]
+    assert len(err) == 1 and err[0].endswith("reference.png: No space left on device")
+    assert not out.exists()
 
 
 def test_buffers_are_dumped(tmp_path):

@@ -175,3 +175,27 @@ def test_npy_round_trip(tmp_path):
     b = np.load(p, allow_pickle=False)
     assert b.dtype == a.dtype and np.array_equal(a, b)
     assert _leftovers(tmp_path) == []
+
+
+def test_output_set_writes_all_or_nothing(tmp_path):
+    from viewer.imageio import OutputSet
+    files = OutputSet()
+    files.png(tmp_path / "new" / "a.png", np.zeros((2, 3, 3), np.uint8))
+    files.json(tmp_path / "new" / "a.json", {"x": 1})
+    (tmp_path / "new").mkdir()
+    (tmp_path / "new" / "a.json").mkdir()          # a folder where a file goes
+    with pytest.raises(IsADirectoryError):
+        files.commit()
+    assert [p.name for p in (tmp_path / "new").iterdir()] == ["a.json"]
+    (tmp_path / "new" / "a.json").rmdir()
+    files.commit()                                  # the folder made if missing
+    assert sorted(p.name for p in (tmp_path / "new").iterdir()) == ["a.json", "a.png"]
+
+    def broken(f):
+        raise RuntimeError("encoder failed")
+    files = OutputSet()
+    files.png(tmp_path / "b.png", np.zeros((2, 3, 3), np.uint8))
+    files.add(tmp_path / "b.bin", broken)
+    with pytest.raises(RuntimeError):
+        files.commit()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["new"]      # no temps either

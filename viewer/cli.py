@@ -17,7 +17,8 @@ class _Parser(argparse.ArgumentParser):
 
 def build_parser() -> argparse.ArgumentParser:
     import importlib
-    parser = _Parser(prog="hmblur", description=__doc__.splitlines()[0])
+    parser = _Parser(prog="hmblur", description="Motion blur: post-process (McGuire, "
+                     "UE4-style), hybrid ray-traced reveal, and a ground-truth reference.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     for name in COMMANDS:
         try:
@@ -36,6 +37,10 @@ def main(argv=None) -> int:
         return int(args.run(args) or 0)
     except UserError as exc:
         print(f"hmblur: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:                 # an output that cannot be written (full disk, ...)
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"hmblur: error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("hmblur: interrupted", file=sys.stderr)

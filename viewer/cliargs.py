@@ -12,7 +12,7 @@ from pathlib import Path
 from .errors import UserError
 from .params import ParamSet
 from .scene import Scene
-from .scene_loader import load_scene
+from .scene_loader import check_camera, load_scene
 
 
 def add_scene_args(p, samples: bool = True):
@@ -22,18 +22,31 @@ def add_scene_args(p, samples: bool = True):
     if samples:
         p.add_argument("--samples", type=str, default=None,
                        help="reference sub-frames (default 64; = --set reference.samples=N)")
-    p.add_argument("--seed", type=str, default="0", help="seed of every jitter (default 0)")
+    p.add_argument("--seed", type=str, default=None,
+                   help="seed of every jitter (default 0, or the --params file's)")
     p.add_argument("--set", action="append", default=[], metavar="GROUP.FIELD=VALUE",
                    help="set a parameter (repeatable)")
     p.add_argument("--params", type=str, default=None,
                    help="JSON sidecar of an earlier image: reproduce its parameters, time and size")
 
 
-def parse_size(text: str) -> tuple[int, int]:
+def parse_size(text: str, flag: str = "--size") -> tuple[int, int]:
     m = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", text or "")
     if not m or int(m.group(1)) < 1 or int(m.group(2)) < 1:
-        raise UserError(f"--size {text!r}: expected WIDTHxHEIGHT with positive integers, e.g. 640x360")
+        raise UserError(f"{flag} {text!r}: expected WIDTHxHEIGHT with positive integers, e.g. 640x360")
     return int(m.group(1)), int(m.group(2))
+
+
+# The largest |frame time| taken, seconds: past it the float32 transforms of p + v t lose
+# every digit of a frame's motion (and far past it overflow).
+MAX_TIME = 1e6
+
+
+def parse_time(flag: str, text: str) -> float:
+    t = parse_float(flag, text)
+    if abs(t) > MAX_TIME:
+        raise UserError(f"{flag} {text!r}: expected seconds within +-{MAX_TIME:g}")
+    return t
 
 
 def parse_float(flag: str, text: str) -> float:
@@ -67,6 +80,8 @@ class Setup:
 
 
 def read_sidecar(path: str) -> dict:
+    """An earlier output's JSON (an image's sidecar, compare's metrics.json, a bench
+    report): anything with a table of parameters."""
     try:
         data = json.loads(Path(path).read_text())
     except FileNotFoundError:
@@ -75,8 +90,9 @@ def read_sidecar(path: str) -> dict:
         raise UserError(f"--params {path}: cannot read ({exc.__class__.__name__})") from None
     except json.JSONDecodeError as exc:
         raise UserError(f"--params {path}: not JSON ({exc.msg} at line {exc.lineno})") from None
-    if not isinstance(data, dict):
-        raise UserError(f"--params {path}: expected a JSON object")
+    if not isinstance(data, dict) or not isinstance(data.get("params"), dict):
+        raise UserError(f"--params {path}: expected the JSON sidecar of an hmblur image "
+                        "(an object with a \"params\" table)")
     return data
 
 
@@ -85,26 +101,25 @@ CAMERA_NUMBERS = ("fov_y", "near", "far", "shutter")
 
 
 def apply_camera(scene: Scene, data, source: str):
-    """Override the scene's camera with a sidecar's (the viewer may have moved it)."""
+    """Override the scene's camera with a sidecar's (the viewer may have moved it), checked
+    as the scene file's camera is (scene_loader.check_camera)."""
+    import dataclasses
+
     import numpy as np
     if not isinstance(data, dict):
         raise UserError(f"{source}: camera: expected a table")
-    cam = scene.camera
-    for key, value in data.items():
-        if key in CAMERA_VECTORS:
-            try:
-                v = np.asarray(value, dtype=np.float64)
-            except (TypeError, ValueError):
-                v = None
-            if v is None or v.shape != (3,) or not np.all(np.isfinite(v)):
-                raise UserError(f"{source}: camera.{key}: expected 3 finite numbers")
-            setattr(cam, key, v)
-        elif key in CAMERA_NUMBERS:
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise UserError(f"{source}: camera.{key}: expected a finite number")
-            setattr(cam, key, float(value))
-        else:
-            raise UserError(f"{source}: camera.{key}: unknown key")
+    merged = {k: (v.tolist() if isinstance(v, np.ndarray) else v)
+              for k, v in dataclasses.asdict(scene.camera).items()}
+    merged.update(data)
+    scene.camera = check_camera(merged, source)
+
+
+def sidecar_size(value, source: str) -> tuple[int, int]:
+    if (not isinstance(value, list) or len(value) != 2
+            or not all(isinstance(x, int) and not isinstance(x, bool) and x >= 1 for x in value)):
+        raise UserError(f"{source}: size: expected [width, height], positive integers, "
+                        f"got {value!r}")
+    return value[0], value[1]
 
 
 def setup(args) -> Setup:
@@ -115,31 +130,55 @@ def setup(args) -> Setup:
     t = scene.render.time
     seed = 0
     if side is not None:
-        params.update(side.get("params", {}), source=f"--params {args.params}")
+        src = f"--params {args.params}"
+        made_for = side.get("scene_name", side.get("scene"))
+        if isinstance(made_for, str) and made_for not in (scene.name, args.scene):
+            raise UserError(f"{src}: made for scene {made_for!r}, not {scene.name!r}")
+        params.update(side["params"], source=src)
         if "camera" in side:
-            apply_camera(scene, side["camera"], f"--params {args.params}")
+            apply_camera(scene, side["camera"], src)
         if "size" in side:
-            size = parse_size("x".join(str(x) for x in side["size"]))
+            size = sidecar_size(side["size"], src)
         if "time" in side:
-            t = parse_float("--params time", str(side["time"]))
-        seed = parse_int("--params seed", str(side.get("seed", 0)), 0)
+            t = parse_time(f"{src}: time", str(side["time"]))
+        seed = parse_int(f"{src}: seed", str(side.get("seed", 0)), 0)
     if args.size is not None:
         size = parse_size(args.size)
     if args.time is not None:
-        t = parse_float("--time", args.time)
-    if args.seed != "0" or side is None:
+        t = parse_time("--time", args.time)
+    if args.seed is not None:
         seed = parse_int("--seed", args.seed, 0)
     if getattr(args, "samples", None) is not None:
-        params.set("reference.samples", str(parse_int("--samples", args.samples, 1)))
+        params.set("reference.samples", str(parse_int("--samples", args.samples, 1)),
+                   label="--samples")
     params.apply(args.set)
     return Setup(scene, size, t, params, seed, side)
 
 
+def parse_modes(flag: str, text: str, available: list[str]) -> list[str]:
+    """A comma-separated list of modes, each of `available`, at least one, none twice."""
+    modes = [m.strip() for m in text.split(",") if m.strip()]
+    if not modes:
+        raise UserError(f"{flag} {text!r}: expected one or more of {', '.join(available)}")
+    for m in modes:
+        if m not in available:
+            raise UserError(f"{flag} {text}: {m!r} is not one of {', '.join(available)}")
+        if modes.count(m) > 1:
+            raise UserError(f"{flag} {text}: {m!r} is listed twice")
+    return modes
+
+
 def check_output_file(path: str, flag: str = "--out") -> Path:
+    """A file path that can be written: not a folder, not a device or pipe (renaming over
+    one would replace it), in a folder that exists."""
     p = Path(path)
     parent = p.parent if str(p.parent) else Path(".")
-    if p.is_dir():
+    if p.is_dir() or path.endswith(("/", os.sep)):
         raise UserError(f"{flag} {path}: is a directory, expected a file path")
+    if p.exists() and not p.is_file():
+        raise UserError(f"{flag} {path}: exists and is not a regular file")
+    if parent.exists() and not parent.is_dir():
+        raise UserError(f"{flag} {path}: {parent} is not a folder")
     if not parent.is_dir():
         raise UserError(f"{flag} {path}: folder {parent} does not exist")
     if not os.access(parent, os.W_OK):
@@ -148,15 +187,19 @@ def check_output_file(path: str, flag: str = "--out") -> Path:
 
 
 def check_output_dir(path: str, flag: str, create: bool = True) -> Path:
+    """A folder to write into: an existing one, or with `create` one whose parent exists
+    (made only when the outputs are written: imageio.OutputSet)."""
     p = Path(path)
     if p.exists() and not p.is_dir():
         raise UserError(f"{flag} {path}: exists and is not a folder")
     if not p.exists():
-        if not create or not p.parent.is_dir():
+        if not create:
+            raise UserError(f"{flag} {path}: folder does not exist")
+        if not p.parent.is_dir():
             raise UserError(f"{flag} {path}: folder {p.parent} does not exist")
         if not os.access(p.parent, os.W_OK):
             raise UserError(f"{flag} {path}: folder {p.parent} is not writable")
-        p.mkdir()
+        return p
     if not os.access(p, os.W_OK):
         raise UserError(f"{flag} {path}: folder is not writable")
     return p

@@ -21,6 +21,11 @@ from .render.timing import PassClock, describe, gpu_timers_truthful
 REALTIME = ("off", "mcguire", "ue4", "hybrid")
 
 
+# Bounds of --speeds and --animate: beyond them a scene's motion is no longer a frame's.
+MAX_SPEED = 1e3
+MIN_FPS, MAX_FPS = 1e-3, 1e6
+
+
 def register(sub):
     p = sub.add_parser("bench", help="time every real-time mode and pass")
     cliargs.add_scene_args(p, samples=False)
@@ -178,20 +183,25 @@ def run(args) -> int:
     frames = cliargs.parse_int("--frames", args.frames, 1)
     warmup = cliargs.parse_int("--warmup", args.warmup, 0)
     available = [m for m in REALTIME if m in MODES]
-    modes = available if not args.modes else [m.strip() for m in args.modes.split(",")]
-    for m in modes:
-        if m not in available:
-            raise cliargs.UserError(f"--modes {args.modes}: {m!r} is not one of {', '.join(available)}")
+    modes = available if args.modes is None else cliargs.parse_modes("--modes", args.modes,
+                                                                     available)
     speeds = None
     if args.speeds:
         if "hybrid" not in available:
             raise cliargs.UserError("--speeds: needs the hybrid mode")
         speeds = [cliargs.parse_float("--speeds", x) for x in args.speeds.split(",")]
+        if any(abs(v) > MAX_SPEED for v in speeds):
+            raise cliargs.UserError(f"--speeds {args.speeds}: expected factors within "
+                                    f"+-{MAX_SPEED:g}")
     fps = None
     if args.animate is not None:
         fps = cliargs.parse_float("--animate", args.animate)
-        if not fps > 0:
-            raise cliargs.UserError(f"--animate {args.animate}: expected frames per second > 0")
+        if not MIN_FPS <= fps <= MAX_FPS:
+            raise cliargs.UserError(f"--animate {args.animate}: expected frames per second "
+                                    f"from {MIN_FPS:g} to {MAX_FPS:g}")
+        if abs(s.time) + frames / fps > cliargs.MAX_TIME:
+            raise cliargs.UserError(f"--animate {args.animate}: {frames} frames run past "
+                                    f"+-{cliargs.MAX_TIME:g} s")
     out = cliargs.check_output_file(args.json, "--json") if args.json else None
     ctx = create_headless()
     method = args.pass_timers

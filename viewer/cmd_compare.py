@@ -10,7 +10,7 @@ import numpy as np
 from . import cliargs
 from .cmd_shot import sidecar
 from .glcontext import create_headless, device_name
-from .imageio import linear_to_srgb8, write_json_atomic, write_png_atomic
+from .imageio import OutputSet, linear_to_srgb8
 from .metrics import SPACE, image_metrics
 from .progress import Progress
 from .regions import INNER, OUTER, region_counts
@@ -44,13 +44,7 @@ def region_picture(region: np.ndarray) -> np.ndarray:
 
 def choose_modes(text: str | None) -> list[str]:
     available = [m for m in REALTIME if m in MODES]
-    if text is None:
-        return available
-    modes = [m.strip() for m in text.split(",") if m.strip()]
-    for m in modes:
-        if m not in available:
-            raise cliargs.UserError(f"--modes {text}: {m!r} is not one of {', '.join(available)}")
-    return modes
+    return available if text is None else cliargs.parse_modes("--modes", text, available)
 
 
 def run(args) -> int:
@@ -58,7 +52,7 @@ def run(args) -> int:
     modes = choose_modes(args.modes)
     out = cliargs.check_output_dir(args.out, "--out")
     w, h = s.size
-    inset = cliargs.parse_size(args.inset) if args.inset else (max(8, h // 4),) * 2
+    inset = cliargs.parse_size(args.inset, "--inset") if args.inset else (max(8, h // 4),) * 2
     ctx = create_headless()
     r = Renderer(ctx, s.scene, s.size)
     images, results, table, timings = {}, {}, {}, {}
@@ -87,21 +81,24 @@ def run(args) -> int:
     lines.append([f"{s.params['reference'].samples} sub-frames", "ground truth"])
     strip = make_strip(panels, inset_box=box, metrics=lines)
 
+    files = OutputSet()                  # all of them, or none
     for mode, img in images.items():
-        write_png_atomic(out / f"{mode}.png", linear_to_srgb8(img))
-        write_json_atomic(out / f"{mode}.json", sidecar(s, mode, results[mode], ctx, args.scene))
-    write_png_atomic(out / "regions.png", region_picture(region))
-    write_png_atomic(out / "strip.png", strip)
+        files.png(out / f"{mode}.png", linear_to_srgb8(img))
+        files.json(out / f"{mode}.json", sidecar(s, mode, results[mode], ctx, args.scene))
+    files.png(out / "regions.png", region_picture(region))
+    files.png(out / "strip.png", strip)
     md = metrics_markdown(table)
     header = (f"# {s.scene.name}: {w}x{h}, t = {s.time:g} s, shutter {s.scene.camera.shutter:g} s, "
               f"reference {s.params['reference'].samples} sub-frames\n\nSpace: {SPACE}.\n\n")
-    write_text(out / "metrics.md", header + md)
-    write_json_atomic(out / "metrics.json", {
+    text = (header + md).encode("utf-8")
+    files.add(out / "metrics.md", lambda f: f.write(text))
+    files.json(out / "metrics.json", {
         "scene": args.scene, "scene_name": s.scene.name, "size": [w, h], "time": s.time,
         "seed": s.seed, "device": device_name(ctx), "params": s.params.to_dict(),
         "regions": region_counts(region), "inset": list(box), "metrics": table, "space": SPACE,
         "ms": timings, "stats": {m: results[m].stats for m in results},
     })
+    files.commit()
     print(md)
     print(f"{out}: strip.png, metrics.md, metrics.json, {len(images)} images")
     return 0
@@ -109,10 +106,3 @@ def run(args) -> int:
 
 def fmt(v) -> str:
     return "n/a" if v is None else f"{v:.4f}"
-
-
-def write_text(path, text: str):
-    import os
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)

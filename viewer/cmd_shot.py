@@ -9,7 +9,7 @@ import numpy as np
 
 from . import cliargs
 from .glcontext import create_headless, device_name
-from .imageio import linear_to_srgb8, write_json_atomic, write_npy_atomic, write_png_atomic
+from .imageio import OutputSet, linear_to_srgb8
 from .render.modes import MODE_GROUPS, MODES
 from .render.renderer import Renderer
 from .visualize import visualise
@@ -18,7 +18,8 @@ from .visualize import visualise
 def register(sub):
     p = sub.add_parser("shot", help="render one mode to a PNG")
     cliargs.add_scene_args(p)
-    p.add_argument("--mode", default="off", help=f"one of: {', '.join(MODES)}")
+    p.add_argument("--mode", default=None,
+                   help=f"one of: {', '.join(MODES)} (default off, or the --params file's)")
     p.add_argument("--out", required=True, help="output PNG path (a .json sidecar goes beside it)")
     p.add_argument("--buffers", default=None, metavar="DIR",
                    help="also write every intermediate texture as .npy (raw) and .png (viewable)")
@@ -42,33 +43,40 @@ def sidecar(s: cliargs.Setup, mode: str, result, ctx, scene_arg: str) -> dict:
         "camera": camera_dict(s.scene.camera),
         "device": device_name(ctx),
         "stats": result.stats,
-        "pass_ms": result.pass_ms,
     }
 
 
 def run(args) -> int:
     s = cliargs.setup(args)
-    if args.mode not in MODES:
-        raise cliargs.UserError(f"--mode {args.mode}: expected one of {', '.join(MODES)}")
+    mode = args.mode or (s.sidecar or {}).get("mode") or "off"
+    if mode not in MODES:
+        raise cliargs.UserError(f"--mode {mode}: expected one of {', '.join(MODES)}")
     out = cliargs.check_output_file(args.out)
+    side = out.with_suffix(".json")
+    if side == out:
+        raise cliargs.UserError(f"--out {args.out}: the JSON sidecar goes to the same path "
+                                "with .json: expected an image path such as x.png")
+    cliargs.check_output_file(str(side), "--out's sidecar")
     bufdir = cliargs.check_output_dir(args.buffers, "--buffers") if args.buffers else None
     ctx = create_headless()
     r = Renderer(ctx, s.scene, s.size)
+    files = OutputSet()
     try:
         t0 = time.perf_counter()
-        res = r.render(args.mode, s.time, s.params, seed=s.seed)
+        res = r.render(mode, s.time, s.params, seed=s.seed)
         ms = (time.perf_counter() - t0) * 1e3
         if bufdir is not None:
-            write_buffers(r, bufdir)
-        write_png_atomic(out, linear_to_srgb8(res.image))
-        write_json_atomic(out.with_suffix(".json"), sidecar(s, args.mode, res, ctx, args.scene))
+            add_buffers(files, r, bufdir)
+        files.png(out, linear_to_srgb8(res.image))
+        files.json(side, sidecar(s, mode, res, ctx, args.scene))
     finally:
         r.release()
-    print(f"{out}: {args.mode} {s.size[0]}x{s.size[1]} t={s.time:g} in {ms:.0f} ms")
+    files.commit()
+    print(f"{out}: {mode} {s.size[0]}x{s.size[1]} t={s.time:g} in {ms:.0f} ms")
     return 0
 
 
-def write_buffers(r: Renderer, folder: Path):
+def add_buffers(files: OutputSet, r: Renderer, folder: Path):
     for name, a in r.buffers().items():
-        write_npy_atomic(folder / f"{name}.npy", a)
-        write_png_atomic(folder / f"{name}.png", visualise(name, a))
+        files.npy(folder / f"{name}.npy", a)
+        files.png(folder / f"{name}.png", visualise(name, a))

@@ -59,9 +59,8 @@ def srgb8_to_linear(srgb8) -> np.ndarray:
 
 # --- atomic writers ------------------------------------------------------------------
 
-def _atomic_write(path, write: Callable[[io.BufferedWriter], None]) -> Path:
-    """Run `write(fileobj)` on a temp file beside `path`, fsync, then rename over it."""
-    path = Path(path)
+def _write_temp(path: Path, write: Callable[[io.BufferedWriter], None]) -> Path:
+    """Run `write(fileobj)` on a new temp file beside `path` and fsync it; its path."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
     # os.open with 0o666 lets the umask decide the final mode, as a plain open() would.
     fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
@@ -70,6 +69,17 @@ def _atomic_write(path, write: Callable[[io.BufferedWriter], None]) -> Path:
             write(f)
             f.flush()
             os.fsync(f.fileno())
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return tmp
+
+
+def _atomic_write(path, write: Callable[[io.BufferedWriter], None]) -> Path:
+    """Run `write(fileobj)` on a temp file beside `path`, fsync, then rename over it."""
+    path = Path(path)
+    tmp = _write_temp(path, write)
+    try:
         os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)
@@ -77,8 +87,55 @@ def _atomic_write(path, write: Callable[[io.BufferedWriter], None]) -> Path:
     return path
 
 
-def write_png_atomic(path, image) -> Path:
-    """Write a uint8 (H,W,3) RGB or (H,W) grey image as PNG with no metadata chunks.
+class OutputSet:
+    """Files that appear together or not at all (an image and its sidecar, a comparison's
+    images and metrics): each is written to a temp file beside its path, and only when
+    every one is written are they renamed into place, after creating their folders. A
+    failure on the way (a full disk, a directory where a file goes) leaves none of them."""
+
+    def __init__(self):
+        self._files: list[tuple[Path, Callable]] = []
+
+    def add(self, path, write: Callable[[io.BufferedWriter], None]):
+        self._files.append((Path(path), write))
+
+    def png(self, path, image):
+        data = _png_bytes(image)          # encoded now: a bad image fails before any write
+        self.add(path, lambda f: f.write(data))
+
+    def json(self, path, obj: Any):
+        data = _json_bytes(obj)
+        self.add(path, lambda f: f.write(data))
+
+    def npy(self, path, array):
+        a = np.asarray(array)
+        self.add(path, lambda f: np.save(f, a, allow_pickle=False))
+
+    def commit(self):
+        for path, _ in self._files:       # what a rename would fail on, or replace
+            if path.exists() and not path.is_file():
+                raise IsADirectoryError(21, "exists and is not a regular file", str(path))
+        done: list[Path] = []
+        made: list[Path] = []
+        try:
+            for path, _ in self._files:
+                if not path.parent.exists():
+                    path.parent.mkdir()
+                    made.append(path.parent)
+            for path, write in self._files:
+                done.append(_write_temp(path, write))
+            for tmp, (path, _) in zip(done, self._files):
+                os.replace(tmp, path)
+        except BaseException:
+            for tmp in done:
+                tmp.unlink(missing_ok=True)
+            for folder in made:
+                folder.rmdir()
+            raise
+
+
+def _png_bytes(image) -> bytes:
+    """A uint8 (H,W,3) RGB or (H,W) grey image as PNG with no metadata chunks.
 
     Pillow writes no tIME/tEXt chunks unless asked, and the compression level is pinned,
     so the same pixels give the same bytes.
@@ -89,7 +146,15 @@ def write_png_atomic(path, image) -> Path:
     if not (a.ndim == 2 or (a.ndim == 3 and a.shape[2] == 3)):
         raise ValueError(f"write_png_atomic: expected (H,W) or (H,W,3), got {a.shape}")
     img = Image.fromarray(np.ascontiguousarray(a), mode="L" if a.ndim == 2 else "RGB")
-    return _atomic_write(path, lambda f: img.save(f, format="PNG", compress_level=6))
+    buf = io.BytesIO()
+    img.save(buf, format="PNG", compress_level=6)
+    return buf.getvalue()
+
+
+def write_png_atomic(path, image) -> Path:
+    """Write a uint8 (H,W,3) RGB or (H,W) grey image as PNG (_png_bytes), atomically."""
+    data = _png_bytes(image)
+    return _atomic_write(path, lambda f: f.write(data))
 
 
 def json_safe(obj: Any) -> Any:
@@ -109,10 +174,14 @@ def json_safe(obj: Any) -> Any:
     return obj
 
 
+def _json_bytes(obj: Any) -> bytes:
+    text = json.dumps(json_safe(obj), sort_keys=True, indent=2, allow_nan=False) + "\n"
+    return text.encode("utf-8")
+
+
 def write_json_atomic(path, obj: Any) -> Path:
     """Write `obj` as JSON (sorted keys, indent 2, trailing newline) via `json_safe`."""
-    text = json.dumps(json_safe(obj), sort_keys=True, indent=2, allow_nan=False) + "\n"
-    data = text.encode("utf-8")  # encode first: a serialisation error must not touch disk
+    data = _json_bytes(obj)      # encoded first: a serialisation error must not touch disk
     return _atomic_write(path, lambda f: f.write(data))
 
 

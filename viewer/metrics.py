@@ -65,9 +65,11 @@ def metric_maps(test, ref, quantize: bool = True) -> dict[str, np.ndarray]:
     if t.shape != r.shape:
         raise ValueError(f"test {t.shape} and reference {r.shape} differ in shape")
     diff = t - r
-    _, ssim = structural_similarity(r, t,
-                                    win_size=SSIM_WIN, channel_axis=2, data_range=1.0,
-                                    full=True)
+    if min(t.shape[:2]) < SSIM_WIN:     # no window fits: no pixel has an SSIM (None)
+        ssim = np.full(t.shape, np.nan)
+    else:
+        _, ssim = structural_similarity(r, t, win_size=SSIM_WIN, channel_axis=2,
+                                        data_range=1.0, full=True)
     return {"sq_err": np.mean(diff * diff, axis=2),
             "ssim": np.mean(ssim, axis=2),
             "flip": flip_map(r, t)}

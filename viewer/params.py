@@ -78,7 +78,14 @@ class ParamSet:
         raise UserError(f"--set {key}: unknown parameter {fname!r} of {name} "
                         f"(known: {', '.join(f.name for f in fields(inst))})")
 
-    def set(self, key: str, value):
+    def set(self, key: str, value, label: str = "--set"):
+        """Set group.field from a string (parsed) or a value; a mistake names `label`
+        (the flag or file it came from) and the key."""
+        if label != "--set":
+            try:
+                return self.set(key, value)
+            except UserError as exc:
+                raise UserError(f"{label}: {str(exc).removeprefix('--set ')}") from None
         inst, f = self.field(key)
         kind = type(f.default)
         if isinstance(value, str):
@@ -108,4 +115,4 @@ class ParamSet:
             if not isinstance(values, dict):
                 raise UserError(f"{source}: {name}: expected a table of parameters")
             for fname, value in values.items():
-                self.set(f"{name}.{fname}", value)
+                self.set(f"{name}.{fname}", value, label=source)

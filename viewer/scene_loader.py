@@ -496,10 +496,16 @@ def image_srgb(im: Image.Image) -> np.ndarray:
     return np.repeat(grey[..., None], 3, axis=-1)
 
 
+def check_camera(data: dict, source: str) -> CameraSpec:
+    """A camera table (SCENE_FORMAT.md [camera]) from elsewhere than a scene file (an
+    image's sidecar), checked as a scene file's is; errors name `source`."""
+    return _Loader(Path(source)).camera(data)
+
+
 def srgb_to_linear(c: np.ndarray) -> np.ndarray:
     """The standard sRGB decoding (IEC 61966-2-1) of values in [0, 1]."""
     c = np.asarray(c, dtype=np.float64)
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
-__all__ = ["load_scene", "builtin_scene_names", "builtin_scene_path", "image_srgb", "srgb_to_linear"]
+__all__ = ["load_scene", "builtin_scene_names", "builtin_scene_path", "check_camera", "image_srgb", "srgb_to_linear"]
