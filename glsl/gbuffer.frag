@@ -16,7 +16,7 @@ uniform vec3 u_eye;
 uniform uint u_object_id;
 
 void main() {
-    vec3 n = normalize(u_normal_matrix * v_normal_local);
+    vec3 n = unit_or_zero(u_normal_matrix * v_normal_local);
     if (dot(n, u_eye - v_world) < 0.0) n = -n;
     vec3 color = shade(v_world, n, v_local, v_uv, u_eye);
 #if GBUFFER_MOTION

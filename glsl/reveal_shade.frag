@@ -111,7 +111,7 @@ void main() {
 #endif
     vec4 world = model * vec4(local, 1.0);
     vec4 view_now = u_view * world;
-    vec3 n = normalize(normal_matrix * normal_local);
+    vec3 n = unit_or_zero(normal_matrix * normal_local);
     if (dot(n, u_eye - world.xyz) < 0.0) n = -n;
     vec2 d = displacement_between(modelview_open * vec4(local, 1.0),
                                   modelview_close * vec4(local, 1.0), view_now);

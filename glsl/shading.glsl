@@ -69,9 +69,16 @@ vec3 surface_albedo(vec3 p_local, vec2 uv) {
     return m_albedo;
 }
 
+// a / |a|, or 0 for a = 0 (normalize(0) is undefined in GLSL): a mesh's zero normal (a
+// fold in a revolve profile, a face shared by both windings) then shades as ambient
+// only on every driver, and the normal target holds 0, not NaN.
+vec3 unit_or_zero(vec3 a) {
+    return dot(a, a) > 0.0 ? normalize(a) : vec3(0.0);
+}
+
 // n: world normal (any length); eye: the camera eye at the frame's time.
 vec3 shade(vec3 p_world, vec3 n, vec3 p_local, vec2 uv, vec3 eye) {
-    n = normalize(n);
+    n = unit_or_zero(n);
     vec3 v = normalize(eye - p_world);
     if (dot(n, v) < 0.0) n = -n;                       // two-sided surfaces
     vec3 diffuse = u_ambient;
@@ -82,7 +89,7 @@ vec3 shade(vec3 p_world, vec3 n, vec3 p_local, vec2 uv, vec3 eye) {
         diffuse += ndl * light_color(k);
         // Skipped (exactly 0 anyway) where the material has no specular: pow is costly.
         if (ndl > 0.0 && m_specular > 0.0) {
-            float ndh = max(0.0, dot(n, normalize(l + v)));
+            float ndh = max(0.0, dot(n, unit_or_zero(l + v)));
             // pow(0, 0) is undefined in GLSL; the contract's value is 1.
             float s = (m_shininess == 0.0) ? 1.0 : pow(ndh, m_shininess);
             spec += s * light_color(k);

@@ -403,3 +403,69 @@ def test_lights_in_a_texture_shade_as_lights_in_uniforms(ctx, tmp_path, mode, mo
     assert texture
     none, _ = render(base.replace("{lights}", ""), "n")
     assert np.abs(many - none).max() > 0.2
+
+
+@pytest.mark.parametrize("mode", ["off", "hybrid"])
+def test_a_zero_normal_shades_as_ambient_only(ctx, tmp_path, mode):
+    """A quad listed with both windings on shared vertices has (next to) zero vertex
+    normals (trimesh: 0 or ~1e-32, whose square underflows in float32): normalize(0) is
+    undefined in GLSL (NaN on llvmpipe), so such a surface is lit by the ambient term
+    alone, and the normal target holds 0, not NaN, on every driver."""
+    (tmp_path / "quad.obj").write_text("v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
+                                       "f 1 2 3\nf 1 3 4\nf 1 3 2\nf 1 4 3\n")
+    sc = scene_from(tmp_path, """
+        ambient = [0.25, 0.5, 0.75]
+        background = [0.25, 0.5, 0.75]
+        [camera]
+        position = [0.0, 0.0, 4.0]
+        look_at = [0.0, 0.0, 0.0]
+        fov_y = 50.0
+        shutter = 0.04
+        [[lights]]
+        direction = [-0.3, -0.5, -1.0]
+        [[objects]]
+        mesh = "quad.obj"
+        velocity = [5.0, 0.0, 0.0]
+        material = { albedo = [1.0, 1.0, 1.0], specular = 0.5 }
+    """)
+    assert np.abs(sc.objects[0].mesh.vertex_normals).max() < 1e-30
+    r = Renderer(ctx, sc, (64, 36))
+    try:
+        ids = r.render("off", 0.0, ParamSet()) and r.buffers()["id"]
+        img = r.render(mode, 0.0, ParamSet()).image
+        bufs = r.buffers()
+    finally:
+        r.release()
+    for name, a in bufs.items():
+        assert np.isfinite(a).all(), name
+    quad = ids > 0
+    assert quad.sum() > 200
+    assert not np.abs(bufs["normal"][..., :3][quad]).any()
+    # (the background is the ambient colour: blurred or not, every pixel is that colour)
+    np.testing.assert_allclose(img, np.broadcast_to([0.25, 0.5, 0.75], img.shape), atol=1e-6)
+
+
+def test_an_image_texture_past_the_drivers_size_limit_is_a_scene_error(ctx, tmp_path):
+    import trimesh
+    from PIL import Image
+    from viewer.errors import SceneError
+    from viewer.render.gpu_scene import GpuScene
+    limit = ctx.info["GL_MAX_TEXTURE_SIZE"]
+    Image.new("RGB", (limit + 1, 1), (255, 128, 0)).save(tmp_path / "wide.png")
+    m = trimesh.creation.box(extents=[1, 1, 1])
+    m.visual = trimesh.visual.TextureVisuals(uv=m.vertices[:, :2] + 0.5)
+    m.export(tmp_path / "box.obj")
+    sc = scene_from(tmp_path, """
+        [camera]
+        position = [0.0, 0.0, 3.0]
+        look_at = [0.0, 0.0, 0.0]
+        fov_y = 50.0
+        [[objects]]
+        name = "crate"
+        mesh = "box.obj"
+        material = { texture = { kind = "image", path = "wide.png" } }
+    """)
+    with pytest.raises(SceneError) as info:
+        GpuScene(ctx, sc)
+    assert "objects[1] (crate).material.texture.path" in str(info.value)
+    assert f"at most {limit} px" in str(info.value)

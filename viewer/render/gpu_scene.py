@@ -105,9 +105,16 @@ class GpuScene:
             self.light_texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
         self.buffers = [ctx.buffer(vertex_data(o).tobytes()) for o in scene.objects]
         self.images: dict[int, moderngl.Texture] = {}
+        limit = int(ctx.info.get("GL_MAX_TEXTURE_SIZE") or 1024)
         for o in scene.objects:
             tex = o.material.texture
             if tex is not None and tex.kind == "image":
+                h, w = tex.image.shape[:2]
+                if max(w, h) > limit:        # (GL would leave the texture empty: black)
+                    raise SceneError(scene.path or scene.name,
+                                     f"objects[{o.id}] ({o.name}).material.texture.path",
+                                     f"an image of at most {limit} px a side (this GL "
+                                     f"driver's limit), got {w}x{h}")
                 img = np.ascontiguousarray(tex.image[::-1], dtype=np.float32)  # UV origin: bottom-left
                 t = ctx.texture((img.shape[1], img.shape[0]), 3, img.tobytes(), dtype="f4")
                 t.filter = (moderngl.LINEAR, moderngl.LINEAR)
