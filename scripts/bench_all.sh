@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The benchmark set of docs/performance.md: every real-time mode on the built-in and the
 # conformance scenes at 640x360 and 1280x720, JSON into docs/perf/, then the tables.
-# About 4-7 minutes on 2 cores. Run after scripts/setup.sh (or `bash scripts/test.sh`).
+# About 2-7 minutes on 2 cores. Run after scripts/setup.sh (or `bash scripts/test.sh`).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 H=.venv/bin/hmblur
