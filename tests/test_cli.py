@@ -102,6 +102,9 @@ def bad_cases(tmp_path):
         "a mode twice": (["bench", BASIC, "--modes", "mcguire,mcguire"], "listed twice"),
         "--animate too slow": (["bench", BASIC, "--animate", "1e-300"], "--animate"),
         "--speeds too fast": (["bench", BASIC, "--speeds", "1e308"], "--speeds"),
+        "empty --json": (["bench", BASIC, "--json", ""], "--json '': expected a file path"),
+        "empty --buffers": (["shot", BASIC, "--buffers", "", "--out", out],
+                            "--buffers '': expected a folder path"),
     }
 
 
@@ -119,6 +122,27 @@ def test_every_user_mistake_is_one_line_and_exit_2(tmp_path, capsys):
         assert not (tmp_path / "s.png").exists(), name
         assert not (tmp_path / "c").exists(), name         # no folder made for nothing
     assert stat.S_ISFIFO(os.stat(tmp_path / "fifo.png").st_mode)    # not replaced
+
+
+def test_an_error_after_a_progress_bar_starts_on_its_own_line():
+    import io
+    from viewer.progress import Progress, end_line
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+    err = Tty()
+    bar = Progress("reference", err)
+    bar(0, 4)                                   # cut short: the line stays open
+    end_line()
+    end_line()                                  # (once only)
+    err.write("hmblur: error: x\n")
+    assert err.getvalue().splitlines()[-1] == "hmblur: error: x"
+    assert err.getvalue().count("\n") == 2
+    done = Tty()
+    Progress("reference", done)(0, 1)           # finished: its line is closed
+    end_line()
+    assert done.getvalue().count("\n") == 1
 
 
 def test_unwritable_output_folder(tmp_path, capsys, monkeypatch):

@@ -6,6 +6,7 @@ import argparse
 import sys
 
 from .errors import UserError
+from .progress import end_line
 
 COMMANDS = ("shot", "compare", "bench", "view")
 
@@ -33,8 +34,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     try:
-        args = build_parser().parse_args(argv)
-        return int(args.run(args) or 0)
+        try:
+            args = build_parser().parse_args(argv)
+            return int(args.run(args) or 0)
+        finally:
+            end_line()                     # (a progress bar's line, cut short)
     except UserError as exc:
         print(f"hmblur: error: {exc}", file=sys.stderr)
         return 2

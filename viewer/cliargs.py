@@ -171,6 +171,8 @@ def parse_modes(flag: str, text: str, available: list[str]) -> list[str]:
 def check_output_file(path: str, flag: str = "--out") -> Path:
     """A file path that can be written: not a folder, not a device or pipe (renaming over
     one would replace it), in a folder that exists."""
+    if not path:
+        raise UserError(f"{flag} '': expected a file path")
     p = Path(path)
     parent = p.parent if str(p.parent) else Path(".")
     if p.is_dir() or path.endswith(("/", os.sep)):
@@ -189,6 +191,8 @@ def check_output_file(path: str, flag: str = "--out") -> Path:
 def check_output_dir(path: str, flag: str, create: bool = True) -> Path:
     """A folder to write into: an existing one, or with `create` one whose parent exists
     (made only when the outputs are written: imageio.OutputSet)."""
+    if not path:
+        raise UserError(f"{flag} '': expected a folder path")
     p = Path(path)
     if p.exists() and not p.is_dir():
         raise UserError(f"{flag} {path}: exists and is not a folder")

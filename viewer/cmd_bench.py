@@ -202,7 +202,7 @@ def run(args) -> int:
         if abs(s.time) + frames / fps > cliargs.MAX_TIME:
             raise cliargs.UserError(f"--animate {args.animate}: {frames} frames run past "
                                     f"+-{cliargs.MAX_TIME:g} s")
-    out = cliargs.check_output_file(args.json, "--json") if args.json else None
+    out = cliargs.check_output_file(args.json, "--json") if args.json is not None else None
     ctx = create_headless()
     method = args.pass_timers
     if method == "auto":

@@ -57,7 +57,7 @@ def run(args) -> int:
         raise cliargs.UserError(f"--out {args.out}: the JSON sidecar goes to the same path "
                                 "with .json: expected an image path such as x.png")
     cliargs.check_output_file(str(side), "--out's sidecar")
-    bufdir = cliargs.check_output_dir(args.buffers, "--buffers") if args.buffers else None
+    bufdir = cliargs.check_output_dir(args.buffers, "--buffers") if args.buffers is not None else None
     ctx = create_headless()
     r = Renderer(ctx, s.scene, s.size)
     files = OutputSet()

@@ -35,8 +35,8 @@ def run(args) -> int:
     frames = cliargs.parse_int("--frames", args.frames, 1) if args.frames is not None else None
     if args.screenshot is not None and frames is None:
         raise cliargs.UserError("--screenshot needs --frames N (the window is saved at frame N)")
-    screenshot = cliargs.check_output_file(args.screenshot, "--screenshot") if args.screenshot else None
-    stats = cliargs.check_output_file(args.stats_json, "--stats-json") if args.stats_json else None
+    screenshot = cliargs.check_output_file(args.screenshot, "--screenshot") if args.screenshot is not None else None
+    stats = cliargs.check_output_file(args.stats_json, "--stats-json") if args.stats_json is not None else None
     shot_dir = cliargs.check_output_dir(args.shot_dir, "--shot-dir", create=False)
     from .ui.script import load_script
     script = load_script(args.script) if args.script else []
