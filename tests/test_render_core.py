@@ -469,3 +469,47 @@ def test_an_image_texture_past_the_drivers_size_limit_is_a_scene_error(ctx, tmp_
         GpuScene(ctx, sc)
     assert "objects[1] (crate).material.texture.path" in str(info.value)
     assert f"at most {limit} px" in str(info.value)
+
+
+@pytest.mark.parametrize("mode", ["off", "reference", "hybrid"])
+def test_depth_holds_with_a_tiny_near_and_far_surfaces(ctx, tmp_path, mode):
+    """near 1e-4: the standard mapping in a 24-bit buffer rounded a wall at 2000 m to
+    depth 1 (gone), and a box 30 m behind another at 1000 m showed through it. With
+    reversed Z in a float buffer (viewer/render/depth.py) both render as a ray caster
+    sees them."""
+    from viewer.render import depth
+    assert depth.reversed_z(ctx)                 # (llvmpipe: GL 4.5)
+    sc = scene_from(tmp_path, """
+        background = [0.0, 0.0, 1.0]
+        ambient = [1.0, 1.0, 1.0]
+        [camera]
+        position = [0.0, 0.0, 0.0]
+        look_at = [0.0, 0.0, -1.0]
+        fov_y = 50.0
+        near = 0.0001
+        far = 100000.0
+        shutter = 0.04
+        [[objects]]
+        mesh = { box = [2000.0, 2000.0, 1.0] }
+        position = [-1000.0, 0.0, -2000.0]
+        material = { albedo = [1.0, 0.0, 0.0] }
+        [[objects]]
+        mesh = { box = [200.0, 200.0, 10.0] }
+        position = [300.0, 0.0, -1035.0]
+        material = { albedo = [1.0, 1.0, 0.0] }
+        [[objects]]
+        mesh = { box = [400.0, 400.0, 400.0] }
+        position = [300.0, 0.0, -1200.0]
+        velocity = [100.0, 0.0, 0.0]
+        material = { albedo = [0.0, 1.0, 0.0] }
+    """)
+    r = Renderer(ctx, sc, (64, 36))
+    try:
+        img = r.render(mode, 0.0, ParamSet(), read_image=True).image
+    finally:
+        r.release()
+    red = (img[..., 0] > 0.99) & (img[..., 1] < 0.01)
+    yellow = (img[..., 0] > 0.99) & (img[..., 1] > 0.99)
+    green = (img[..., 1] > 0.99) & (img[..., 0] < 0.01)
+    assert red.sum() > 100                       # the far wall, left half
+    assert green.sum() > 50 and yellow.sum() == 0   # the nearer box hides the one behind

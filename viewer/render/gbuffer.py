@@ -5,6 +5,7 @@ from __future__ import annotations
 import moderngl
 
 from ..conventions import glsl_defines
+from . import depth
 from .frame import Frame
 from .gpu_scene import set_uniform
 from .passes import Pass
@@ -53,7 +54,7 @@ class GBufferPass(Pass):
         fbo = frame.pool.framebuffer(self.produces, depth=True)
         fbo.use()
         fbo.viewport = (0, 0) + fbo.size
-        fbo.clear(depth=1.0)
+        fbo.clear(depth=depth.clear_value(ctx))
         # Background first, without depth test: fills every target where nothing is hit.
         bg = frame.programs.get("fullscreen.vert", "background.frag", defines)
         set_uniform(bg, "u_background", frame.scene.background)
@@ -61,7 +62,7 @@ class GBufferPass(Pass):
         frame.programs.empty_vao(bg).render(moderngl.TRIANGLES, vertices=3)
 
         ctx.enable(moderngl.DEPTH_TEST)
-        ctx.depth_func = "<"
+        ctx.depth_func = depth.nearer(ctx)
         prog = frame.programs.get("gbuffer.vert", "gbuffer.frag", defines)
         gpu.bind_camera(prog, cam, t, frame.size)
         gpu.bind_lights(prog)

@@ -10,6 +10,7 @@ import numpy as np
 from .. import transforms as tf
 from ..errors import SceneError
 from ..scene import Scene, SceneObject
+from . import depth
 
 # The shaders' light arrays hold a multiple of this many lights (the define MAX_LIGHTS):
 # one program per 16, not per light count.
@@ -154,7 +155,8 @@ class GpuScene:
         close reach the shaders through bind_object)."""
         set_uniform(prog, "u_view", cam.view(t))
         proj = cam.projection()
-        set_uniform(prog, "u_proj", proj)
+        set_uniform(prog, "u_proj", depth.projection(prog.ctx, proj, cam.spec.near,
+                                                     cam.spec.far))
         set_uniform(prog, "u_focal", (float(proj[0, 0]), float(proj[1, 1])))
         set_uniform(prog, "u_eye", cam.eye(t))
         set_uniform(prog, "u_viewport", tuple(float(x) for x in size))

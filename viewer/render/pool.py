@@ -11,6 +11,8 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
+from . import depth
+
 
 @dataclass(frozen=True)
 class TexSpec:
@@ -79,7 +81,7 @@ class ResourcePool:
             park_framebuffer(self.ctx)
             for d in self._depth.values():
                 d.release()
-            self._depth = {self.size: self.ctx.depth_texture(self.size)}
+            self._depth = {self.size: depth.depth_texture(self.ctx, self.size)}
         return self._depth[self.size]
 
     def framebuffer(self, names: tuple[str, ...], depth: bool = False) -> moderngl.Framebuffer:
