@@ -12,13 +12,13 @@ in vec4 v_view_open;
 in vec4 v_view_close;
 
 uniform mat3 u_normal_matrix;   // inverse transpose of M(t)'s upper 3x3
-uniform vec3 u_eye;
 uniform uint u_object_id;
 
 void main() {
+    // (positions relative to the eye: the eye is the origin)
     vec3 n = unit_or_zero(u_normal_matrix * v_normal_local);
-    if (dot(n, u_eye - v_world) < 0.0) n = -n;
-    vec3 color = shade(v_world, n, v_local, v_uv, u_eye);
+    if (dot(n, -v_world) < 0.0) n = -n;
+    vec3 color = shade(v_world, n, v_local, v_uv, vec3(0.0));
 #if GBUFFER_MOTION
     vec2 velocity = displacement_between(v_view_open, v_view_close, v_view);
 #else

@@ -6,25 +6,26 @@ in vec3 in_position;
 in vec3 in_normal;
 in vec2 in_uv;
 
-uniform mat4 u_model;           // M(t)
-uniform mat4 u_view;
+// Composed on the host in float64 (GBuffer.execute): in float32 a scene far from the
+// origin would lose its detail to the world translation before V subtracts it again.
+uniform mat4 u_model_eye;       // T(-eye(t)) M(t): world position relative to the eye
+uniform mat4 u_modelview;       // V(t) M(t)
 uniform mat4 u_proj;
 
 out vec3 v_local;
 out vec3 v_normal_local;
 out vec2 v_uv;
-out vec3 v_world;
+out vec3 v_world;               // relative to the eye
 out vec4 v_view;
 out vec4 v_view_open;           // the point's view position at shutter open / close
 out vec4 v_view_close;
 
 void main() {
-    vec4 world = u_model * vec4(in_position, 1.0);
     v_local = in_position;
     v_normal_local = in_normal;
     v_uv = in_uv;
-    v_world = world.xyz;
-    v_view = u_view * world;
+    v_world = (u_model_eye * vec4(in_position, 1.0)).xyz;
+    v_view = u_modelview * vec4(in_position, 1.0);
     v_view_open = view_open(in_position);
     v_view_close = view_close(in_position);
     gl_Position = u_proj * v_view;
