@@ -6,8 +6,8 @@ in vec3 in_position;
 in vec3 in_normal;
 in vec2 in_uv;
 
-// Composed on the host in float64 (GBuffer.execute): in float32 a scene far from the
-// origin would lose its detail to the world translation before V subtracts it again.
+// Composed on the host in float64 (GpuScene.object_matrices): in float32 a scene far from
+// the origin would lose its detail to the world translation before V subtracts it again.
 uniform mat4 u_model_eye;       // T(-eye(t)) M(t): world position relative to the eye
 uniform mat4 u_modelview;       // V(t) M(t)
 uniform mat4 u_proj;

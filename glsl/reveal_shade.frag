@@ -1,7 +1,8 @@
 #version 330 core
 // The revealed layer, shaded exactly as the raster G-buffer shades (gbuffer.frag): the same
-// shade() with the same GpuScene uniforms, the object's M(t) for position and normal, and
-// its M at shutter open and close for the displacement, so the filter can blur it.
+// shade() with the same GpuScene uniforms, the object's M(t) (relative to the eye) for
+// position and normal, and its M at shutter open and close for the displacement, so the
+// filter can blur it.
 // Drawn over the tiles holding traced pixels (viewer/render/reveal_pass.py), in draws
 // of one or more revealed objects over their own tiles, each of whose pixels a draw
 // writes: its record's key is one of the draw's (shaded), 0 (no ray: cleared), or -1
@@ -27,11 +28,11 @@ uniform sampler2D u_hits;       // (face row, u, v, 1 + object id); 0 where no r
 uniform sampler2D u_faces;      // 6 texels per face, FACES_PER_ROW faces a row: corner c at
                                 // 2c: (position, normal.x), at 2c + 1: (normal.yz, uv)
 uniform mat4 u_view;
-uniform vec3 u_eye;
 uniform vec3 u_background;
 #if OBJECT_TABLE
-uniform sampler2D u_objects;    // 18 texels per object id (reveal_pass.ObjectTable): M(t), the
-                                // modelviews at shutter open and close, the normal matrix,
+uniform sampler2D u_objects;    // 18 texels per object id (reveal_pass.ObjectTable):
+                                // T(-eye) M(t), the modelviews at shutter open and close,
+                                // the normal matrix,
                                 // the material
 vec4 object_texel(int id, int k) {          // (OBJECTS_PER_ROW: a power of two)
     ivec2 at = ivec2((id % OBJECTS_PER_ROW) * 18 + k, id / OBJECTS_PER_ROW);
@@ -42,7 +43,7 @@ mat4 object_mat4(int id, int k) {
                 object_texel(id, k + 3));
 }
 #else
-uniform mat4 u_model;
+uniform mat4 u_model_eye;       // T(-eye(t)) M(t) (GpuScene.object_matrices)
 uniform mat3 u_normal_matrix;
 uniform uint u_object_id;
 #endif
@@ -105,17 +106,18 @@ void main() {
     m_tex_axis = int(m2.z);
     float packed_id = hit.w;
 #else
-    mat4 model = u_model, modelview_open = u_modelview_open, modelview_close = u_modelview_close;
+    mat4 model = u_model_eye, modelview_open = u_modelview_open, modelview_close = u_modelview_close;
     mat3 normal_matrix = u_normal_matrix;
     float packed_id = 1.0 + float(u_object_id);
 #endif
+    // (world positions relative to the eye: V = turn T(-eye), the eye is the origin)
     vec4 world = model * vec4(local, 1.0);
-    vec4 view_now = u_view * world;
+    vec4 view_now = vec4(mat3(u_view) * world.xyz, 1.0);
     vec3 n = unit_or_zero(normal_matrix * normal_local);
-    if (dot(n, u_eye - world.xyz) < 0.0) n = -n;
+    if (dot(n, -world.xyz) < 0.0) n = -n;
     vec2 d = displacement_between(modelview_open * vec4(local, 1.0),
                                   modelview_close * vec4(local, 1.0), view_now);
     out_packed = vec4(d, -view_now.z, packed_id);
-    out_packed_color = vec4(shade(world.xyz, n, local, uv, u_eye), 1.0);
+    out_packed_color = vec4(shade(world.xyz, n, local, uv, vec3(0.0)), 1.0);
 #endif
 }

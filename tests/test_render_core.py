@@ -515,10 +515,12 @@ def test_depth_holds_with_a_tiny_near_and_far_surfaces(ctx, tmp_path, mode):
     assert green.sum() > 50 and yellow.sum() == 0   # the nearer box hides the one behind
 
 
-def test_a_scene_far_from_the_origin_renders_as_at_the_origin(ctx, tmp_path):
-    """The G-buffer's transforms are composed on the host in float64 relative to the eye:
-    the conformance scene `basic` moved 1e5 m along x (camera and objects) gives the same
-    `off` image (in float32 world space 1221 of its pixels moved, 381 by more than 2)."""
+@pytest.mark.parametrize("mode", ["off", "hybrid"])
+def test_a_scene_far_from_the_origin_renders_as_at_the_origin(ctx, tmp_path, mode):
+    """The G-buffer's and reveal_shade's transforms are composed on the host in float64
+    relative to the eye: the conformance scene `basic` moved 1e5 m along x (camera and
+    objects) gives the same image (in float32 world space 1221 of its `off` pixels moved,
+    381 by more than 2)."""
     import re
     src = (CONFORMANCE / "basic.toml").read_text()
 
@@ -533,7 +535,7 @@ def test_a_scene_far_from_the_origin_renders_as_at_the_origin(ctx, tmp_path):
         p.write_text(moved(src, dx))
         r = Renderer(ctx, load_scene(p), (160, 90))
         try:
-            images.append(linear_to_srgb8(r.render("off", 0.0, ParamSet()).image))
+            images.append(linear_to_srgb8(r.render(mode, 0.0, ParamSet()).image))
         finally:
             r.release()
     assert len(re.findall(r"(?:position|look_at)\s*=", src)) >= 5

@@ -66,15 +66,14 @@ class GBufferPass(Pass):
         prog = frame.programs.get("gbuffer.vert", "gbuffer.frag", defines)
         gpu.bind_camera(prog, cam, t, frame.size)
         gpu.bind_lights(prog)
-        view, eye = cam.view(t), cam.eye(t)
-        for obj in gpu.front_to_back(eye, t):
+        turn = cam.view(t).copy()
+        turn[:3, 3] = 0.0                 # V(t) = turn T(-eye(t)): V M = turn T(-eye) M
+        for obj in gpu.front_to_back(cam.eye(t), t):
             if self.static_only and obj.moving:
                 continue
             gpu.bind_object(prog, obj, cam, t, t_open, t_close, frame.object_matrices)
-            model = gpu.object_matrices(obj, cam, t, t_open, t_close, frame.object_matrices)[0]
-            model_eye = model.copy()
-            model_eye[:3, 3] -= eye
-            set_uniform(prog, "u_model_eye", model_eye)
-            set_uniform(prog, "u_modelview", view @ model)
+            model_eye = gpu.object_matrices(obj, cam, t, t_open, t_close,
+                                            frame.object_matrices)[0]
+            set_uniform(prog, "u_modelview", turn @ model_eye)
             gpu.vao(prog, obj).render(moderngl.TRIANGLES)
         ctx.disable(moderngl.DEPTH_TEST)

@@ -203,15 +203,20 @@ class GpuScene:
     def object_matrices(obj: SceneObject, cam, t: float, t_open: float, t_close: float,
                         memo: dict | None = None
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """M(t), V(t_open) M(t_open), V(t_close) M(t_close) (glsl/motion.glsl) and the
-        normal matrix of M(t): what bind_object sets and reveal_shade's object table holds.
-        `memo`: a dict that lives one frame (camera and objects fixed), shared by the passes
-        that ask for the same times (the hybrid's G-buffer and reveal_shade)."""
+        """T(-eye(t)) M(t) (world positions relative to the eye at t), V(t_open) M(t_open),
+        V(t_close) M(t_close) (glsl/motion.glsl) and the normal matrix of M(t): what
+        bind_object sets and reveal_shade's object table holds, composed here in float64 so
+        that the shaders' float32 never holds a world translation (a scene far from the
+        origin keeps its detail). `memo`: a dict that lives one frame (camera and objects
+        fixed), shared by the passes that ask for the same times (the hybrid's G-buffer
+        and reveal_shade)."""
         key = (obj.id, t, t_open, t_close)
         mats = None if memo is None else memo.get(key)
         if mats is None:
             model = obj.matrix(t)
-            mats = (model, cam.view(t_open) @ obj.matrix(t_open),
+            model_eye = model.copy()
+            model_eye[:3, 3] -= cam.eye(t)
+            mats = (model_eye, cam.view(t_open) @ obj.matrix(t_open),
                     cam.view(t_close) @ obj.matrix(t_close), tf.normal_matrix(model))
             if memo is not None:
                 memo[key] = mats
@@ -221,8 +226,9 @@ class GpuScene:
                     t_open: float, t_close: float, memo: dict | None = None):
         """Transforms of `obj` at the frame time, and seen by the camera `cam` at shutter
         open and close (glsl/motion.glsl); `memo` as object_matrices'."""
-        model, open_, close, normal = self.object_matrices(obj, cam, t, t_open, t_close, memo)
-        set_uniform(prog, "u_model", model)
+        model_eye, open_, close, normal = self.object_matrices(obj, cam, t, t_open, t_close,
+                                                               memo)
+        set_uniform(prog, "u_model_eye", model_eye)
         set_uniform(prog, "u_modelview_open", open_)
         set_uniform(prog, "u_modelview_close", close)
         set_uniform(prog, "u_normal_matrix", normal)

@@ -60,7 +60,7 @@ RECORD_UNIT = 6
 SHADE_TILE = 8
 class ObjectTable:
     """reveal_shade's per-object uniforms as a texture, a record per object id (record 0
-    unused: the background), TEXELS RGBA32F texels: the columns of M(t), of V M at shutter
+    unused: the background), TEXELS RGBA32F texels: the columns of T(-eye) M(t), of V M at shutter
     open and close, of the normal matrix (xyz), then (albedo, specular), (albedo2,
     shininess), (texture kind, size, axis, 0) as glsl/reveal_shade.frag's OBJECT_TABLE
     reads them; OBJECTS_PER_ROW records a texture row (a power of two: the shader finds
