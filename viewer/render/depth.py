@@ -55,9 +55,29 @@ def reversed_z(ctx: moderngl.Context) -> bool:
         and _gl() is not None
     if ok:
         _gl().glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE)
-        ok = ctx.error == "GL_NO_ERROR"
+        ok = ctx.error == "GL_NO_ERROR" and _clips_below_zero(ctx)
     ctx.extra["reversed_z"] = ok
     return ok
+
+
+def _clips_below_zero(ctx: moderngl.Context) -> bool:
+    """Whether the clip control took effect in `ctx` (the library's entry point may reach
+    another context or none): a point at clip z = -w/2 is drawn under GL's default [-1, 1]
+    depth range and clipped under [0, 1]."""
+    from .pool import park_framebuffer          # (pool imports this module)
+    prog = ctx.program(
+        vertex_shader="#version 330 core\nvoid main() { gl_Position = vec4(0, 0, -0.5, 1); }",
+        fragment_shader="#version 330 core\nout vec4 c;\nvoid main() { c = vec4(1.0); }")
+    vao = ctx.vertex_array(prog, [])
+    try:
+        park_framebuffer(ctx)                     # a 1x1 target that lives with ctx
+        fbo = ctx.extra["parking_fbo"]
+        fbo.clear(0.0, 0.0, 0.0, 0.0)
+        vao.render(moderngl.POINTS, vertices=1)
+        return fbo.read(components=4)[0] == 0
+    finally:
+        vao.release()
+        prog.release()
 
 
 def depth_texture(ctx: moderngl.Context, size: tuple[int, int]) -> moderngl.Texture:
