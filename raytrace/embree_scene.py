@@ -106,6 +106,53 @@ def transform_vectors(m: np.ndarray, p: np.ndarray) -> np.ndarray:
     return transform_points(m, p, 0.0)
 
 
+# Moving objects from which the box tests take their rays from a RowIndex: building it
+# (~0.1 ms for 30 k rays) costs what ~10 box tests over every ray cost.
+ROW_INDEX_MOVERS = 8
+
+
+class RowIndex:
+    """Primary rays from one eye in image row order: the key -(d . up) / (d . forward)
+    (the tangent of the ray's angle below the view direction) runs monotonically with the
+    row, so the rays that can meet a box lie in one contiguous span, found by bisection:
+    those whose key lies within the keys of the box's corners (the key is a ratio of
+    linear functions, so over a box wholly in front of the eye its extremes are at
+    corners). A box not wholly in front spans every ray."""
+
+    ROUNDING = 1e-9
+
+    def __init__(self, eye, key, forward, up):
+        self.eye, self.key, self.forward, self.up = eye, key, forward, up
+
+    @classmethod
+    def of(cls, eye, d, forward, up) -> "RowIndex | None":
+        fwd, up = np.asarray(forward, np.float64), np.asarray(up, np.float64)
+        along = d @ fwd
+        if not (along > 0.0).all():
+            return None
+        key = -(d @ up) / along
+        if key[0] > key[-1]:                 # rows bottom to top: the key runs down
+            key, up = -key, -up
+        # Within a row the key is one value up to rounding (~1e-16): rows in order, and
+        # the running maximum (within ROUNDING of the key, far inside span's pad) to bisect.
+        if not (key[1:] >= key[:-1] - cls.ROUNDING).all():     # not in row order: no index
+            return None
+        return cls(np.asarray(eye, np.float64), np.maximum.accumulate(key), fwd, up)
+
+    def spans(self, lo, hi) -> np.ndarray:
+        """(m, 2) [first, end) ray spans of m boxes [lo, hi] ((m, 3) each), all at once."""
+        pick = np.array([[(i >> k) & 1 for k in range(3)] for i in range(8)], bool)
+        c = np.where(pick[None], hi[:, None, :], lo[:, None, :]) - self.eye     # (m, 8, 3)
+        along = c @ self.forward
+        with np.errstate(divide="ignore", invalid="ignore"):
+            k = -(c @ self.up) / along
+        pad = 1e-6 * (1.0 + np.abs(k).max(axis=1))   # float rounding of the rays' keys
+        out = np.stack([np.searchsorted(self.key, k.min(axis=1) - pad, "left"),
+                        np.searchsorted(self.key, k.max(axis=1) + pad, "right")], axis=1)
+        out[~(along > 0.0).all(axis=1)] = (0, len(self.key))   # not wholly in front
+        return out
+
+
 def _box_corners(vertices: np.ndarray) -> np.ndarray:
     """(8, 3) corners of the axis-aligned box around `vertices`."""
     lo, hi = vertices.min(axis=0), vertices.max(axis=0)
@@ -227,7 +274,7 @@ class RayScene:
 
     def intersect(self, origins, dirs, t: float, exclude_ids=None, max_restarts: int = 8,
                   tnear=None, tfar=None, view: tuple | None = None, pixels=None,
-                  threads: int = 1) -> Hits:
+                  threads: int = 1, image_axes: tuple | None = None) -> Hits:
         """Nearest hit per ray at time t, skipping each ray's excluded object.
 
         origins, dirs: (n, 3); dirs should be unit length for `distance` to be metres.
@@ -245,6 +292,9 @@ class RayScene:
         threads: Embree's calls run on up to this many worker threads from PARALLEL_RAYS
         rays: the exclusion scenes' calls (each ray in one of them) side by side, another
         call split into parts.
+        image_axes: (forward, up) of the camera whose pixels the rays go through, in image
+        row order (as the reveal reads its mask): each moving object's box test then takes
+        only the rows its box covers on screen (RowIndex), not every ray.
         """
         o = np.asarray(origins, dtype=np.float64).reshape(-1, 3)
         d = np.asarray(dirs, dtype=np.float64).reshape(-1, 3)
@@ -282,12 +332,19 @@ class RayScene:
         o32, d32, inv_d = kernels.ray_arrays(o, d, start, from_eye)
         o_box = o[:1].astype(np.float32) if from_eye else o.astype(np.float32)
         no_ids = np.zeros(1, np.uint32)
-        for (obj, es), (box_lo, box_hi, inv, rotate) in zip(self.moving, self._poses(t)):
+        poses = self._poses(t)
+        index = (RowIndex.of(o[0], d, *image_axes)
+                 if self.cull and from_eye and image_axes is not None
+                 and len(self.moving) >= ROW_INDEX_MOVERS else None)
+        spans = (np.array([[0, n]] * len(poses)) if index is None else
+                 index.spans(np.array([p[0] for p in poses]), np.array([p[1] for p in poses])))
+        for (obj, es), (box_lo, box_hi, inv, rotate), (a, b) in zip(self.moving, poses,
+                                                                       spans.tolist()):
             # Rays that may hit the object's world box within [start, best]; a moving
             # excluded object is not traced at all.
             if self.cull:
                 rows = kernels.box_rows(o_box, inv_d, from_eye, box_lo, box_hi, start, best,
-                                        excl, obj.id)
+                                        excl, obj.id, a, b)
             else:
                 rows = np.flatnonzero(excl != obj.id)
             if not rows.size:

@@ -43,13 +43,14 @@ def _meets(l0, l1, l2, h0, h1, h2, ix, iy, iz, start, best):
 
 
 @njit(**_JIT)
-def box_rows(o, inv_d, shared, lo, hi, start, best, excl, skip_id):
-    """Rows of the rays o + s d that meet the box [lo, hi] for some s in [start, best]
-    and are not excluded (excl != skip_id): the slab test in float32. inv_d: (3, n), the
-    inverse directions component by component (contiguous rows: the loop vectorises,
-    ~5x faster than over (n, 3) rows). shared: every ray starts at o[0]."""
-    n = inv_d.shape[1]
-    ix, iy, iz = inv_d[0], inv_d[1], inv_d[2]
+def box_rows(o, inv_d, shared, lo, hi, start, best, excl, skip_id, first, end):
+    """Rows first..end-1 of the rays o + s d that meet the box [lo, hi] for some s in
+    [start, best] and are not excluded (excl != skip_id): the slab test in float32.
+    inv_d: (3, n), the inverse directions component by component (contiguous rows: the
+    loop vectorises, ~5x faster than over (n, 3) rows). shared: every ray starts at o[0]."""
+    n = max(end - first, 0)
+    ix, iy, iz = inv_d[0, first:end], inv_d[1, first:end], inv_d[2, first:end]
+    start, best, excl = start[first:end], best[first:end], excl[first:end]
     meets = np.empty(n, np.bool_)
     if shared:
         l0, l1, l2 = (np.float32(lo[0]) - o[0, 0], np.float32(lo[1]) - o[0, 1],
@@ -60,6 +61,7 @@ def box_rows(o, inv_d, shared, lo, hi, start, best, excl, skip_id):
             meets[i] = (_meets(l0, l1, l2, h0, h1, h2, ix[i], iy[i], iz[i], start[i], best[i])
                         & (excl[i] != skip_id))
     else:
+        o = o[first:end]
         for i in range(n):
             l0, l1, l2 = (np.float32(lo[0]) - o[i, 0], np.float32(lo[1]) - o[i, 1],
                           np.float32(lo[2]) - o[i, 2])
@@ -67,7 +69,7 @@ def box_rows(o, inv_d, shared, lo, hi, start, best, excl, skip_id):
                           np.float32(hi[2]) - o[i, 2])
             meets[i] = (_meets(l0, l1, l2, h0, h1, h2, ix[i], iy[i], iz[i], start[i], best[i])
                         & (excl[i] != skip_id))
-    return np.flatnonzero(meets)
+    return first + np.flatnonzero(meets)
 
 
 @njit(**_JIT)

@@ -142,7 +142,7 @@ def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
     """view: primary_view(camera, t), asked once by reveal() for every chunk."""
     n = len(pixels_ij)
     origin, direction = camera.rays(t, pixels_ij[:, 0], pixels_ij[:, 1])
-    _, fwd, _ = camera.spec.pose(t)
+    _, fwd, up = camera.spec.pose(t)
     # Clip by view depth like the rasteriser: depth = distance * cos(ray, forward).
     cos, near, far = kernels.view_clip(direction, np.asarray(fwd, np.float64),
                                        float(camera.spec.near), float(camera.spec.far))
@@ -159,7 +159,7 @@ def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
             "view": view, "pixels": pixels_ij[:, 1] * camera.width + pixels_ij[:, 0]}
         hits = rs.intersect(pick(origin), pick(direction), t, exclude,
                             max_restarts=max_depth, tnear=tnear, tfar=pick(far),
-                            threads=call_threads, **primary)
+                            threads=call_threads, image_axes=(fwd, up), **primary)
         if rows is None:
             layer = _layer(rs, hits, origin, direction, cos, np.ones(n, dtype=bool))
         else:

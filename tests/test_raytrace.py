@@ -646,6 +646,56 @@ def test_box_culling_changes_no_hit():
         assert np.count_nonzero(np.isin(culled.object_id, [3, 4])) > 50
 
 
+def many_movers_scene(n=14, seed=5):
+    """A floor and n moving boxes and spheres strewn in front of, beside and behind a
+    camera that looks down a little (not along an axis), one straddling the eye's plane."""
+    rng = np.random.default_rng(seed)
+    objects = [obj(1, box([40, 0.2, 40]), position=[0, -1.5, 0])]
+    for k in range(n):
+        mesh = (box(rng.uniform(0.2, 0.8, 3)) if k % 2 else
+                mesh_of(trimesh.creation.icosphere(1, radius=float(rng.uniform(0.2, 0.5)))))
+        pos = [rng.uniform(-4, 4), rng.uniform(-1, 2), rng.uniform(-9, 1)]
+        if k == 0:
+            pos = [0.3, 0.0, 0.1]                          # around the eye's plane
+        objects.append(obj(k + 2, mesh, position=pos, velocity=rng.normal(0, 2, 3),
+                           angular_velocity=rng.normal(0, 1, 3)))
+    return scene_of(objects, eye=(0.2, 0.4, 0.5), look_at=(0.5, -0.3, -6.0), fov_y=70.0)
+
+
+@pytest.mark.parametrize("order", ["top_down", "bottom_up", "shuffled"])
+def test_row_index_changes_no_hit(order):
+    # With 8 or more movers, primary rays in image row order take each box test only
+    # over the rows its box spans on screen: exactly the hits of testing every ray.
+    s = many_movers_scene()
+    assert len(RayScene(s).moving) >= embree_scene.ROW_INDEX_MOVERS
+    cam = Camera(s.camera, 64, 48)
+    jj, ii = np.mgrid[0:48, 0:64]
+    pix = np.c_[ii.ravel(), jj.ravel()]
+    if order == "bottom_up":
+        pix = pix[::-1].copy()
+    if order == "shuffled":
+        pix = pix[np.random.default_rng(1).permutation(len(pix))]
+    o, d = cam.rays(0.02, pix[:, 0], pix[:, 1])
+    own = np.random.default_rng(3).integers(0, 8, len(o))
+    eye, fwd, up = s.camera.pose(0.02)
+    rs = RayScene(s)
+    first = rs.intersect(o, d, 0.02, own)
+    tnear = np.where(first.object_id > 1, 0.6 * first.distance, 0.0)
+    for kw in ({}, {"tnear": tnear}):
+        plain = rs.intersect(o, d, 0.02, own, **kw)
+        indexed = rs.intersect(o, d, 0.02, own, image_axes=(fwd, up), **kw)
+        for name in ("object_id", "prim_id", "u", "v", "distance"):
+            np.testing.assert_array_equal(getattr(indexed, name), getattr(plain, name), name)
+        assert np.count_nonzero(plain.object_id > 1) > 300
+    index = embree_scene.RowIndex.of(eye, d, fwd, up)
+    assert (index is None) == (order == "shuffled")
+    if index is not None:
+        poses = rs._poses(0.02)
+        spans = index.spans(np.array([p[0] for p in poses]), np.array([p[1] for p in poses]))
+        assert tuple(spans[0]) == (0, len(d))               # straddles the eye's plane
+        assert np.mean(spans[1:, 1] - spans[1:, 0]) < 0.6 * len(d)
+
+
 def test_slab_hand_values():
     from raytrace.kernels import box_rows
     o = np.array([[0, 0, 5], [0, 0, 5], [3, 0, 5], [0.5, 0, 5], [0.99, 0, 5]], np.float32)
@@ -657,15 +707,21 @@ def test_slab_hand_values():
     excl = np.zeros(5, np.uint32)
     # Towards the box, away from it, beside it, along the x = 0.5 line through it, just
     # inside its x = 1 face.
-    np.testing.assert_array_equal(box_rows(o, inv_d, False, lo, hi, t0, t1, excl, 7),
+    n = len(o)
+    np.testing.assert_array_equal(box_rows(o, inv_d, False, lo, hi, t0, t1, excl, 7, 0, n),
                                   [0, 3, 4])
     # The box lies 4 to 6 along the first ray: a far limit of 3.9 misses it; an excluded
     # ray is dropped; every ray from the first origin (all but the second meet it).
     assert not len(box_rows(o[:1], inv_d[:, :1], False, lo, hi, t0[:1], np.array([3.9]),
-                            excl[:1], 7))
+                            excl[:1], 7, 0, 1))
     np.testing.assert_array_equal(box_rows(o, inv_d, False, lo, hi, t0, t1,
-                                           np.array([7, 0, 0, 0, 0], np.uint32), 7), [3, 4])
-    np.testing.assert_array_equal(box_rows(o, inv_d, True, lo, hi, t0, t1, excl, 7), [0, 2, 3, 4])
+                                           np.array([7, 0, 0, 0, 0], np.uint32), 7, 0, n),
+                                  [3, 4])
+    np.testing.assert_array_equal(box_rows(o, inv_d, True, lo, hi, t0, t1, excl, 7, 0, n),
+                                  [0, 2, 3, 4])
+    # Only rows first..end-1: the same rows of that span.
+    np.testing.assert_array_equal(box_rows(o, inv_d, True, lo, hi, t0, t1, excl, 7, 2, 4),
+                                  [2, 3])
 
 
 def test_large_views_keep_no_static_hits(monkeypatch):
