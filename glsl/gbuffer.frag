@@ -18,7 +18,7 @@ void main() {
     // (positions relative to the eye: the eye is the origin)
     vec3 n = unit_or_zero(u_normal_matrix * v_normal_local);
     if (dot(n, -v_world) < 0.0) n = -n;
-    vec3 color = shade(v_world, n, v_local, v_uv, vec3(0.0));
+    vec3 color = shade(v_world, n, v_local, v_uv);
 #if GBUFFER_MOTION
     vec2 velocity = displacement_between(v_view_open, v_view_close, v_view);
 #else

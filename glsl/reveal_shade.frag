@@ -118,6 +118,6 @@ void main() {
     vec2 d = displacement_between(modelview_open * vec4(local, 1.0),
                                   modelview_close * vec4(local, 1.0), view_now);
     out_packed = vec4(d, -view_now.z, packed_id);
-    out_packed_color = vec4(shade(world.xyz, n, local, uv, vec3(0.0)), 1.0);
+    out_packed_color = vec4(shade(world.xyz, n, local, uv), 1.0);
 #endif
 }

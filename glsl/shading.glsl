@@ -76,10 +76,12 @@ vec3 unit_or_zero(vec3 a) {
     return dot(a, a) > 0.0 ? normalize(a) : vec3(0.0);
 }
 
-// n: world normal (any length); eye: the camera eye at the frame's time.
-vec3 shade(vec3 p_world, vec3 n, vec3 p_local, vec2 uv, vec3 eye) {
+// p_eye: the world position relative to the camera eye at the frame's time (the
+// callers' transforms are composed so: GpuScene.object_matrices); n: world normal (any
+// length).
+vec3 shade(vec3 p_eye, vec3 n, vec3 p_local, vec2 uv) {
     n = unit_or_zero(n);
-    vec3 v = normalize(eye - p_world);
+    vec3 v = normalize(-p_eye);
     if (dot(n, v) < 0.0) n = -n;                       // two-sided surfaces
     vec3 diffuse = u_ambient;
     vec3 spec = vec3(0.0);

@@ -96,10 +96,6 @@ def read_sidecar(path: str) -> dict:
     return data
 
 
-CAMERA_VECTORS = ("position", "look_at", "up", "velocity", "angular_velocity")
-CAMERA_NUMBERS = ("fov_y", "near", "far", "shutter")
-
-
 def apply_camera(scene: Scene, data, source: str):
     """Override the scene's camera with a sidecar's (the viewer may have moved it), checked
     as the scene file's camera is (scene_loader.check_camera)."""

@@ -76,15 +76,12 @@ def _write_temp(path: Path, write: Callable[[io.BufferedWriter], None]) -> Path:
 
 
 def _atomic_write(path, write: Callable[[io.BufferedWriter], None]) -> Path:
-    """Run `write(fileobj)` on a temp file beside `path`, fsync, then rename over it."""
-    path = Path(path)
-    tmp = _write_temp(path, write)
-    try:
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return path
+    """Run `write(fileobj)` on a temp file beside `path`, fsync, then rename over it (an
+    OutputSet of one file)."""
+    files = OutputSet()
+    files.add(path, write)
+    files.commit()
+    return Path(path)
 
 
 class OutputSet:

@@ -71,9 +71,8 @@ class GBufferPass(Pass):
         for obj in gpu.front_to_back(cam.eye(t), t):
             if self.static_only and obj.moving:
                 continue
-            gpu.bind_object(prog, obj, cam, t, t_open, t_close, frame.object_matrices)
-            model_eye = gpu.object_matrices(obj, cam, t, t_open, t_close,
-                                            frame.object_matrices)[0]
+            model_eye = gpu.bind_object(prog, obj, cam, t, t_open, t_close,
+                                        frame.object_matrices)[0]
             set_uniform(prog, "u_modelview", turn @ model_eye)
             gpu.vao(prog, obj).render(moderngl.TRIANGLES)
         ctx.disable(moderngl.DEPTH_TEST)

@@ -158,7 +158,6 @@ class GpuScene:
         set_uniform(prog, "u_proj", depth.projection(prog.ctx, proj, cam.spec.near,
                                                      cam.spec.far))
         set_uniform(prog, "u_focal", (float(proj[0, 0]), float(proj[1, 1])))
-        set_uniform(prog, "u_eye", cam.eye(t))
         set_uniform(prog, "u_viewport", tuple(float(x) for x in size))
         set_uniform(prog, "u_near", float(cam.spec.near))
 
@@ -225,7 +224,7 @@ class GpuScene:
     def bind_object(self, prog: moderngl.Program, obj: SceneObject, cam, t: float,
                     t_open: float, t_close: float, memo: dict | None = None):
         """Transforms of `obj` at the frame time, and seen by the camera `cam` at shutter
-        open and close (glsl/motion.glsl); `memo` as object_matrices'."""
+        open and close (glsl/motion.glsl); `memo` as object_matrices'. Returns them."""
         model_eye, open_, close, normal = self.object_matrices(obj, cam, t, t_open, t_close,
                                                                memo)
         set_uniform(prog, "u_model_eye", model_eye)
@@ -234,6 +233,7 @@ class GpuScene:
         set_uniform(prog, "u_normal_matrix", normal)
         set_uniform(prog, "u_object_id", obj.id)
         self.bind_material(prog, obj)
+        return model_eye, open_, close, normal
 
     def release(self):
         for v in self._vaos.values():

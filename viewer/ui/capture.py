@@ -10,7 +10,7 @@ import numpy as np
 from ..cliargs import Setup
 from ..cmd_shot import sidecar
 from ..conventions import to_image
-from ..imageio import linear_to_srgb8, write_json_atomic, write_png_atomic
+from ..imageio import OutputSet, linear_to_srgb8
 from ..render.renderer import Renderer
 
 
@@ -27,11 +27,13 @@ def save_shot(path: Path, renderer: Renderer, mode: str, s: Setup, scene_arg: st
     """Render `mode` as `hmblur shot` does (full quality, one call: a reference is all its
     sub-frames, whatever the progressive view has reached) and write PNG + sidecar."""
     result = renderer.render(mode, s.time, s.params, seed=s.seed)
-    write_png_atomic(path, linear_to_srgb8(result.image))
     side = sidecar(s, mode, result, renderer.ctx, scene_arg)
     if extra:
         side["viewer"] = extra
-    write_json_atomic(path.with_suffix(".json"), side)
+    files = OutputSet()                  # the image and its sidecar together, or neither
+    files.png(path, linear_to_srgb8(result.image))
+    files.json(path.with_suffix(".json"), side)
+    files.commit()
     return path
 
 
