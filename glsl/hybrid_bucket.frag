@@ -10,24 +10,32 @@
 // at a jittered point inside it. A fragment moving |D| px over the exposure covers the
 // pixel while the pixel lies within its box-shaped spread: a fraction
 // overlap([a, b], [-|D|/2, |D|/2]) / |D| of the exposure. So a surface filling the line
-// sums to exactly 1 whatever the jitter. Lines, in the order they run: the pixel's own
-// displacement (its own object; its taps also record where the own object lies along
-// its path, for the time pairing of the other two), the neighbourhood's largest
-// displacement (others passing over; the own object too where it moves along that line
-// within its reach), and the revealed layer's displacement (the background blurred along
-// its own motion). A bucket's coverage is min(1, sum of weights); the revealed colour
-// fills what the background bucket leaves (centre fill); fragments of the revealed
-// object seen beside the pixel's own object belong to line 3 only. Without a revealed
-// background, the farther fragments' plain mean fills instead (the mirrored background
-// of post-process filters).
-// BACK_LAYER 0 compiles the variant for tiles without a revealed pixel (line 3 never runs
-// there), OWN_STILL 1 the one for tiles where no pixel moves (|D| < 1e-3: no own line, no
-// time pairing): llvmpipe would still pay for them (a branch in a loop costs even where
-// no pixel takes it; both sides run where an 8-wide group disagrees). SIMPLE 1 compiles
-// the one for tiles with no other object within the lines' reach
-// (viewer/render/hybrid_composite.py near_outlines): every tap of the neighbourhood's
-// line lands on the own object and adds nothing, so it runs only where it is the own
-// line. All three give the image the full variant gives.
+// sums to exactly 1 whatever the jitter. Lines, in the order they run:
+//   the own line, along the pixel's own displacement: its own object's coverage and
+//     colour; its taps also record where the own object lies along its path, for the
+//     time pairing of the lines after it;
+//   the neighbourhood's line, along the largest displacement around (NeighborMax): what
+//     passes over the pixel. Where that displacement lies within MERGE_COS of the own
+//     one (a camera pan: every surface moves about the same way), the lines are merged:
+//     the own line's taps fill the neighbourhood's buckets too, and the neighbourhood's
+//     line walks only its two ends beyond the own line's reach, where the own object may
+//     still reach the pixel if it moves faster there (one line's taps instead of two);
+//   the revealed layer's line, along its own displacement (the background blurred along
+//     its own motion).
+// A bucket's coverage is min(1, sum of weights); the revealed colour fills what the
+// background bucket leaves (centre fill); fragments of the revealed object seen beside the
+// pixel's own object belong to the revealed layer's line only. Without a revealed
+// background, the farther fragments' plain mean fills instead (the mirrored background of
+// post-process filters).
+// BACK_LAYER 0 compiles the variant for tiles without a revealed pixel (the revealed
+// layer's line never runs there), OWN_STILL 1 the one for tiles where no pixel moves
+// (|D| < 1e-3: no own line, no time pairing): llvmpipe would still pay for them (a branch
+// in a loop costs even where no pixel takes it; both sides run where an 8-wide group
+// disagrees). SIMPLE 1 compiles the one for tiles with no other object within the lines'
+// reach (viewer/render/hybrid_composite.py near_outlines, which also covers the merged
+// own lines' spread off the neighbourhood's direction): every tap lands on the own object,
+// so the buckets of other objects stay empty and the unmerged neighbourhood's line adds
+// nothing. All four give the image the full variant gives.
 #include "noise.glsl"
 #include "hybrid_layers.glsl"
 uniform sampler2D u_neighbormax;
@@ -72,7 +80,8 @@ float coverage(float a, float b, float len) {
 // its jittered point in piece i) landed on the own object, and the own fragment at time u
 // lies in piece floor((1/2 - u) n). The bits come from the own line where it runs, from a
 // presence walk (one fetch a tap) otherwise. A fetch here instead would run for every tap
-// of lines 1 and 3 in every pixel: llvmpipe runs a branch in a loop whether taken or not.
+// of the neighbourhood's and the revealed layer's lines in every pixel: llvmpipe runs a
+// branch in a loop whether taken or not.
 const int BITS = 32;
 uint g_own_bits;
 int g_bits_n;
@@ -98,6 +107,17 @@ ivec2 tap(ivec2 x, vec2 dir, float R, int i, int n, out float a, out float b) {
     a = -R + 2.0 * h * float(i);
     b = a + 2.0 * h;
     g_s = a + 2.0 * h * g_jitter;
+    return clamp(ivec2(floor(vec2(x) + 0.5 + g_s * dir)), ivec2(0), g_size - 1);
+}
+
+// Tap i of n on the line x + s dir with the middle [-gap/2, gap/2] left out: pieces of
+// equal length (2R - gap) / n, the first m before the gap, the rest after it.
+ivec2 tap_gap(ivec2 x, vec2 dir, float R, float gap, int i, int n, int m,
+              out float a, out float b) {
+    float h = (2.0 * R - gap) / float(n);
+    a = -R + h * float(i) + (i >= m ? gap : 0.0);
+    b = a + h;
+    g_s = a + h * g_jitter;
     return clamp(ivec2(floor(vec2(x) + 0.5 + g_s * dir)), ivec2(0), g_size - 1);
 }
 
@@ -142,26 +162,22 @@ void main() {
 #endif
     float back_depth = revealed ? bx.z : 3.0e38;
     float back_id = revealed ? bx.w - 1.0 : -1.0;
-    // The own object has its own line unless it moves like the neighbourhood.
-    bool own_line = any(greaterThanEqual(abs(fx.xy - vn), vec2(1.0)));
-    // The neighbourhood's line also samples the own object where the own displacement lies
-    // along it (its ends within a pixel of the line), within its reach, and its taps lie
-    // about as densely as the own line's would: the same pixels, nearly the same taps.
     float ln = length(vn), lo = length(fx.xy);
-    if (own_line && ln > 1.0) {
-        float across = abs(fx.x * vn.y - fx.y * vn.x) / ln;
-        if (across < 1.0 && lo <= ln + 1.0
-            && float(taps_for(0.5 * ln)) * lo >= 0.85 * float(taps_for(0.5 * lo)) * ln)
-            own_line = false;
-    }
+    float ro = 0.5 * lo, rn = 0.5 * ln;
     float a, b;
-    float ro = 0.5 * lo;
     presence_reset(1);
 
-    // Line 2: the pixel's own displacement: its own object's coverage and colour.
-#if !OWN_STILL
+    // The own line: the own object's coverage and colour along its displacement, and
+    // the bits of its presence along its path for the time pairing.
+#if OWN_STILL
+    const bool own_walk = false, merged = false;
+#else
     int n_own = taps_for(ro);
-    bool own_walk = own_line && ro > 0.5;
+    bool own_walk = ro > 0.5;
+    // Merged lines (see the top): the others passing over are sampled along the own
+    // direction within the own line's reach.
+    bool merged = own_walk && n_own <= BITS && rn > 0.5
+                  && abs(dot(vn, fx.xy)) >= MERGE_COS * ln * lo;
     if (own_moves && (!own_walk || n_own > BITS)) {
         // The own object's presence along its path without its line (or past BITS taps).
         vec2 dir = fx.xy / lo;
@@ -182,45 +198,62 @@ void main() {
             vec3 c = texelFetch(u_front_color, y, 0).rgb;
             bool own = m.w == own_id;
             presence_add(min(i, BITS - 1), own && n <= BITS);
-            add(OWN, c, own ? coverage(a, b, min(length(m.xy), u_max_disp)) : 0.0);
+            float len = min(length(m.xy), u_max_disp);
+            float w = coverage(a, b, len);
+            add(OWN, c, own ? w : 0.0);
             bool far = !own && m.z >= own_depth;
             g_far_sum += far ? c : vec3(0.0);
             g_far_count += far ? 1.0 : 0.0;
+#if !SIMPLE
+            // A nearer fragment here hides the own object at this tap: it counts as
+            // passing the pixel while the own object is away (its exact time pairing
+            // would need bits this loop has not set yet; measured as good or better).
+            bool near = merged && !own && !far;
+            add(NEAR, c, near ? w : 0.0);
+            g_near_free += near && len >= 1e-3 ? w : 0.0;
+            add(BETWEEN, c, merged && far && m.w != back_id && m.z < back_depth ? w : 0.0);
+#endif
         }
     } else
 #endif
-    if (own_line) {
+    {
         add(OWN, own_colour, 1.0);            // the own object (nearly) still
     }
-    // Line 1: the neighbourhood's largest displacement: what passes over the pixel.
-    // (llvmpipe pays for a branch in a loop whether taken or not: each tap fetches its
-    // colour once, unconditionally, and every bucket takes it with a weight of 0 or w.)
+    // The neighbourhood's line: what passes over the pixel; where merged, only its ends
+    // beyond the own line, as densely as the whole line's taps, and the own object's
+    // fragments there count. (llvmpipe pays for a branch in a loop whether taken or not:
+    // each tap fetches its colour once, unconditionally, and every bucket takes it with a
+    // weight of 0 or w.)
 #if SIMPLE
-    float rn = own_line ? 0.0 : 0.5 * length(vn);
-#else
-    float rn = 0.5 * length(vn);
+    rn = merged ? rn : 0.0;
 #endif
-    if (rn > 0.5) {
-        vec2 dir = vn / length(vn);
-        int n = taps_for(rn);
+    float R = max(rn, merged ? ro : 0.0);
+    float gap = merged ? 2.0 * ro : 0.0;
+    int n = taps_for(rn);
+    int n_end = merged ? int(ceil((R - ro) * float(n) / (2.0 * rn) - 1e-3)) : n / 2;
+    n = merged ? 2 * n_end : n;
+    if (rn > 0.5 && n > 0) {
+        vec2 dir = vn / ln;
         for (int i = 0; i < n; ++i) {
-            ivec2 y = tap(x, dir, rn, i, n, a, b);
+            ivec2 y = tap_gap(x, dir, R, gap, i, n, n_end, a, b);
             vec4 m = texelFetch(u_front, y, 0);       // only |D| is needed: clamp that
             vec3 c = texelFetch(u_front_color, y, 0).rgb;
             float len = min(length(m.xy), u_max_disp);
             float w = coverage(a, b, len);
             bool own = m.w == own_id;
+            add(OWN, c, own && merged ? w : 0.0);
+#if !SIMPLE
             bool near = !own && m.z < own_depth;
             bool between = !own && !near && m.w != back_id && m.z < back_depth;
-            add(OWN, c, own && !own_line ? w : 0.0);
             add(NEAR, c, near ? w : 0.0);
             g_near_free += own_moves && near && !own_covers(len, lo) ? w : 0.0;
             add(BETWEEN, c, between ? w : 0.0);
             g_far_sum += between ? c : vec3(0.0);
             g_far_count += between ? 1.0 : 0.0;
+#endif
         }
     }
-    // Line 3: the revealed layer blurred along its own motion (merged with the raster
+    // The revealed layer's line, blurred along its own motion (merged with the raster
     // where nothing was revealed, so the line may run out of the mask).
     vec3 fill = g_far_count > 0.0 ? g_far_sum / g_far_count : own_colour;
     vec3 back_all = vec3(0.0);      // the line's background without the time pairing

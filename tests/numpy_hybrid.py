@@ -282,9 +282,14 @@ def time_composite(front, front_color, back, back_color, tilemax, neighbormax, t
     return out
 
 
+MERGE_COS = float(np.cos(np.radians(10.0)))   # hybrid_composite.MERGE_ANGLE_DEG
+
+
 def bucket_composite(front, front_color, back, back_color, neighbormax, tile: int,
-                     max_disp: float, samples_min=8, samples_max=48, spacing=2.0) -> np.ndarray:
-    """hybrid_bucket.frag with jitter 0 (taps at the centres of their pieces)."""
+                     max_disp: float, samples_min=8, samples_max=48, spacing=2.0,
+                     merge_cos=MERGE_COS) -> np.ndarray:
+    """hybrid_bucket.frag (its full variant) with jitter 0 (taps at the centres of their
+    pieces)."""
     h, w = front.shape[:2]
     NEAR, OWN, BETWEEN, BACK = range(4)
     out = np.zeros((h, w, 3))
@@ -292,16 +297,17 @@ def bucket_composite(front, front_color, back, back_color, neighbormax, tile: in
     def taps_for(half):
         return int(np.clip(int(np.ceil(2.0 * half / spacing)), samples_min, samples_max))
 
-    def line(x, y, d, half, n=None):
-        """(a, b, s, pixel) of each tap of the line through (x, y) along d (n taps, or
-        taps_for(half))."""
+    def line(x, y, d, half, n=None, gap=0.0):
+        """(a, b, s, pixel) of each tap of the line through (x, y) along d over [-half,
+        half] (n taps, or taps_for(half)), the middle [-gap/2, gap/2] left out (n even:
+        n/2 equal pieces on either side of it)."""
         n = taps_for(half) if n is None else n
         direction = d / np.hypot(*d)
-        hh = half / n
+        piece = (2.0 * half - gap) / n
         for i in range(n):
-            a = -half + 2.0 * hh * i
-            b = a + 2.0 * hh
-            s = a + hh
+            a = -half + piece * i + (gap if gap and i >= n // 2 else 0.0)
+            b = a + piece
+            s = a + 0.5 * piece
             p = np.floor(np.array([x + 0.5, y + 0.5]) + s * direction).astype(int)
             p = np.clip(p, 0, [w - 1, h - 1])
             yield a, b, s, (p[1], p[0])
@@ -328,15 +334,15 @@ def bucket_composite(front, front_color, back, back_color, neighbormax, tile: in
             own_id, own_depth = fx[3], fx[2]
             back_depth = bx[2] if revealed else np.inf
             back_id = bx[3] - 1.0 if revealed else -1.0
-            own_line = bool(np.any(np.abs(fx[:2] - vn) >= 1.0))
             ln, lo = np.hypot(*vn), np.hypot(*fx[:2])
-            if own_line and ln > 1.0:
-                # The neighbourhood's line doubles as the own line: along it, within its
-                # reach, its taps about as dense.
-                across = abs(fx[0] * vn[1] - fx[1] * vn[0]) / ln
-                if (across < 1.0 and lo <= ln + 1.0
-                        and taps_for(0.5 * ln) * lo >= 0.85 * taps_for(0.5 * lo) * ln):
-                    own_line = False
+            rn, ro = 0.5 * ln, 0.5 * lo
+            n_own = taps_for(ro)
+            own_walk = ro > 0.5
+            # The neighbourhood's line merged with the own line where their directions
+            # lie within the merge angle: the own line's taps fill every bucket, and the
+            # neighbourhood's line walks only its ends beyond the own line's reach.
+            merged = (own_walk and n_own <= 32 and rn > 0.5
+                      and abs(float(np.dot(vn, fx[:2]))) >= merge_cos * ln * lo)
 
             def add(k, c, wt):
                 sums[k] += wt * c
@@ -346,9 +352,8 @@ def bucket_composite(front, front_color, back, back_color, neighbormax, tile: in
             # u the own fragment over the pixel lies in the piece floor((1/2 - u) n).
             presence = []
             if lo >= 1e-3:
-                n_own = min(taps_for(0.5 * lo), 32)
                 presence = [front[p][3] == own_id
-                            for _, _, _, p in line(x, y, fx[:2], 0.5 * lo, n_own)]
+                            for _, _, _, p in line(x, y, fx[:2], ro, min(n_own, 32))]
 
             def own_covers(s, length):
                 """Does the own object cover the pixel at the time u = -s / length that
@@ -360,32 +365,48 @@ def bucket_composite(front, front_color, back, back_color, neighbormax, tile: in
                                     len(presence) - 1)]
 
             near_free = 0.0
-
-            rn = 0.5 * np.hypot(*vn)
-            if rn > 0.5:
-                for a, b, s, p in line(x, y, vn, rn):
+            if own_walk:
+                for a, b, s, p in line(x, y, fx[:2], ro):
                     m, c = front[p], front_color[p]
-                    wt = coverage(a, b, s, np.hypot(*m[:2]))
+                    length = np.hypot(*m[:2])
+                    wt = coverage(a, b, s, length)
                     if m[3] == own_id:
-                        if not own_line:
-                            add(OWN, c, wt)
-                    elif m[2] < own_depth:
+                        add(OWN, c, wt)
+                        continue
+                    if m[2] >= own_depth:
+                        far.append(c)
+                    if not merged:
+                        continue
+                    if m[2] < own_depth:
+                        # A nearer fragment hides the own object at this tap: it passes
+                        # the pixel while the own object is away.
                         add(NEAR, c, wt)
-                        if wt > 0.0 and not own_covers(s, np.hypot(*m[:2])):
+                        if length >= 1e-3:
                             near_free += wt
                     elif m[3] != back_id and m[2] < back_depth:
                         add(BETWEEN, c, wt)
-                        far.append(c)
-            ro = 0.5 * np.hypot(*fx[:2])
-            if own_line and ro > 0.5:
-                for a, b, s, p in line(x, y, fx[:2], ro):
-                    m, c = front[p], front_color[p]
-                    if m[3] == own_id:
-                        add(OWN, c, coverage(a, b, s, np.hypot(*m[:2])))
-                    elif m[2] >= own_depth:
-                        far.append(c)
-            elif own_line:
+            else:
                 add(OWN, own_colour, 1.0)
+            n = taps_for(rn)
+            if merged:
+                ends = int(np.ceil((max(rn, ro) - ro) * n / (2.0 * rn) - 1e-3))
+                taps = line(x, y, vn, max(rn, ro), 2 * ends, 2.0 * ro) if ends > 0 else ()
+            else:
+                taps = line(x, y, vn, rn, n) if rn > 0.5 else ()
+            for a, b, s, p in taps:
+                m, c = front[p], front_color[p]
+                length = np.hypot(*m[:2])
+                wt = coverage(a, b, s, length)
+                if m[3] == own_id:
+                    if merged:
+                        add(OWN, c, wt)
+                elif m[2] < own_depth:
+                    add(NEAR, c, wt)
+                    if wt > 0.0 and lo >= 1e-3 and not own_covers(s, length):
+                        near_free += wt
+                elif m[3] != back_id and m[2] < back_depth:
+                    add(BETWEEN, c, wt)
+                    far.append(c)
             fill = np.mean(far, axis=0) if far else own_colour
             back_all, back_all_w = np.zeros(3), 0.0
             if revealed:

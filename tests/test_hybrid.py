@@ -420,7 +420,7 @@ def test_numpy_bucket_composite_with_an_exact_background_is_the_box_shutter():
 
 
 @pytest.mark.parametrize("case", ["exact", "no_reveal", "moving_wall", "parallel_wall",
-                                  "many_taps"])
+                                  "many_taps", "merged_ends"])
 def test_bucket_composite_matches_numpy(synthetic_frame, case):
     rng = np.random.default_rng(10)
     # many_taps: lines of 40 taps, past the 32 own-presence bits (a separate presence walk)
@@ -435,11 +435,33 @@ def test_bucket_composite_matches_numpy(synthetic_frame, case):
         b["rev_v"][:, 12:24] = (2.3, 0.4)
     if case == "parallel_wall":
         # The wall moves along the bar's line, 0.77 as far (a camera pan's parallax): the
-        # neighbourhood's line doubles as the wall pixels' own line.
+        # wall pixels' own line is merged with the neighbourhood's.
         b["disp"][:, :12] = b["disp"][:, 24:] = (-11.85, 2.0)
         b["rev_v"][:, 12:24] = (-11.85, 2.0)
+    if case == "merged_ends":
+        # The bar's displacement grows along it (a slanted surface under a pan) and turns
+        # by up to 4 degrees, the wall's is 0.6 of the slowest: every line merged, and its
+        # ends hold bar fragments fast enough to reach pixels whose own line does not.
+        bar_d = np.linspace(5.0, 11.0, 12)[:, None] * np.c_[np.cos(np.linspace(0.0, 0.07, 12)),
+                                                             np.sin(np.linspace(0.0, 0.07, 12))]
+        b["disp"][:, 12:24] = -bar_d
+        b["disp"][:, :12] = b["disp"][:, 24:] = (-3.0, 0.0)
+        b["rev_v"][:, 12:24] = (-3.0, 0.0)
     got = run_composite(frame, b)
-    np.testing.assert_allclose(got, numpy_composite(frame, b), atol=2e-6)
+    want = numpy_composite(frame, b)
+    np.testing.assert_allclose(got, want, atol=2e-6)
+    if case == "merged_ends":
+        # (the merged lines' ends count: not merging reads otherwise)
+        k = max_radius_px(frame)
+        front, fc, back, bc = nh.pack_layers(b["colour"], b["depth"], b["disp"], b["rev_c"],
+                                             b["rev_d"], b["rev_v"], 2.0 * k, b["ids"],
+                                             b["rev_ids"])
+        tiles = nm.tilemax(b["disp"].astype(np.float32), k)
+        hp = frame.params["hybrid"]
+        apart = nh.bucket_composite(front, fc, back, bc, nm.neighbormax(tiles), k, 2.0 * k,
+                                    hp.samples_min, hp.samples_max, hp.sample_spacing,
+                                    merge_cos=2.0)
+        assert np.abs(apart - want).max() > 0.01
     if case == "exact":
         p.set("hybrid.sample_spacing", 1.0)
         p.set("hybrid.samples_min", 9)

@@ -7,7 +7,7 @@ import pytest
 
 from conftest import CONFORMANCE
 from viewer.params import ParamSet
-from viewer.render import tile_kernels, tile_lists
+from viewer.render import hybrid_composite, tile_kernels, tile_lists
 from viewer.render.renderer import Renderer
 from viewer.scene_loader import load_scene
 
@@ -420,16 +420,19 @@ def test_tile_coords_list_the_true_tiles_row_by_row():
     assert tile_lists.tile_coords(np.zeros((3, 4), bool)).shape == (0, 2)
 
 
-def _line_leaves_object(ids, vn, k, max_len):
+def _line_leaves_object(ids, vn, k, max_len, turn=0.0):
     """Per pixel (GL rows), brute force: does any point of its neighbourhood line, as
     glsl/hybrid_bucket.frag taps it (the pixel holding x + 0.5 + s dir, clamped, |s| <=
-    |vn| / 2, run where that exceeds 0.5), show another object?"""
+    |vn| / 2, run where that exceeds 0.5), show another object? turn: the line turned by
+    this angle (radians) off vn, as a merged own line may be."""
     h, w = ids.shape
     yy, xx = np.mgrid[0:h, 0:w]
     v = vn[yy // k, xx // k].astype(np.float64)
     length = np.linalg.norm(v, axis=-1)
     r = 0.5 * np.minimum(length, max_len)
     d = v / np.maximum(length, 1e-12)[..., None]
+    c, s_ = np.cos(turn), np.sin(turn)
+    d = np.stack([c * d[..., 0] - s_ * d[..., 1], s_ * d[..., 0] + c * d[..., 1]], -1)
     leaves = np.zeros((h, w), bool)
     for u in np.linspace(-1.0, 1.0, 801):
         s = u * r
@@ -439,17 +442,18 @@ def _line_leaves_object(ids, vn, k, max_len):
     return leaves & (r > 0.5)
 
 
-def _outlines(boundary, vn, tile, k, w, h, max_len):
+def _outlines(boundary, vn, tile, k, w, h, max_len, spread=0.0):
     """tile_kernels.outlines_along over every tile, with the composite's margin."""
     return tile_kernels.outlines_along(boundary, np.ones_like(boundary), vn, tile, k, w, h,
-                                       max_len, 0.05)
+                                       max_len, 0.05, spread)
 
 
 @pytest.mark.parametrize("seed", range(6))
 def test_outlines_along_holds_every_tile_whose_line_can_leave_its_object(seed):
     # Random rectangles over a background, random NeighborMax vectors: every pixel whose
     # line reaches another object lies in a tile outlines_along sets, and the directional
-    # test leaves out tiles an isotropic reach would keep.
+    # test leaves out tiles an isotropic reach would keep. With the composite's spread,
+    # also every pixel whose line turned by up to the merge angle does.
     rng = np.random.default_rng(seed)
     h, w, tile, k = 72, 104, 8, 12
     ids = np.zeros((h, w), np.int64)
@@ -467,6 +471,14 @@ def test_outlines_along_holds_every_tile_whose_line_can_leave_its_object(seed):
     assert len(yy) > 100
     assert got[yy // tile, xx // tile].all()
     assert not got.all() and got.sum() < boundary.sum() * 9
+    angle = np.radians(hybrid_composite.MERGE_ANGLE_DEG)
+    spread = _outlines(boundary, vn, tile, k, w, h, 2.0 * k, np.sin(angle))
+    assert (spread >= got).all()
+    turned = np.zeros_like(leaves)
+    for turn in np.linspace(-angle, angle, 9):
+        turned |= _line_leaves_object(ids, vn, k, 2.0 * k, turn)
+    yy, xx = np.nonzero(turned)
+    assert spread[yy // tile, xx // tile].all()
 
 
 def test_outlines_along_follows_the_line_direction():
@@ -482,6 +494,16 @@ def test_outlines_along_follows_the_line_direction():
     vn[..., 0] = 16.0
     got = _outlines(boundary, vn, tile, k, w, h, 32.0)
     np.testing.assert_array_equal(got, boundary)
+    # Lines turned by up to the merge angle reach 8 sin(10 deg) = 1.4 px across: over the
+    # outline from the row of pixels above it (tile row 4) too; the kernel knows only
+    # that the outline lies in tile row 3, so it also takes the row below (within 1.4 px
+    # of that tile's box), and no others.
+    angle = np.radians(hybrid_composite.MERGE_ANGLE_DEG)
+    spread = _outlines(boundary, vn, tile, k, w, h, 32.0, np.sin(angle))
+    np.testing.assert_array_equal(np.nonzero(spread.all(axis=1))[0], [2, 3, 4])
+    assert spread.sum() == 24
+    yy, _ = np.nonzero(_line_leaves_object(ids, vn, k, 32.0, angle))
+    assert set(yy // tile) == {3, 4}
     vn = vn[..., ::-1].copy()
     got = _outlines(boundary, vn, tile, k, w, h, 32.0)
     np.testing.assert_array_equal(np.nonzero(got.all(axis=1))[0], [2, 3, 4])

@@ -15,6 +15,8 @@
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from raytrace import kernels
@@ -33,19 +35,28 @@ JITTER_STREAM = 2
 # outlines_along's widening of the tiles' pixel centres: float rounding of a tap's point
 # (float32 on the GPU: ~1e-5 px over the longest line).
 OUTLINE_MARGIN_PX = 0.05
+# The bucketed composite merges the own line with the neighbourhood's where their
+# directions lie within this angle (glsl/hybrid_bucket.frag MERGE_COS): one line's taps
+# instead of two under a camera pan, whose surfaces all move about the same way (pan:
+# 95% of pixels within 6 degrees of their NeighborMax vector). The merged own lines stray
+# off the neighbourhood's direction by up to the angle's sine times their reach, which
+# near_outlines adds to its margin.
+MERGE_ANGLE_DEG = 10.0
+MERGE_COS = math.cos(math.radians(MERGE_ANGLE_DEG))
+MERGE_SPREAD = math.sin(math.radians(MERGE_ANGLE_DEG))
 FRAGMENTS = {"time": "hybrid_time.frag", "bucket": "hybrid_bucket.frag"}
 
 
 def near_outlines(frame: Frame, todo: np.ndarray) -> np.ndarray:
-    """FINE tiles (GL rows) where a tap of the neighbourhood's line can land on another
-    object than its pixel's: all of them without tile lists. The line runs along the
-    pixel's NeighborMax vector (read back: a few hundred floats), so a tile is near an
-    outline only where a boundary tile (motion_tiles' flag) lies along that line within
-    its reach (tile_kernels.outlines_along: a camera pan's horizontal lines miss the
-    outlines above and below). Elsewhere every tap of that line lands on the pixel's own
-    object, where it adds nothing unless the line is also the own line: the SIMPLE
-    variant, which skips it then, gives the same image. Decided for the tiles of `todo`
-    only."""
+    """FINE tiles (GL rows) where a tap of the neighbourhood's line, or of an own line
+    merged with it, can land on another object than its pixel's: all of them without
+    tile lists. The line runs along the pixel's NeighborMax vector (read back: a few
+    hundred floats), a merged own line within MERGE_ANGLE_DEG of it and no farther, so a
+    tile is near an outline only where a boundary tile (motion_tiles' flag) lies along
+    that line within its reach (tile_kernels.outlines_along: a camera pan's horizontal
+    lines miss the outlines above and below). Elsewhere every tap lands on the pixel's own
+    object, and the buckets of other objects stay empty: the SIMPLE variant, which skips
+    them, gives the same image. Decided for the tiles of `todo` only."""
     lists = frame.host.get("tile_lists")
     if lists is None or lists.boundary.shape != todo.shape:
         return np.ones(todo.shape, bool)
@@ -54,7 +65,7 @@ def near_outlines(frame: Frame, todo: np.ndarray) -> np.ndarray:
         vn = read_neighbormax(frame)
     k = max_radius_px(frame)
     return outlines_along(lists.boundary, todo, vn, FINE, k, frame.size[0], frame.size[1],
-                          2.0 * k, OUTLINE_MARGIN_PX)
+                          2.0 * k, OUTLINE_MARGIN_PX, MERGE_SPREAD)
 
 
 def read_neighbormax(frame: Frame) -> np.ndarray:
@@ -143,7 +154,7 @@ class Composite(FullscreenPass):
         p = frame.params["hybrid"]
         return {"LAYERS": int(p.layers), "MAX_SEEDS": int(p.seeds),
                 "JITTER_STREAM": f"{JITTER_STREAM}u", "BACK_LAYER": self._back,
-                "OWN_STILL": self._still, "SIMPLE": self._simple}
+                "OWN_STILL": self._still, "SIMPLE": self._simple, "MERGE_COS": repr(MERGE_COS)}
 
     def outputs(self, frame: Frame):
         return {"hybrid": TexSpec(4, "f4")}

@@ -235,7 +235,7 @@ def _segment_meets_box(cx, cy, dx, dy, x0, y0, x1, y1):
 
 
 @njit(**_JIT)
-def outlines_along(boundary, todo, vn, tile, k, w, h, max_len, margin):
+def outlines_along(boundary, todo, vn, tile, k, w, h, max_len, margin, spread=0.0):
     """FINE tiles (GL rows, `tile` px) where a tap of the composite's neighbourhood line
     may land on another object than its pixel's: the line of pixel x runs through its
     centre along vn, the NeighborMax vector (GL rows, k px tiles) of x's k-tile clamped
@@ -246,7 +246,9 @@ def outlines_along(boundary, todo, vn, tile, k, w, h, max_len, margin):
     T is set when the box of T's pixel centres (per k-tile part), widened by `margin` px
     for rounding, swept along +- vn / 2, meets a boundary tile's box; a border tile's box
     runs on to infinity outward (a clamped tap). Only the tiles of `todo` are decided
-    (the others read False)."""
+    (the others read False). spread: the sine of the largest angle a line of the same
+    reach may take off vn (the composite's merged own lines): every point of such a line
+    lies within |vn| / 2 * spread of the segment, so the box is widened by that too."""
     rows, cols = boundary.shape
     out = np.zeros((rows, cols), np.bool_)
     big = 1e30
@@ -265,11 +267,13 @@ def outlines_along(boundary, todo, vn, tile, k, w, h, max_len, margin):
                         continue
                     s = 0.5 * min(length, max_len) / length
                     dx, dy = vx * s, vy * s
-                    # The centres of T's pixels in this k-tile, widened by the margin.
-                    px0 = max(x0, kx * k) + 0.5 - margin
-                    px1 = min(x1, (kx + 1) * k) - 0.5 + margin
-                    py0 = max(y0, ky * k) + 0.5 - margin
-                    py1 = min(y1, (ky + 1) * k) - 0.5 + margin
+                    # The centres of T's pixels in this k-tile, widened by the margin
+                    # and by the spread lines' offset.
+                    e = margin + 0.5 * min(length, max_len) * spread
+                    px0 = max(x0, kx * k) + 0.5 - e
+                    px1 = min(x1, (kx + 1) * k) - 0.5 + e
+                    py0 = max(y0, ky * k) + 0.5 - e
+                    py1 = min(y1, (ky + 1) * k) - 0.5 + e
                     cx, cy = 0.5 * (px0 + px1), 0.5 * (py0 + py1)
                     hx, hy = 0.5 * (px1 - px0), 0.5 * (py1 - py0)
                     reach = int((max(abs(dx) + hx, abs(dy) + hy)) // tile) + 2
