@@ -147,7 +147,9 @@ void main() {
         out_color = vec4(own_colour, 1.0);
         return;
     }
-    g_jitter = mix(0.5, hash01(x, JITTER_STREAM), u_jitter);
+    // Interleaved gradient noise (Jimenez 2014), not white noise: its error is spread at
+    // high spatial frequencies, which the eye (and FLIP) weigh least; PSNR / SSIM alike.
+    g_jitter = mix(0.5, ign(vec2(x), float(JITTER_STREAM)), u_jitter);
     for (int k = 0; k < 4; ++k) { g_sum[k] = vec3(0.0); g_weight[k] = 0.0; }
     g_far_sum = vec3(0.0);
     g_far_count = 0.0;

@@ -65,7 +65,9 @@ class HybridParams:
                                        "grows with the displacement")
     jitter: float = param(1.0, lo=0.0, hi=1.0,
                           help="per-pixel jitter of the stratified times or taps: 0 = "
-                               "fixed (banding), 1 = one random offset per pixel (noise)")
+                               "fixed (banding), 1 = one offset per pixel (noise: "
+                               "random for the time composite, interleaved gradient "
+                               "noise for the bucketed one)")
     seeds: int = param(2, lo=1, hi=9, effect="recompile",
                        help="distinct tile maxima around a pixel whose surfaces are looked "
                             "for at each time sample (what may pass over it)")
