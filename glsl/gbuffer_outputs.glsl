@@ -3,8 +3,11 @@
 // visibility), 2 = colour only (plain reference sub-frames), 3 = the hybrid mode's: colour,
 // normal and the packed front layer (D, depth, id) that every hybrid pass reads, one fetch
 // for all three (writing depth, id and D once each costs ~2.5 ms a frame at 640x360 on
-// llvmpipe); 4 = colour and the packed front layer (the static objects' layer that the
-// hybrid reveal copies where a ray's first hit is static: viewer/render/reveal_pass.py).
+// llvmpipe); 4 = colour and the packed front layer (the hybrid mode's without the
+// poster's edge test, which alone reads the normal target; and the static objects' layer
+// that the hybrid reveal copies where a ray's first hit is static:
+// viewer/render/reveal_pass.py); 5 = colour, depth and displacement (the post-process
+// filters').
 #define GBUFFER_FULL (GBUFFER_LAYOUT == 0)
 #define GBUFFER_MOTION (GBUFFER_LAYOUT == 0 || GBUFFER_LAYOUT >= 3)    // D is written
 layout(location = 0) out vec4 out_color;         // linear, unclamped
@@ -23,6 +26,9 @@ layout(location = 1) out vec4 out_normal;
 layout(location = 2) out vec4 out_hybrid_front;
 #elif GBUFFER_LAYOUT == 4
 layout(location = 1) out vec4 out_hybrid_front;
+#elif GBUFFER_LAYOUT == 5
+layout(location = 1) out float out_depth;
+layout(location = 2) out vec2 out_velocity;
 #endif
 
 void write_gbuffer(vec3 color, float depth, vec3 normal, uint id, vec2 velocity) {
@@ -42,5 +48,8 @@ void write_gbuffer(vec3 color, float depth, vec3 normal, uint id, vec2 velocity)
     out_hybrid_front = vec4(velocity, depth, float(id));   // ids are exact as floats below 2^24
 #elif GBUFFER_LAYOUT == 4
     out_hybrid_front = vec4(velocity, depth, float(id));
+#elif GBUFFER_LAYOUT == 5
+    out_depth = depth;
+    out_velocity = velocity;
 #endif
 }

@@ -505,8 +505,13 @@ def test_stored_layers_are_the_packed_g_buffer_and_revealed_layer(ctx):
     p = ParamSet()
     p.set("blur.max_radius", 0.05)            # k = 8 px: some displacements exceed 2k
     res, bufs = render(ctx, scene, "hybrid", 0.0, p)
-    _, full = render(ctx, scene, "mcguire", 0.0, p)      # the full G-buffer layout
+    _, full = render(ctx, scene, "off", 0.0, p)          # the full G-buffer layout
     assert not {"depth", "id", "velocity"} & set(bufs)   # the hybrid layout packs them
+    assert "normal" not in bufs                          # read by the range check only
+    p.set("hybrid.range_check", True)
+    _, with_edges = render(ctx, scene, "hybrid", 0.0, p)
+    np.testing.assert_array_equal(with_edges["normal"][..., :3], full["normal"][..., :3])
+    np.testing.assert_array_equal(with_edges["hybrid_front"], bufs["hybrid_front"])
     k = 8
     np.testing.assert_array_equal(
         bufs["hybrid_front"], np.dstack([full["velocity"], full["depth"], full["id"]]))

@@ -331,13 +331,16 @@ def test_tile_lists_keep_the_range_checks_far_reach(synthetic_frame):
 
 
 def test_hybrid_gbuffer_stores_log_depth_for_the_edge_test(ctx):
-    # The edge test reads log depth from the normal target's w (what upload() writes).
+    # The edge test (the range check's mask) reads log depth from the normal target's w
+    # (what upload() writes).
     from conftest import CONFORMANCE
     from viewer.render.renderer import Renderer
     from viewer.scene_loader import load_scene
     r = Renderer(ctx, load_scene(str(CONFORMANCE / "basic.toml")), (96, 54))
+    p = ParamSet()
+    p.set("hybrid.range_check", True)
     try:
-        r.render("hybrid", 0.0, ParamSet(), read_image=False)
+        r.render("hybrid", 0.0, p, read_image=False)
         bufs = r.buffers()
     finally:
         r.release()

@@ -4,7 +4,8 @@ Post-process blur cannot know the background a moving object hides, which its bl
 partly uncovers (inner blur). The hybrid mode finds those pixels, ray-traces the true
 background behind them, shades it like the raster layer, and resolves both layers:
 
-  gbuffer (colour, normal, hybrid_front = D, depth, id) -> motion_tiles -> select_tiles
+  gbuffer (colour, hybrid_front = D, depth, id; + normal for the range check)
+          -> motion_tiles -> select_tiles
           (host: which tiles move, which any motion reaches) (viewer/render/tile_lists.py)
           -> hybrid tiles (+ NeighborMax read back)      (viewer/render/hybrid_composite.py)
           -> mask_displacement (+ the edge test) -> mask_edge tiles -> ray_mask (+ tiles),
@@ -37,6 +38,17 @@ def hybrid_passes() -> list:
             *reveal_passes(), Composite()]
 
 
+class HybridGBuffer(GBufferPass):
+    """Colour and the packed front layer (D, depth, id); the normal target too only for
+    the poster's three-step mask (hybrid.range_check), whose edge test alone reads it."""
+
+    def __init__(self):
+        super().__init__(layout="hybrid")
+
+    def layout(self, frame) -> str:
+        return "hybrid" if frame.params["hybrid"].range_check else "front"
+
+
 @mode("hybrid", groups=("blur", "hybrid"))
 def hybrid_pipeline() -> Pipeline:
-    return Pipeline("hybrid", [GBufferPass(layout="hybrid"), *hybrid_passes()], output="hybrid")
+    return Pipeline("hybrid", [HybridGBuffer(), *hybrid_passes()], output="hybrid")

@@ -84,4 +84,4 @@ def mcguire_passes() -> list:
 
 @mode("mcguire", groups=("blur", "mcguire"))
 def mcguire_pipeline() -> Pipeline:
-    return Pipeline("mcguire", [GBufferPass(), *mcguire_passes()], output="mcguire")
+    return Pipeline("mcguire", [GBufferPass(layout="motion"), *mcguire_passes()], output="mcguire")

@@ -137,4 +137,4 @@ def ue4_passes() -> list:
 
 @mode("ue4", groups=("blur", "ue4"))
 def ue4_pipeline() -> Pipeline:
-    return Pipeline("ue4", [GBufferPass(), *ue4_passes()], output="ue4")
+    return Pipeline("ue4", [GBufferPass(layout="motion"), *ue4_passes()], output="ue4")
