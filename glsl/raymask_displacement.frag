@@ -7,6 +7,12 @@
 // lies within half the RELATIVE displacement D - D_bg of the silhouette: the first probe
 // that sees the background gives D_bg, and X +- (D - D_bg)/2 is tested as well.
 // Outputs: the test's result and the relative displacement (D where no background was seen).
+// STEP 3 (the default mask) keeps only the relative test's survivors: the surface hidden
+// behind X at the frame time shows at some time of the exposure iff X +- (D - D_bg)/2
+// leaves X's object, whatever D alone does (the same test where the background is
+// still); where D and D_bg are alike (a camera pan's parallax) the band is far
+// narrower. The background seen at X while X's object is away, at X - u D_bg, is then
+// either visible at the frame time (the raster has it) or hidden and itself masked.
 //
 // Ray mask, step 2, in the same pass (it needs nothing but this pixel's step 1): the edge
 // test. Survivors of the displacement test are kept where a Sobel kernel on log depth or
@@ -80,7 +86,9 @@ void displacement_test(ivec2 x, ivec2 size) {
     bool found = false;
     for (int s = -1; s <= 1; s += 2) {
         if (uncovers(x, 0.5 * float(s) * d, size, vb)) {
-            out_mask = 1u;
+#if STEP != 3
+            out_mask = 1u;                  // (the poster's test: X's object leaves X)
+#endif
             if (!found) { out_relative = d - vb; found = true; }
         }
     }

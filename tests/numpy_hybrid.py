@@ -31,8 +31,11 @@ def _length(v) -> float:
 
 # ---- ray mask --------------------------------------------------------------------------------
 
-def displacement_test(depth, ids, disp, min_speed: float, threshold: float):
-    """Step 1: (mask uint8 (H,W), relative displacement (H,W,2))."""
+def displacement_test(depth, ids, disp, min_speed: float, threshold: float,
+                      relative_only: bool = False):
+    """Step 1: (mask uint8 (H,W), relative displacement (H,W,2)). relative_only: the
+    default mask's test (glsl/raymask_displacement.frag STEP 3), the probes along the
+    relative displacement alone decide; the full displacement's only find D_bg."""
     h, w = ids.shape
     disp = np.asarray(disp, dtype=F32)
     mask = np.zeros((h, w), np.uint8)
@@ -53,7 +56,8 @@ def displacement_test(depth, ids, disp, min_speed: float, threshold: float):
             for s in (-1, 1):
                 hit, vb = uncovers(F32(0.5 * s) * d)
                 if hit:
-                    mask[y, x] = 1
+                    if not relative_only:
+                        mask[y, x] = 1
                     if not found:
                         rel[y, x] = d - vb
                         found = True

@@ -126,6 +126,29 @@ def test_bar_over_static_wall(synthetic_frame):
     assert columns(got["ray_mask"][3]) == [12, 13, 14, 15, 16, 19, 20, 21, 22, 23]
 
 
+@pytest.mark.parametrize("bg", [0.0, 6.0, -4.6])
+def test_default_mask_is_where_the_hidden_surface_shows(synthetic_frame, bg):
+    # The default mask (no range check): bar pixel x is masked iff the wall behind it at
+    # the frame time shows at some time, i.e. x + 0.5 +- (9.2 - bg) / 2 leaves the bar
+    # [12, 24). A still wall: the poster's band, 4.6 px from each edge. The wall moving
+    # 6 px the same way (a pan's parallax): 1.6 px, where the poster's test marks 4.6.
+    # Moving the other way (-4.6): 6.9 px wide, but only pixels whose own probes (4.6 px)
+    # see the wall are tested: 4.6 px again (the range check finds the rest).
+    frame = synthetic_frame((W, H), params())
+    frame.params.set("hybrid.range_check", False)
+    bufs = bar_scene(bg_disp=(bg, 0.0))
+    upload(frame, *bufs)
+    got = run(frame)["ray_mask"]
+    want = {0.0: [12, 13, 14, 15, 16, 19, 20, 21, 22, 23], 6.0: [12, 13, 22, 23],
+            -4.6: [12, 13, 14, 15, 16, 19, 20, 21, 22, 23]}[bg]
+    assert all(columns(row) == want for row in got)
+    relative, _ = nh.displacement_test(*bufs[:3], 1.0, 0.01, relative_only=True)
+    np.testing.assert_array_equal(got, np.where(relative != 0, bufs[1], 0))
+    poster, _ = nh.displacement_test(*bufs[:3], 1.0, 0.01)
+    assert (poster >= relative).all()
+    assert columns(poster[0]) == [12, 13, 14, 15, 16, 19, 20, 21, 22, 23]
+
+
 def test_camera_motion_uses_the_relative_displacement(synthetic_frame):
     frame = synthetic_frame((W, H), params())
     bufs = bar_scene(bg_disp=(-4.6, 0.0))
@@ -215,7 +238,10 @@ def test_without_the_range_check_the_mask_is_the_displacement_tests_survivors(
     frame.params.set("hybrid.range_check", False)
     got = run(frame)
     dm, _, _, with_range = numpy_mask(frame, *bufs)
-    want = np.where(dm != 0, bufs[1], 0).astype(np.uint32)
+    p = frame.params["hybrid"]
+    relative, _ = nh.displacement_test(bufs[0], bufs[1], bufs[2], p.min_speed,
+                                       p.depth_threshold, relative_only=True)
+    want = np.where(relative != 0, bufs[1], 0).astype(np.uint32)
     np.testing.assert_array_equal(got["ray_mask"], want)
     np.testing.assert_array_equal(three["ray_mask"], with_range)
     assert np.count_nonzero(want) > 10 and np.count_nonzero(with_range != want) > 5
