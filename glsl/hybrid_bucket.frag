@@ -222,8 +222,10 @@ void main() {
         add(OWN, own_colour, 1.0);            // the own object (nearly) still
     }
     // The neighbourhood's line: what passes over the pixel; where merged, only its ends
-    // beyond the own line, as densely as the whole line's taps, and the own object's
-    // fragments there count. (llvmpipe pays for a branch in a loop whether taken or not:
+    // beyond the own line, about as densely as the whole line's taps (rounded to the
+    // nearest count, at least one a side: under a pan the ends are a few pixels long, and
+    // a second tap each cost 0.6 ms of pan's 16 for no measured gain), and the own
+    // object's fragments there count. (llvmpipe pays for a branch in a loop whether taken or not:
     // each tap fetches its colour once, unconditionally, and every bucket takes it with a
     // weight of 0 or w.)
 #if SIMPLE
@@ -232,7 +234,8 @@ void main() {
     float R = max(rn, merged ? ro : 0.0);
     float gap = merged ? 2.0 * ro : 0.0;
     int n = taps_for(rn);
-    int n_end = merged ? int(ceil((R - ro) * float(n) / (2.0 * rn) - 1e-3)) : n / 2;
+    int n_end = !merged ? n / 2 : R - ro > 1e-3
+        ? max(1, int(floor((R - ro) * float(n) / (2.0 * rn) + 0.5))) : 0;
     n = merged ? 2 * n_end : n;
     if (rn > 0.5 && n > 0) {
         vec2 dir = vn / ln;

@@ -393,7 +393,8 @@ def bucket_composite(front, front_color, back, back_color, neighbormax, tile: in
                 add(OWN, own_colour, 1.0)
             n = taps_for(rn)
             if merged:
-                ends = int(np.ceil((max(rn, ro) - ro) * n / (2.0 * rn) - 1e-3))
+                reach = max(rn, ro) - ro
+                ends = max(1, int(np.floor(reach * n / (2.0 * rn) + 0.5))) if reach > 1e-3 else 0
                 taps = line(x, y, vn, max(rn, ro), 2 * ends, 2.0 * ro) if ends > 0 else ()
             else:
                 taps = line(x, y, vn, rn, n) if rn > 0.5 else ()
