@@ -164,13 +164,15 @@ class Composite(FullscreenPass):
         if kind == "bucket":
             frame.pool.discard(MASK_TILES)     # (made by an earlier time composite)
         tiles = tile_list(frame, "active")
-        if tiles is not None:
+        lists = frame.host.get("tile_lists")
+        if tiles is not None and tiles.count < lists.shape[0] * lists.shape[1]:
             # Outside the active tiles nothing reaches a pixel: its sharp colour stands.
+            # (Where every tile is active, as under a moving camera, the draws below
+            # write every pixel.)
             frame.ctx.copy_framebuffer(frame.pool.framebuffer(("hybrid",)),
                                        frame.pool.framebuffer(("color",)))
         if tiles is None or kind == "time":    # (no tile lists: a pass run on its own)
             return self._draw(frame, "time" if kind == "split" else kind, tiles)
-        lists = frame.host["tile_lists"]
         active = np.zeros(lists.shape, bool)
         active[tiles.tiles[:, 1], tiles.tiles[:, 0]] = True
         masked = frame.host.get("masked_pixels", np.zeros((0, 2), int))
