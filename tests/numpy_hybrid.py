@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from viewer.render.hybrid_composite import MERGE_COS   # (a setting, not logic)
+
 F32 = np.float32
 
 
@@ -286,7 +288,6 @@ def time_composite(front, front_color, back, back_color, tilemax, neighbormax, t
     return out
 
 
-MERGE_COS = float(np.cos(np.radians(10.0)))   # hybrid_composite.MERGE_ANGLE_DEG
 
 
 def bucket_composite(front, front_color, back, back_color, neighbormax, tile: int,

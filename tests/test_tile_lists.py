@@ -494,10 +494,10 @@ def test_outlines_along_follows_the_line_direction():
     vn[..., 0] = 16.0
     got = _outlines(boundary, vn, tile, k, w, h, 32.0)
     np.testing.assert_array_equal(got, boundary)
-    # Lines turned by up to the merge angle reach 8 sin(10 deg) = 1.4 px across: over the
+    # Lines turned by up to the merge angle reach 8 sin(7 deg) = 0.97 px across: over the
     # outline from the row of pixels above it (tile row 4) too; the kernel knows only
-    # that the outline lies in tile row 3, so it also takes the row below (within 1.4 px
-    # of that tile's box), and no others.
+    # that the outline lies in tile row 3, so it also takes the row below (within 1 px of
+    # that tile's box), and no others.
     angle = np.radians(hybrid_composite.MERGE_ANGLE_DEG)
     spread = _outlines(boundary, vn, tile, k, w, h, 32.0, np.sin(angle))
     np.testing.assert_array_equal(np.nonzero(spread.all(axis=1))[0], [2, 3, 4])
