@@ -292,6 +292,35 @@ def test_exclusion_scenes_and_restarts_find_the_same_hits():
     np.testing.assert_allclose(a.distance[hit], b.distance[hit], rtol=1e-5)
 
 
+@pytest.mark.parametrize("front", [False, True])
+def test_bench_ceiling_traces_the_reveals_rays_into_its_scenes(front):
+    """`hmblur bench`'s bare-Embree ceiling: its calls, merged nearest-first, find the
+    reveal's hit distance on every ray (static own objects skipped in their exclusion
+    scenes, moving ones not traced); front=True stops rays at a static own object."""
+    from raytrace.bench import bare_embree_rays_per_s, ceiling_jobs
+    s = busy_scene()
+    cam = Camera(s.camera, 64, 48)
+    rng = np.random.default_rng(5)
+    px = np.c_[rng.integers(0, 64, 500), rng.integers(0, 48, 500)]
+    own = rng.integers(0, 5, 500).astype(np.uint32)
+    rs = RayScene(s)
+    batch = {"rayscene": rs, "camera": cam, "pixels": px, "own": own, "t": 0.05}
+    best = np.full(len(px), np.inf)
+    for es, o, d, rows in ceiling_jobs(batch, front):
+        r = embree_scene._embree_run(es, o, d, np.full(len(rows), np.inf, np.float32))
+        hit = r["geomID"] >= 0
+        np.minimum.at(best, rows[hit], r["tfar"][hit])
+    o, d = cam.rays(0.05, px[:, 0], px[:, 1])
+    static_own = np.isin(own, rs.static_ids)
+    want = rs.intersect(o, d, 0.05, exclude_ids=np.where(static_own & front, 0, own))
+    # The two ceilings differ on many rays (a static own object in front).
+    other = rs.intersect(o, d, 0.05, exclude_ids=np.where(static_own & ~front, 0, own))
+    assert (want.object_id != 0).sum() > 300 and (want.distance != other.distance).sum() > 60
+    np.testing.assert_allclose(best, want.distance, rtol=1e-5)
+    assert bare_embree_rays_per_s(batch, repeats=1, front=front) > 0
+    assert bare_embree_rays_per_s(dict(batch, pixels=px[:0], own=own[:0])) == 0.0
+
+
 def test_restarts_are_bounded_by_max_restarts():
     rs = RayScene(wall_scene(), exclusion_budget=0)
     hits = rs.intersect(*down_z(1), t=0.0, exclude_ids=A([1]), max_restarts=1)

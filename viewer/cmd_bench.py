@@ -107,8 +107,12 @@ def time_modes(r: Renderer, modes: list[str], s, frames: int, warmup: int, progr
             if mode == "hybrid" and res.stats.get("rays"):
                 # The ceiling on this frame's rays, timed right after it (same conditions).
                 from raytrace.bench import bare_embree_rays_per_s
-                res.stats["embree_rays_per_s"] = bare_embree_rays_per_s(
-                    res.host.get("reveal_batch"), repeats=1)
+                batch = res.host.get("reveal_batch")
+                res.stats["embree_rays_per_s"] = bare_embree_rays_per_s(batch, repeats=1)
+                # The static part into the whole static scene: rays of a static own
+                # object stop at it (the ceiling as measured up to session 10).
+                res.stats["embree_front_rays_per_s"] = bare_embree_rays_per_s(
+                    batch, repeats=1, front=True)
             stats[mode].append(res.stats)
         progress(k, frames)
     return {m: mode_summary(frame_ms[m], passes[m], stats[m], frame_cpu[m], passes_cpu[m])
@@ -143,6 +147,7 @@ def reveal_summary(results: dict) -> dict | None:
     reveal_ms = st.get("reveal_ms", 0.0)
     trace_ms = st.get("reveal_trace_ms", 0.0)
     ceiling = st.get("embree_rays_per_s", 0.0)
+    front = st.get("embree_front_rays_per_s", 0.0)
     # Throughput over the whole host side of the reveal (mask read-back, tracing,
     # hit records), and over the tracing alone.
     rps = rays / (reveal_ms / 1e3) if reveal_ms > 0 else 0.0
@@ -151,7 +156,9 @@ def reveal_summary(results: dict) -> dict | None:
             "reveal_ms": reveal_ms, "trace_ms": trace_ms, "rays_per_s": rps,
             "trace_rays_per_s": trace_rps, "embree_rays_per_s": ceiling,
             "fraction_of_embree": (rps / ceiling) if ceiling else None,
-            "trace_fraction_of_embree": (trace_rps / ceiling) if ceiling else None}
+            "trace_fraction_of_embree": (trace_rps / ceiling) if ceiling else None,
+            "embree_front_rays_per_s": front,
+            "fraction_of_embree_front": (rps / front) if front else None}
 
 
 def speed_table(r: Renderer, s, speeds: list[float], frames: int) -> list[dict]:
@@ -255,7 +262,10 @@ def format_report(rep: dict) -> str:
                      + f"; tracing alone {rv['trace_ms']:.1f} ms = "
                      f"{rv['trace_rays_per_s'] / 1e6:.2f} M rays/s"
                      + (f" ({100 * tfrac:.0f}%)" if tfrac else "")
-                     + f"; bare Embree on the same rays {rv['embree_rays_per_s'] / 1e6:.2f} M rays/s")
+                     + f"; bare Embree on the same rays {rv['embree_rays_per_s'] / 1e6:.2f} M rays/s"
+                     + (f" (stopping at their own object: "
+                        f"{rv['embree_front_rays_per_s'] / 1e6:.2f})"
+                        if rv.get("embree_front_rays_per_s") else ""))
     if rep.get("scaling"):
         lines += ["", "| speed x | masked pixels | rays | reveal ms |", "| ---: | ---: | ---: | ---: |"]
         lines += [f"| {r['speed']:g} | {r['masked_pixels']} | {r['rays']} | {r['reveal_ms']:.2f} |"

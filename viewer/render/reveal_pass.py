@@ -307,7 +307,7 @@ class RevealTrace(Pass):
         frame.host["masked_pixels"] = pixels        # the composite's split (image i, j)
         # What `hmblur bench` needs to time bare Embree on the same primary rays.
         frame.host["reveal_batch"] = {"rayscene": st.rays, "camera": frame.camera,
-                                      "pixels": pixels, "t": frame.time}
+                                      "pixels": pixels, "own": own, "t": frame.time}
 
 
 def packed_names(k: int) -> tuple[str, str]:
