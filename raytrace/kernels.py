@@ -240,6 +240,22 @@ def record_inputs(px, height, object_id, prim_id, face_offset, static_view, stat
 
 
 @njit(**_JIT)
+def _counting_order(values, top, order):
+    """`order` (a permutation of the rows) stably sorted by values[row] in [0, top)."""
+    count = np.zeros(top + 1, np.int64)
+    for i in range(order.shape[0]):
+        count[values[order[i]] + 1] += 1
+    for v in range(top):
+        count[v + 1] += count[v]
+    out = np.empty_like(order)
+    for i in range(order.shape[0]):
+        v = values[order[i]]
+        out[count[v]] = order[i]
+        count[v] += 1
+    return out
+
+
+@njit(**_JIT)
 def pack_blocks(gx, gy, key, face, bary, tile_bits, row_bits):
     """Hit records in blocks (viewer/render/reveal_pass.py layer_hits): for ray k at GL
     pixel (gx, gy) with key (1 + object id; small non-negative ints), face row and
@@ -268,39 +284,53 @@ def pack_blocks(gx, gy, key, face, bary, tile_bits, row_bits):
             rank[c] = n_keys
             n_keys += 1
     per_key = cols * rows_t
+    # Each ray's cell, rank(key) * per_key + tile, and the cells present in order (block b
+    # is the b-th): a radix sort of the rays, by tile and then by key rank (counting
+    # sorts: no table over every key and tile of the screen, which at 4 px tiles is
+    # ~190 k cells for crowd_pan's 13 keys and 4.5 k rays).
     cell = np.empty(n, np.int64)
-    block_of = np.full(n_keys * per_key, -1, np.int64)
+    tile_of = np.empty(n, np.int64)       # (kept apart: no divisions per ray)
+    rank_of = np.empty(n, np.int64)
     for k in range(n):
-        c = rank[key[k]] * per_key + (gy[k] >> tile_bits) * cols + (gx[k] >> tile_bits)
-        cell[k] = c
-        block_of[c] = 0
+        tile_of[k] = (gy[k] >> tile_bits) * cols + (gx[k] >> tile_bits)
+        rank_of[k] = rank[key[k]]
+        cell[k] = rank_of[k] * per_key + tile_of[k]
+    if n_keys * per_key <= 4 * n:         # few cells for the rays: sort by cell at once
+        order = _counting_order(cell, n_keys * per_key, np.arange(n))
+    else:
+        order = _counting_order(rank_of, n_keys, _counting_order(tile_of, per_key, np.arange(n)))
+    block = np.empty(n, np.int64)          # each ray's block
+    blocks = 0
+    for i in range(n):
+        if i == 0 or cell[order[i]] != cell[order[i - 1]]:
+            blocks += 1
+        block[order[i]] = blocks - 1
     keys = np.empty(n_keys, np.int64)
     for c in range(top + 1):
         if rank[c] >= 0:
             keys[rank[c]] = c
-    blocks = 0                       # each present cell's block number, in cell order
-    for c in range(block_of.shape[0]):
-        if block_of[c] == 0:
-            block_of[c] = blocks
-            blocks += 1
     block_key = np.empty(blocks, np.int64)
     block_tile = np.empty((blocks, 2), np.int64)
-    for q in range(n_keys):
-        for r in range(per_key):
-            b = block_of[q * per_key + r]
-            if b >= 0:
-                block_key[b] = keys[q]
-                block_tile[b, 0] = r % cols
-                block_tile[b, 1] = r // cols
+    # The blocks of each screen tile as a linked list (several keys drawn there).
+    head = np.full(per_key, -1, np.int64)
+    after = np.full(blocks, -1, np.int64)
+    shared = np.zeros(per_key, np.int64)
+    for i in range(n):
+        k = order[i]
+        b = block[k]
+        if i == 0 or block[order[i - 1]] != b:
+            r = tile_of[k]
+            block_key[b] = keys[rank_of[k]]
+            block_tile[b, 0] = r % cols
+            block_tile[b, 1] = r // cols
+            after[b] = head[r]
+            head[r] = b
+            shared[r] += 1
     n_rows = (blocks + per_row - 1) >> row_bits
     records = np.zeros((n_rows * tile, per_row * tile, 4), np.float32)
     mask = tile - 1
-    shared = np.zeros(per_key, np.int64)      # blocks per screen tile (keys drawn there)
-    for c in range(block_of.shape[0]):
-        if block_of[c] >= 0:
-            shared[c % per_key] += 1
     for k in range(n):
-        b = block_of[cell[k]]
+        b = block[k]
         ox, oy = gx[k] & mask, gy[k] & mask
         rx = ((b & (per_row - 1)) << tile_bits) + ox
         ry = ((b >> row_bits) << tile_bits) + oy
@@ -308,14 +338,15 @@ def pack_blocks(gx, gy, key, face, bary, tile_bits, row_bits):
         records[ry, rx, 1] = bary[k, 0]
         records[ry, rx, 2] = bary[k, 1]
         records[ry, rx, 3] = key[k]
-        r = cell[k] % per_key
+        r = tile_of[k]
         if shared[r] > 1:
             # The tile's other keys' blocks: -1 there, "another draw's pixel".
-            for q in range(n_keys):
-                o = block_of[q * per_key + r]
-                if o >= 0 and o != b:
+            o = head[r]
+            while o >= 0:
+                if o != b:
                     records[((o >> row_bits) << tile_bits) + oy,
                             ((o & (per_row - 1)) << tile_bits) + ox, 3] = -1.0
+                o = after[o]
     return records, block_key, block_tile
 
 

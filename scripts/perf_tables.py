@@ -75,8 +75,9 @@ def host_table(reports) -> str:
 
 def reveal_table(reports) -> str:
     lines = ["| scene | size | masked pixels | rays | reveal ms | of which tracing | "
-             "M rays/s (whole / tracing) | bare Embree M rays/s | whole / bare | tracing / bare |",
-             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+             "M rays/s (whole / tracing) | bare Embree M rays/s | whole / bare | tracing / bare | "
+             "bare, stopping at the own object |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for _, r in reports:
         rv = r.get("reveal")
         if not rv:
@@ -86,7 +87,9 @@ def reveal_table(reports) -> str:
             f"{rv['rays']} | {rv['reveal_ms']:.1f} | {rv['trace_ms']:.1f} | "
             f"{rv['rays_per_s'] / 1e6:.2f} / {rv['trace_rays_per_s'] / 1e6:.2f} | "
             f"{rv['embree_rays_per_s'] / 1e6:.2f} | {rv['fraction_of_embree'] or 0:.0%} | "
-            f"{rv['trace_fraction_of_embree'] or 0:.0%} |")
+            f"{rv['trace_fraction_of_embree'] or 0:.0%} | "
+            + (f"{rv['embree_front_rays_per_s'] / 1e6:.2f} ({rv['fraction_of_embree_front']:.0%}) |"
+               if rv.get("fraction_of_embree_front") else "- |"))
     return "\n".join(lines)
 
 

@@ -213,20 +213,20 @@ def test_resize_between_frames_gives_a_fresh_renderers_frame(ctx):
         fresh.release()
 
 
-@pytest.mark.parametrize("seed", range(3))
-def test_record_blocks_match_a_brute_force_packing(seed):
-    # reveal_shade's hit records: one 8 x 8 block per (key, screen tile) in order of
+@pytest.mark.parametrize("seed, tile_bits", [(0, 3), (1, 3), (2, 3), (3, 2)])
+def test_record_blocks_match_a_brute_force_packing(seed, tile_bits):
+    # reveal_shade's hit records: one tile x tile block per (key, screen tile) in order of
     # (key, tile row, tile column), 4 blocks a row here, each pixel's record at its
     # offset within its tile, -1 there in the tile's other keys' blocks; else zero.
     from raytrace.kernels import pack_blocks
     rng = np.random.default_rng(seed)
-    n, tile, per_row = 500, 8, 4
+    n, tile, per_row = 500, 1 << tile_bits, 4
     flat = rng.choice(70 * 50, n, replace=False)
     gx, gy = flat % 70, flat // 70
     key = rng.choice([1, 3, 4, 9], n)
     face = rng.integers(-1, 1000, n)
     bary = rng.uniform(0, 1, (n, 2)).astype(np.float32)
-    records, block_key, tiles = pack_blocks(gx, gy, key, face, bary, 3, 2)
+    records, block_key, tiles = pack_blocks(gx, gy, key, face, bary, tile_bits, 2)
     cells = sorted({(int(k), int(y) // tile, int(x) // tile) for k, x, y in zip(key, gx, gy)})
     np.testing.assert_array_equal(block_key, [c[0] for c in cells])
     np.testing.assert_array_equal(tiles, [(c[2], c[1]) for c in cells])
