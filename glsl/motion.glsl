@@ -31,8 +31,21 @@ vec4 clip_to_near(vec4 q, vec4 q_now) {
 vec4 view_open(vec3 p_local) { return u_modelview_open * vec4(p_local, 1.0); }
 vec4 view_close(vec3 p_local) { return u_modelview_close * vec4(p_local, 1.0); }
 
+// Displacements past any blur limit are cut to DISPLACEMENT_LIMIT px along the same
+// direction: every reader takes length(D), whose square overflows float32 from ~1.8e19
+// px (an object at ~1e20 m/s): length() then reads inf and the blur limit's scaling turns
+// D into 0 (no blur at all). An infinite component (matrices past float32) is first
+// taken as the largest finite value.
+const float DISPLACEMENT_LIMIT = 1e9;
+vec2 saturate_displacement(vec2 d) {
+    d = clamp(d, vec2(-3.0e38), vec2(3.0e38));
+    float m = max(abs(d.x), abs(d.y));
+    return m > DISPLACEMENT_LIMIT ? d * (DISPLACEMENT_LIMIT / m) : d;
+}
+
 vec2 displacement_between(vec4 q_open, vec4 q_close, vec4 view_now) {
-    return to_window(clip_to_near(q_close, view_now)) - to_window(clip_to_near(q_open, view_now));
+    return saturate_displacement(to_window(clip_to_near(q_close, view_now))
+                                 - to_window(clip_to_near(q_open, view_now)));
 }
 
 vec2 exposure_displacement(vec3 p_local, vec4 view_now) {

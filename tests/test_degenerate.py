@@ -134,6 +134,30 @@ def test_blur_beyond_the_limit_is_clamped(ctx, tmp_path, mode):
     assert changed.min() >= cols.min() - limit - 1 and changed.max() <= cols.max() + limit + 1
 
 
+@pytest.mark.parametrize("speed", ["1e21", "1e40"])
+def test_absurd_speeds_blur_as_a_fast_one_does(ctx, tmp_path, speed):
+    # A bar far past the blur limit at 400 m/s, and at speeds whose displacement's square
+    # overflows float32 (1e21 m/s: ~1e20 px) or whose matrices do (1e40 m/s): every filter
+    # still blurs it to the limit, as at 400 (length(D) once read inf and the limit's
+    # scaling made D zero: no blur).
+    images = {}
+    for v in ("400.0", speed):
+        sc = scene(tmp_path, WALL + f"""
+            [[objects]]
+            mesh = {{ box = [0.3, 3.0, 0.1] }}
+            velocity = [{v}, 0.0, 0.0]
+        """)
+        images[v] = render_all(ctx, sc, (96, 32), modes=["off"] + REALTIME)
+    for mode in REALTIME:
+        fast, absurd, off = images["400.0"][mode], images[speed][mode], images[speed]["off"]
+        assert np.isfinite(absurd).all(), mode
+        blurred = np.abs(fast - off).max(axis=-1) > 1e-3
+        assert blurred.sum() > 100, mode
+        # The same blur but for a few pixels (the hybrid's ray mask probes past the screen).
+        same = np.abs(absurd - fast).max(axis=-1) < 1e-6
+        assert same.mean() > 0.97, (mode, same.mean())
+
+
 def test_sizes_beyond_the_gl_limit_are_a_clear_error(ctx, tmp_path):
     sc = scene(tmp_path, "")
     with pytest.raises(UserError, match="GL limit"):
