@@ -29,15 +29,22 @@ class Camera:
         views = self.__dict__.setdefault("_views", {})
         v = views.get(key)
         if v is None:
-            if len(views) >= 8:
-                views.clear()
+            if len(views) >= 8:          # the oldest goes (a moving camera's frame asks
+                views.pop(next(iter(views)))   # for t and the shutter's ends, and again)
             v = views[key] = tf.look_at(eye, fwd, up)
             v.flags.writeable = False
         return v
 
     def projection(self) -> np.ndarray:
+        """The perspective projection (read-only, kept while the lens and size hold)."""
         s = self.spec
-        return tf.perspective(s.fov_y, self.aspect, s.near, s.far)
+        key = (s.fov_y, self.aspect, s.near, s.far)
+        kept = self.__dict__.get("_projection")
+        if kept is None or kept[0] != key:
+            p = tf.perspective(*key)
+            p.flags.writeable = False
+            kept = self.__dict__["_projection"] = (key, p)
+        return kept[1]
 
     def view_projection(self, t: float) -> np.ndarray:
         return self.projection() @ self.view(t)
