@@ -285,9 +285,9 @@ def pack_blocks(gx, gy, key, face, bary, tile_bits, row_bits):
             n_keys += 1
     per_key = cols * rows_t
     # Each ray's cell, rank(key) * per_key + tile, and the cells present in order (block b
-    # is the b-th): a radix sort of the rays, by tile and then by key rank (counting
-    # sorts: no table over every key and tile of the screen, which at 4 px tiles is
-    # ~190 k cells for crowd_pan's 13 keys and 4.5 k rays).
+    # is the b-th): the rays sorted by cell, by one counting sort where the cells are few
+    # for the rays, else by tile and then by key rank (a table over every key and tile of
+    # the screen is ~190 k cells at 4 px tiles for crowd_pan's 13 keys and 4.5 k rays).
     cell = np.empty(n, np.int64)
     tile_of = np.empty(n, np.int64)       # (kept apart: no divisions per ray)
     rank_of = np.empty(n, np.int64)
