@@ -106,6 +106,15 @@ def transform_vectors(m: np.ndarray, p: np.ndarray) -> np.ndarray:
     return transform_points(m, p, 0.0)
 
 
+@dataclass
+class Poses:
+    """The moving objects (RayScene.moving, in order) at one time t."""
+    lo: np.ndarray        # (m, 3) float64: world box at t, padded (for the box test)
+    hi: np.ndarray
+    inv: np.ndarray       # (m, 4, 4) float32: M(t)^-1
+    rotate: np.ndarray    # (m,) bool: M(t)^-1 turns or scales (else directions stay)
+
+
 # Moving objects from which the box tests take their rays from a RowIndex: building it
 # (~0.1 ms for 30 k rays) costs what ~10 box tests over every ray cost.
 ROW_INDEX_MOVERS = 8
@@ -126,31 +135,23 @@ class RowIndex:
 
     @classmethod
     def of(cls, eye, d, forward, up) -> "RowIndex | None":
+        """The index of rays d (n, 3) from `eye`, None where there is none (a ray not in
+        front of the eye, rays not in image row order). Within a row the key is one value
+        up to rounding (~1e-16): rows in order, and the running maximum (within ROUNDING
+        of the key, far inside spans' pad) to bisect (kernels.row_keys)."""
         fwd, up = np.asarray(forward, np.float64), np.asarray(up, np.float64)
-        along = d @ fwd
-        if not (along > 0.0).all():
+        key, sign = kernels.row_keys(np.ascontiguousarray(d, np.float64), fwd, up,
+                                     cls.ROUNDING)
+        if sign == 0.0:
             return None
-        key = -(d @ up) / along
-        if key[0] > key[-1]:                 # rows bottom to top: the key runs down
-            key, up = -key, -up
-        # Within a row the key is one value up to rounding (~1e-16): rows in order, and
-        # the running maximum (within ROUNDING of the key, far inside span's pad) to bisect.
-        if not (key[1:] >= key[:-1] - cls.ROUNDING).all():     # not in row order: no index
-            return None
-        return cls(np.asarray(eye, np.float64), np.maximum.accumulate(key), fwd, up)
+        return cls(np.asarray(eye, np.float64), key, fwd, sign * up)
 
     def spans(self, lo, hi) -> np.ndarray:
-        """(m, 2) [first, end) ray spans of m boxes [lo, hi] ((m, 3) each), all at once."""
-        pick = np.array([[(i >> k) & 1 for k in range(3)] for i in range(8)], bool)
-        c = np.where(pick[None], hi[:, None, :], lo[:, None, :]) - self.eye     # (m, 8, 3)
-        along = c @ self.forward
-        with np.errstate(divide="ignore", invalid="ignore"):
-            k = -(c @ self.up) / along
-        pad = 1e-6 * (1.0 + np.abs(k).max(axis=1))   # float rounding of the rays' keys
-        out = np.stack([np.searchsorted(self.key, k.min(axis=1) - pad, "left"),
-                        np.searchsorted(self.key, k.max(axis=1) + pad, "right")], axis=1)
-        out[~(along > 0.0).all(axis=1)] = (0, len(self.key))   # not wholly in front
-        return out
+        """(m, 2) [first, end) ray spans of m boxes [lo, hi] ((m, 3) each), all at once;
+        the float rounding of the rays' keys padded by 1e-6 relative (kernels.row_spans)."""
+        return kernels.row_spans(self.key, self.eye, self.forward, self.up,
+                                 np.ascontiguousarray(lo, np.float64),
+                                 np.ascontiguousarray(hi, np.float64), 1e-6)
 
 
 def _box_corners(vertices: np.ndarray) -> np.ndarray:
@@ -217,8 +218,10 @@ class RayScene:
                 self.moving.append((o, es))
         # The corners of each moving mesh's local bounding box: at time t their world
         # box culls the rays that cannot hit the object before any Embree call.
-        self._corners = {o.id: _box_corners(o.mesh.vertices) for o, _ in self.moving}
-        self._pose_cache: dict[int, tuple] = {}
+        self._moving_ids = np.array([o.id for o, _ in self.moving], np.uint32)
+        self._corners = np.array([_box_corners(o.mesh.vertices) for o, _ in self.moving]
+                                 ).reshape(-1, 8, 3)
+        self._pose_cache: tuple | None = None
 
     def _static_scene(self, ids: np.ndarray) -> rtcs.EmbreeScene:
         """One Embree scene of the static objects `ids`, geometry k = ids[k]."""
@@ -240,23 +243,19 @@ class RayScene:
                 self._without[own] = (self._static_scene(ids), np.r_[np.uint32(0), ids])
         return self._without[own]
 
-    def _poses(self, t: float) -> list[tuple]:
-        """Per moving object at time t: its world box (padded, for the box test), M(t)^-1
-        as float32 and whether it rotates or scales (else directions stay as they are);
-        kept per object for its last M(t) (every layer and chunk of a frame asks again)."""
-        poses = []
-        for obj, _ in self.moving:
-            m = obj.matrix(t)
-            key = m.tobytes()
-            kept = self._pose_cache.get(obj.id)
-            if kept is None or kept[0] != key:
-                lo, hi = kernels.world_box(m, self._corners[obj.id], 1e-4, 1e-6)
-                inv = np.linalg.inv(m).astype(np.float32)
-                # Not renormalised, so t stays in world units; a pure translation keeps them.
-                kept = self._pose_cache[obj.id] = (key, (lo, hi, inv,
-                                                         kernels.turns_or_scales(inv)))
-            poses.append(kept[1])
-        return poses
+    def _poses(self, t: float) -> "Poses":
+        """The moving objects at time t (Poses), all at once (an animation's every frame
+        has a new t: per object, np.linalg.inv alone cost ~9 us, 32 movers 0.3 ms); kept
+        for the last M(t)s (every layer and chunk of a frame asks again)."""
+        ms = np.stack([obj.matrix(t) for obj, _ in self.moving]) if self.moving else \
+            np.zeros((0, 4, 4))
+        key = ms.tobytes()
+        if self._pose_cache is None or self._pose_cache[0] != key:
+            lo, hi = kernels.world_boxes(ms, self._corners, 1e-4, 1e-6)
+            inv = np.linalg.inv(ms).astype(np.float32)    # (the same LU per matrix as alone)
+            # Not renormalised, so t stays in world units; a pure translation keeps them.
+            self._pose_cache = (key, Poses(lo, hi, inv, kernels.turns_or_scales(inv)))
+        return self._pose_cache[1]
 
     def reveal(self, camera, t: float, pixels_ij, own_ids, layers: int = 1, max_depth: int = 8,
                threads: int | None = None, **kw):
@@ -336,17 +335,19 @@ class RayScene:
         index = (RowIndex.of(o[0], d, *image_axes)
                  if self.cull and from_eye and image_axes is not None
                  and len(self.moving) >= ROW_INDEX_MOVERS else None)
-        spans = (np.array([[0, n]] * len(poses)) if index is None else
-                 index.spans(np.array([p[0] for p in poses]), np.array([p[1] for p in poses])))
-        for (obj, es), (box_lo, box_hi, inv, rotate), (a, b) in zip(self.moving, poses,
-                                                                       spans.tolist()):
-            # Rays that may hit the object's world box within [start, best]; a moving
-            # excluded object is not traced at all.
-            if self.cull:
-                rows = kernels.box_rows(o_box, inv_d, from_eye, box_lo, box_hi, start, best,
-                                        excl, obj.id, a, b)
-            else:
-                rows = np.flatnonzero(excl != obj.id)
+        spans = (np.tile(np.array([0, n], np.int64), (len(self.moving), 1)) if index is None
+                 else index.spans(poses.lo, poses.hi))
+        # Rays that may hit each object's world box within [start, best] (best as it
+        # stands before any of them: one compiled call, not one per object); a moving
+        # excluded object is not traced at all.
+        if self.cull and self.moving:
+            culled, cuts = kernels.boxes_rows(o_box, inv_d, from_eye, poses.lo, poses.hi,
+                                                start, best, excl, self._moving_ids, spans)
+            cuts = cuts.tolist()
+        for k, ((obj, es), inv, rotate) in enumerate(zip(self.moving, poses.inv,
+                                                         poses.rotate.tolist())):
+            rows = (culled[cuts[k]:cuts[k + 1]] if self.cull
+                    else np.flatnonzero(excl != obj.id))
             if not rows.size:
                 continue
             lo, ld, tfar = kernels.local_rays(o32, d32, rows, shared, inv, rotate, start, best)

@@ -73,6 +73,26 @@ def box_rows(o, inv_d, shared, lo, hi, start, best, excl, skip_id, first, end):
 
 
 @njit(**_JIT)
+def boxes_rows(o, inv_d, shared, lo, hi, start, best, excl, ids, spans):
+    """box_rows for m boxes at once (lo, hi (m, 3), ids (m,) the objects skipped, spans
+    (m, 2) the rows each tests): (rows, cuts), box b's rows rows[cuts[b]:cuts[b + 1]]."""
+    m = lo.shape[0]
+    total = 0
+    for b in range(m):
+        total += max(spans[b, 1] - spans[b, 0], 0)
+    rows = np.empty(total, np.int64)
+    cuts = np.zeros(m + 1, np.int64)
+    k = 0
+    for b in range(m):
+        r = box_rows(o, inv_d, shared, lo[b], hi[b], start, best, excl, ids[b],
+                     spans[b, 0], spans[b, 1])
+        rows[k:k + r.shape[0]] = r
+        k += r.shape[0]
+        cuts[b + 1] = k
+    return rows[:k], cuts
+
+
+@njit(**_JIT)
 def ray_arrays(o, d, start, shared):
     """The rays moved to their starts (o + start d, in float64) as Embree takes them
     (float32 origins and directions), and the directions' float32 inverses (inf for a
@@ -419,6 +439,77 @@ def nonzero_pixels(gl_rows, i0, j0):
 
 
 @njit(**_JIT)
+def row_keys(d, fwd, up, rounding):
+    """embree_scene.RowIndex's key of rays d (n, 3) from one eye: the running maximum of
+    -(d . up) / (d . forward), up negated where the key runs down the rays (rows bottom to
+    top); (key, sign of up), sign 0 where there is no index: a ray not in front of the
+    eye, or rays not in row order (a key below the one before by more than rounding)."""
+    n = d.shape[0]
+    key = np.empty(n, np.float64)
+    for i in range(n):
+        along = d[i, 0] * fwd[0] + d[i, 1] * fwd[1] + d[i, 2] * fwd[2]
+        if not along > 0.0:
+            return key[:0], 0.0
+        key[i] = -(d[i, 0] * up[0] + d[i, 1] * up[1] + d[i, 2] * up[2]) / along
+    sign = 1.0
+    if n and key[0] > key[n - 1]:
+        sign = -1.0
+    for i in range(n):
+        key[i] *= sign
+    previous = key[0] if n else 0.0
+    for i in range(1, n):
+        raw = key[i]
+        if not raw >= previous - rounding:
+            return key[:0], 0.0
+        previous = raw
+        key[i] = max(raw, key[i - 1])
+    return key, sign
+
+
+@njit(inline="always")
+def _bisect(a, x, right):
+    """np.searchsorted(a, x, "right" if right else "left") on ascending a."""
+    lo, hi = 0, a.shape[0]
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if a[mid] < x or (right and a[mid] == x):
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@njit(**_JIT)
+def row_spans(key, eye, fwd, up, lo, hi, rel_pad):
+    """(m, 2) [first, end) spans of the rays (by RowIndex key, ascending) that can meet
+    each box [lo[b], hi[b]]: the keys of its corners (extremes of the key over a box wholly
+    in front of the eye), widened by rel_pad (1 + the largest |corner key|) for the rays'
+    float rounding; every ray for a box not wholly in front."""
+    m = lo.shape[0]
+    out = np.empty((m, 2), np.int64)
+    for b in range(m):
+        k_min, k_max, k_abs = np.inf, -np.inf, 0.0
+        front = True
+        for c in range(8):
+            x = (hi[b, 0] if c & 1 else lo[b, 0]) - eye[0]
+            y = (hi[b, 1] if c & 2 else lo[b, 1]) - eye[1]
+            z = (hi[b, 2] if c & 4 else lo[b, 2]) - eye[2]
+            along = x * fwd[0] + y * fwd[1] + z * fwd[2]
+            if not along > 0.0:
+                front = False
+                break
+            k = -(x * up[0] + y * up[1] + z * up[2]) / along
+            k_min, k_max, k_abs = min(k_min, k), max(k_max, k), max(k_abs, abs(k))
+        if not front:
+            out[b, 0], out[b, 1] = 0, key.shape[0]
+            continue
+        pad = rel_pad * (1.0 + k_abs)
+        out[b, 0] = _bisect(key, k_min - pad, False)
+        out[b, 1] = _bisect(key, k_max + pad, True)
+    return out
+
+
+@njit(**_JIT)
 def group_rows(values, member):
     """The rows i with member[i], grouped by values[i] (ascending), in row order within a
     group (a counting sort: the values are small ids), and where each group starts
@@ -481,27 +572,35 @@ def mark_tiles(pixels, rows, cols, tile):
 
 
 @njit(**_JIT)
-def world_box(m, corners, rel_pad, abs_pad):
-    """The axis-aligned world box of `corners` (8, 3) carried by the 4x4 m (column
-    vectors, transform_points' order of operations), padded by rel_pad times its largest
-    side plus abs_pad: (lo, hi)."""
-    lo = np.full(3, np.inf)
-    hi = np.full(3, -np.inf)
-    for k in range(corners.shape[0]):
-        x, y, z = corners[k, 0], corners[k, 1], corners[k, 2]
+def world_boxes(ms, corners, rel_pad, abs_pad):
+    """The axis-aligned world boxes of corners[k] (8, 3) carried by the 4x4 ms[k] (column
+    vectors, transform_points' order of operations), each padded by rel_pad times its
+    largest side plus abs_pad: (lo, hi), (m, 3) each."""
+    m = ms.shape[0]
+    lo = np.full((m, 3), np.inf)
+    hi = np.full((m, 3), -np.inf)
+    for b in range(m):
+        for k in range(corners.shape[1]):
+            x, y, z = corners[b, k, 0], corners[b, k, 1], corners[b, k, 2]
+            for i in range(3):
+                v = ms[b, i, 0] * x + ms[b, i, 1] * y + ms[b, i, 2] * z + 1.0 * ms[b, i, 3]
+                lo[b, i] = min(lo[b, i], v)
+                hi[b, i] = max(hi[b, i], v)
+        pad = rel_pad * max(hi[b, 0] - lo[b, 0], hi[b, 1] - lo[b, 1],
+                            hi[b, 2] - lo[b, 2]) + abs_pad
         for i in range(3):
-            v = m[i, 0] * x + m[i, 1] * y + m[i, 2] * z + 1.0 * m[i, 3]
-            lo[i] = min(lo[i], v)
-            hi[i] = max(hi[i], v)
-    pad = rel_pad * max(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) + abs_pad
-    return lo - pad, hi + pad
+            lo[b, i] -= pad
+            hi[b, i] += pad
+    return lo, hi
 
 
 @njit(**_JIT)
-def turns_or_scales(inv):
-    """Whether the upper 3x3 of `inv` is not exactly the identity."""
-    for i in range(3):
-        for j in range(3):
-            if inv[i, j] != (1.0 if i == j else 0.0):
-                return True
-    return False
+def turns_or_scales(invs):
+    """Per 4x4 of invs (m, 4, 4): whether its upper 3x3 is not exactly the identity."""
+    out = np.zeros(invs.shape[0], np.bool_)
+    for b in range(invs.shape[0]):
+        for i in range(3):
+            for j in range(3):
+                if invs[b, i, j] != (1.0 if i == j else 0.0):
+                    out[b] = True
+    return out

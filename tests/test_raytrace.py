@@ -720,9 +720,46 @@ def test_row_index_changes_no_hit(order):
     assert (index is None) == (order == "shuffled")
     if index is not None:
         poses = rs._poses(0.02)
-        spans = index.spans(np.array([p[0] for p in poses]), np.array([p[1] for p in poses]))
+        spans = index.spans(poses.lo, poses.hi)
         assert tuple(spans[0]) == (0, len(d))               # straddles the eye's plane
         assert np.mean(spans[1:, 1] - spans[1:, 0]) < 0.6 * len(d)
+
+
+def test_row_index_kernels_match_numpy():
+    # RowIndex's key and spans, compiled (raytrace/kernels.py), against their numpy
+    # statements: rays of a 40 x 30 image top-down and bottom-up, boxes in front of the
+    # eye, straddling its plane and behind it; out-of-order rays have no index.
+    cam_spec = scene_of([], eye=(0.2, 0.4, 0.5), look_at=(0.5, -0.3, -6.0), fov_y=70.0).camera
+    cam = Camera(cam_spec, 40, 30)
+    eye, fwd, up = (np.asarray(v, np.float64) for v in cam_spec.pose(0.0))
+    jj, ii = np.mgrid[0:30, 0:40]
+    rng = np.random.default_rng(4)
+    centre = eye + fwd * rng.uniform(-2, 12, (60, 1)) + rng.normal(0, 3, (60, 3))
+    lo, hi = centre - rng.uniform(0.05, 2, (60, 3)), centre + rng.uniform(0.05, 2, (60, 3))
+    pick = np.array([[(i >> k) & 1 for k in range(3)] for i in range(8)], bool)
+    for flip in (False, True):
+        pix = np.c_[ii.ravel(), jj.ravel()][::-1 if flip else 1]
+        _, d = cam.rays(0.0, pix[:, 0], pix[:, 1])
+        key, u = -(d @ up) / (d @ fwd), up
+        if key[0] > key[-1]:
+            key, u = -key, -up
+        index = embree_scene.RowIndex.of(eye, d, fwd, up)
+        # (the same sums, but numpy's matmul may round them differently: ~1e-16)
+        np.testing.assert_allclose(index.key, np.maximum.accumulate(key), rtol=0, atol=1e-14)
+        np.testing.assert_array_equal(index.up, u)
+        c = np.where(pick[None], hi[:, None, :], lo[:, None, :]) - eye
+        along = c @ fwd
+        with np.errstate(divide="ignore", invalid="ignore"):
+            k = -(c @ u) / along
+        pad = 1e-6 * (1.0 + np.abs(k).max(axis=1))
+        want = np.stack([np.searchsorted(index.key, k.min(axis=1) - pad, "left"),
+                         np.searchsorted(index.key, k.max(axis=1) + pad, "right")], axis=1)
+        want[~(along > 0.0).all(axis=1)] = (0, len(d))
+        got = index.spans(lo, hi)
+        np.testing.assert_array_equal(got, want)
+        assert 10 < np.count_nonzero(got[:, 1] - got[:, 0] < len(d)) < 60
+    assert embree_scene.RowIndex.of(eye, d[rng.permutation(len(d))], fwd, up) is None
+    assert embree_scene.RowIndex.of(eye, np.r_[d, -d[:1]], fwd, up) is None   # one behind
 
 
 def test_slab_hand_values():
@@ -751,6 +788,14 @@ def test_slab_hand_values():
     # Only rows first..end-1: the same rows of that span.
     np.testing.assert_array_equal(box_rows(o, inv_d, True, lo, hi, t0, t1, excl, 7, 2, 4),
                                   [2, 3])
+    # Several boxes in one call: each box's rows of its own span, its own object skipped.
+    from raytrace.kernels import boxes_rows
+    los, his = np.array([lo, lo + 10, lo]), np.array([hi, hi + 10, hi])
+    excl = np.array([0, 0, 0, 9, 0], np.uint32)
+    rows, cuts = boxes_rows(o, inv_d, True, los, his, t0, t1, excl,
+                            np.array([7, 8, 9], np.uint32), np.array([[0, 5], [0, 5], [1, 4]]))
+    assert cuts.tolist() == [0, 4, 4, 5]
+    np.testing.assert_array_equal(rows, [0, 2, 3, 4, 2])     # (ray 1 turns away)
 
 
 def test_large_views_keep_no_static_hits(monkeypatch):
@@ -783,23 +828,26 @@ def test_group_rows_is_a_stable_sort_by_id():
 
 
 def test_world_box_and_rotation_flag_match_numpy():
-    # The box test's padded world box and "directions need the inverse" flag, compiled
-    # (raytrace/kernels.py), against their numpy statements.
+    # The box test's padded world boxes and "directions need the inverse" flags, compiled
+    # for all moving objects at once (raytrace/kernels.py), against numpy per object.
     rng = np.random.default_rng(9)
+    ms = np.tile(np.eye(4), (50, 1, 1))
+    for k in range(1, 50, 2):
+        ms[k, :3, :3] = rng.normal(size=(3, 3))
+    ms[:, :3, 3] = rng.normal(size=(50, 3)) * 5
+    corners = rng.normal(size=(50, 8, 3))
+    lo, hi = kernels.world_boxes(ms, corners, 1e-4, 1e-6)
+    invs = np.linalg.inv(ms).astype(np.float32)
+    flags = kernels.turns_or_scales(invs)
     for k in range(50):
-        m = np.eye(4)
-        if k % 2:
-            m[:3, :3] = rng.normal(size=(3, 3))
-        m[:3, 3] = rng.normal(size=3) * 5
-        corners = rng.normal(size=(8, 3))
-        world = transform_points(m, corners)
+        world = transform_points(ms[k], corners[k])
         pad = 1e-4 * float(np.ptp(world, axis=0).max()) + 1e-6
-        lo, hi = kernels.world_box(m, corners, 1e-4, 1e-6)
-        np.testing.assert_array_equal(lo, world.min(axis=0) - pad)
-        np.testing.assert_array_equal(hi, world.max(axis=0) + pad)
-        inv = np.linalg.inv(m).astype(np.float32)
-        assert kernels.turns_or_scales(inv) == (not np.array_equal(inv[:3, :3], np.eye(3)))
-        assert kernels.turns_or_scales(inv) == bool(k % 2)
+        np.testing.assert_array_equal(lo[k], world.min(axis=0) - pad)
+        np.testing.assert_array_equal(hi[k], world.max(axis=0) + pad)
+        inv = np.linalg.inv(ms[k]).astype(np.float32)
+        np.testing.assert_array_equal(invs[k], inv)      # batched: the same LU per matrix
+        assert flags[k] == (not np.array_equal(inv[:3, :3], np.eye(3)))
+        assert flags[k] == bool(k % 2)
 
 
 def test_run_all_raises_a_jobs_error_after_every_thread_is_done():
