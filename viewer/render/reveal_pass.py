@@ -102,12 +102,12 @@ class ObjectTable:
     def write(self, frame: Frame, ids):
         """The transforms of objects `ids` at the frame's time, uploaded."""
         t_open, t_close = frame.exposure
-        for i in ids:
-            mats = frame.gpu.object_matrices(self.objects[i], frame.camera, frame.time,
-                                             t_open, t_close, frame.object_matrices)
-            for k, m in enumerate(mats):       # columns: (model, open, close, normal)
-                cols = np.asarray(m, np.float32).T
-                self.data[i, 4 * k:4 * k + len(cols), :cols.shape[1]] = cols
+        mats = [frame.gpu.object_matrices(self.objects[i], frame.camera, frame.time, t_open,
+                                          t_close, frame.object_matrices) for i in ids]
+        ids = np.asarray(ids, np.int64)
+        for k, m in enumerate(zip(*mats)):     # columns: (model, open, close, normal)
+            cols = np.asarray(m, np.float32).transpose(0, 2, 1)      # (objects, column, row)
+            self.data[ids, 4 * k:4 * k + cols.shape[1], :cols.shape[2]] = cols
         self.texture.write(self.data.tobytes())
 
     def release(self):
