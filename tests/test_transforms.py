@@ -64,6 +64,28 @@ def test_object_matrix_follows_the_contract():
     assert np.allclose((o.matrix(t) @ np.r_[p, 1])[:3], expect)
 
 
+def test_object_matrix_kept_only_while_its_fields_hold():
+    # M(t) is kept per t, and for an object that does not move as one matrix for every t;
+    # edited fields (the viewer's panel, bench --speeds) give the matrix of the new values.
+    mesh = Mesh(np.zeros((3, 3)), np.array([[0, 1, 2]]), np.zeros((3, 3)), np.zeros((1, 3)))
+    o = SceneObject("o", 1, mesh, Material(), position=np.array([1.0, 2, 3]),
+                    rotation=np.array([0.0, 90, 0]))
+    still = o.matrix(0.0)
+    np.testing.assert_array_equal(still[:3, 3], [1, 2, 3])
+    for t in (0.25, -3.0, 1e5):
+        np.testing.assert_array_equal(o.matrix(t), still)
+    o.velocity = np.array([0.0, 4, 0])
+    np.testing.assert_allclose(o.matrix(0.25)[:3, 3], [1, 3, 3], rtol=0, atol=1e-15)
+    np.testing.assert_array_equal(o.matrix(0.0), still)
+    o.velocity[:] = 0.0                         # edited in place: still again
+    o.position[0] = 5.0
+    np.testing.assert_array_equal(o.matrix(0.25)[:3, 3], [5, 2, 3])
+    o.angular_velocity = np.array([0.0, 0, 2])
+    turned = o.matrix(0.25)
+    np.testing.assert_allclose(turned[:3, :3], rodrigues([0, 0, 1], 0.5) @ still[:3, :3],
+                               rtol=0, atol=1e-15)
+
+
 def test_camera_pose_and_projection_of_known_points():
     spec = CameraSpec(position=np.array([0.0, 0, 5]), look_at=np.zeros(3), fov_y=90.0,
                       velocity=np.array([1.0, 0, 0]), angular_velocity=np.array([0, 0.5, 0]))
