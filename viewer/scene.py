@@ -78,9 +78,11 @@ class SceneObject:
         memo = self.__dict__.setdefault("_matrix_memo", {})
         m = memo.get(key)
         if m is None:
-            shift = self.velocity * t if moving else 0.0
-            m = tf.translate(self.position + shift) @ self._rest()
-            if moving and np.any(self.angular_velocity != 0):
+            # T(p) @ rest, written at once: rest's last column is (0, 0, 0, 1), so the
+            # product's is p and its 3x3 rest's (a product by 1 and sums of zeros).
+            m = self._rest()
+            m[:3, 3] = self.position + (self.velocity * t if moving else 0.0)
+            if moving and self.angular_velocity.any():
                 m[:3, :3] = rotation_at(self.angular_velocity, t) @ m[:3, :3]
             if len(memo) >= 8:
                 memo.pop(next(iter(memo)))
@@ -89,7 +91,7 @@ class SceneObject:
 
     def _rest(self) -> np.ndarray:
         """R0 @ S, cached against the values it was made from (the fields may be edited)."""
-        key = (tuple(self.rotation), tuple(self.scale))
+        key = (self.rotation.tobytes(), self.scale.tobytes())
         cached = getattr(self, "_rest_cache", None)
         if cached is None or cached[0] != key:
             cached = (key, tf.homogeneous(tf.euler_xyz_degrees(self.rotation)) @ tf.scale(self.scale))

@@ -4,6 +4,8 @@ shading of ray-revealed surfaces set their uniforms here, so both layers shade t
 """
 from __future__ import annotations
 
+import math
+
 import moderngl
 import numpy as np
 
@@ -94,6 +96,18 @@ def light_texels(scene: Scene) -> np.ndarray:
     return texels.reshape(rows, 2 * LIGHTS_PER_ROW, 3)
 
 
+def _normal_matrix(obj: SceneObject, model: np.ndarray) -> np.ndarray:
+    """tf.normal_matrix(model) (read-only), kept on the object for its last 3x3: an object
+    that does not turn keeps it from frame to frame (np.linalg.inv: ~5-10 us a call)."""
+    m3 = model[:3, :3].tobytes()
+    kept = obj.__dict__.get("_normal_memo")
+    if kept is None or kept[0] != m3:
+        n = tf.normal_matrix(model)
+        n.flags.writeable = False
+        kept = obj.__dict__["_normal_memo"] = (m3, n)
+    return kept[1]
+
+
 class GpuScene:
     def __init__(self, ctx: moderngl.Context, scene: Scene):
         self.max_lights = light_slots(ctx, scene)
@@ -122,16 +136,17 @@ class GpuScene:
                 t.repeat_x = t.repeat_y = True
                 self.images[o.id] = t
         self._vaos: dict[tuple[int, int], moderngl.VertexArray] = {}
-        # Local bounding-box centres, for the draw order.
-        self._centres = {o.id: (o.mesh.vertices.min(0) + o.mesh.vertices.max(0)) / 2
-                         if len(o.mesh.vertices) else np.zeros(3) for o in scene.objects}
+        # Local bounding-box centres (homogeneous: (x, y, z, 1)), for the draw order.
+        self._centres = {o.id: np.append((o.mesh.vertices.min(0) + o.mesh.vertices.max(0)) / 2
+                                         if len(o.mesh.vertices) else np.zeros(3), 1.0)
+                         for o in scene.objects}
 
     def front_to_back(self, eye: np.ndarray, t: float) -> list[SceneObject]:
         """Objects nearest first, so the depth test rejects hidden fragments before they are
         shaded (software GL shades every fragment that passes). Ties keep file order."""
         def distance(o):
-            c = o.matrix(t) @ np.append(self._centres[o.id], 1.0)
-            return float(np.linalg.norm(c[:3] - eye))
+            d = (o.matrix(t) @ self._centres[o.id])[:3] - eye
+            return math.sqrt(d.dot(d))          # np.linalg.norm's value, without its checks
         return sorted(self.scene.objects, key=lambda o: (distance(o), o.id))
 
     def vao(self, prog: moderngl.Program, obj: SceneObject) -> moderngl.VertexArray:
@@ -212,11 +227,18 @@ class GpuScene:
         key = (obj.id, t, t_open, t_close)
         mats = None if memo is None else memo.get(key)
         if mats is None:
+            # The camera's eye and views at these times, asked once a frame, not per object.
+            poses = None if memo is None else memo.get(("camera", t, t_open, t_close))
+            if poses is None:
+                poses = (cam.eye(t), cam.view(t_open), cam.view(t_close))
+                if memo is not None:
+                    memo[("camera", t, t_open, t_close)] = poses
+            eye, view_open, view_close = poses
             model = obj.matrix(t)
             model_eye = model.copy()
-            model_eye[:3, 3] -= cam.eye(t)
-            mats = (model_eye, cam.view(t_open) @ obj.matrix(t_open),
-                    cam.view(t_close) @ obj.matrix(t_close), tf.normal_matrix(model))
+            model_eye[:3, 3] -= eye
+            mats = (model_eye, view_open @ obj.matrix(t_open),
+                    view_close @ obj.matrix(t_close), _normal_matrix(obj, model))
             if memo is not None:
                 memo[key] = mats
         return mats
