@@ -342,7 +342,7 @@ class RayScene:
         # excluded object is not traced at all.
         if self.cull and self.moving:
             culled, cuts = kernels.boxes_rows(o_box, inv_d, from_eye, poses.lo, poses.hi,
-                                                start, best, excl, self._moving_ids, spans)
+                                              start, best, excl, self._moving_ids, spans)
             cuts = cuts.tolist()
         for k, ((obj, es), inv, rotate) in enumerate(zip(self.moving, poses.inv,
                                                          poses.rotate.tolist())):
