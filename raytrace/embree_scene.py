@@ -244,15 +244,18 @@ class RayScene:
         return self._without[own]
 
     def _poses(self, t: float) -> "Poses":
-        """The moving objects at time t (Poses), all at once (an animation's every frame
-        has a new t: per object, np.linalg.inv alone cost ~9 us, 32 movers 0.3 ms); kept
-        for the last M(t)s (every layer and chunk of a frame asks again)."""
+        """The moving objects at time t (Poses), all at once in compiled calls (an
+        animation's every frame has a new t: per object, np.linalg.inv alone cost ~9 us,
+        32 movers 0.3 ms); kept for the last M(t)s (every layer and chunk of a frame asks
+        again)."""
         ms = np.stack([obj.matrix(t) for obj, _ in self.moving]) if self.moving else \
             np.zeros((0, 4, 4))
         key = ms.tobytes()
         if self._pose_cache is None or self._pose_cache[0] != key:
             lo, hi = kernels.world_boxes(ms, self._corners, 1e-4, 1e-6)
-            inv = np.linalg.inv(ms).astype(np.float32)    # (the same LU per matrix as alone)
+            inv, ok = kernels.affine_inverses(ms)
+            if not ok:                  # (a determinant too small or too large for it)
+                inv = np.linalg.inv(ms).astype(np.float32)
             # Not renormalised, so t stays in world units; a pure translation keeps them.
             self._pose_cache = (key, Poses(lo, hi, inv, kernels.turns_or_scales(inv)))
         return self._pose_cache[1]

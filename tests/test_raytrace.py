@@ -848,6 +848,16 @@ def test_world_box_and_rotation_flag_match_numpy():
         np.testing.assert_array_equal(invs[k], inv)      # batched: the same LU per matrix
         assert flags[k] == (not np.array_equal(inv[:3, :3], np.eye(3)))
         assert flags[k] == bool(k % 2)
+    # The poses' inverses, compiled (adjugate over determinant), against LAPACK's to a
+    # float32 ulp; a determinant out of its range says so (the caller takes LAPACK's).
+    ms[::3, :3, :3] *= -1.0                                 # (mirrored ones too)
+    fast, ok = kernels.affine_inverses(ms)
+    assert ok
+    np.testing.assert_allclose(fast, np.linalg.inv(ms).astype(np.float32), rtol=2e-7,
+                               atol=1e-12)
+    tiny = np.eye(4)[None].copy()
+    tiny[0, :3, :3] *= 1e-110
+    assert not kernels.affine_inverses(tiny)[1]
 
 
 def test_run_all_raises_a_jobs_error_after_every_thread_is_done():
