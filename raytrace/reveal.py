@@ -138,7 +138,7 @@ def primary_view(camera: Camera, t: float) -> tuple | None:
 
 def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
                   own_ids: np.ndarray, layers: int, max_depth: int, view: tuple | None,
-                  call_threads: int = 1) -> RevealResult:
+                  call_threads: int = 1, matrices=None) -> RevealResult:
     """view: primary_view(camera, t), asked once by reveal() for every chunk."""
     n = len(pixels_ij)
     origin, direction = camera.rays(t, pixels_ij[:, 0], pixels_ij[:, 1])
@@ -159,7 +159,8 @@ def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
             "view": view, "pixels": pixels_ij[:, 1] * camera.width + pixels_ij[:, 0]}
         hits = rs.intersect(pick(origin), pick(direction), t, exclude,
                             max_restarts=max_depth, tnear=tnear, tfar=pick(far),
-                            threads=call_threads, image_axes=(fwd, up), **primary)
+                            threads=call_threads, image_axes=(fwd, up), matrices=matrices,
+                            **primary)
         if rows is None:
             layer = _layer(rs, hits, origin, direction, cos, np.ones(n, dtype=bool))
         else:
@@ -200,7 +201,8 @@ def _concatenate(parts: list[RevealResult]) -> RevealResult:
 
 def reveal(rs: RayScene, camera: Camera, t: float, pixels_ij, own_ids, layers: int = 1,
            max_depth: int = 8, threads: int | None = None,
-           min_chunk: int = MIN_CHUNK, max_chunk: int = MAX_CHUNK) -> RevealResult:
+           min_chunk: int = MIN_CHUNK, max_chunk: int = MAX_CHUNK,
+           matrices=None) -> RevealResult:
     """Reveal what lies behind each pixel's own object.
 
     pixels_ij: (n, 2) int image coordinates (column i from the left, row j from the top).
@@ -209,6 +211,8 @@ def reveal(rs: RayScene, camera: Camera, t: float, pixels_ij, own_ids, layers: i
     max_depth: restarts allowed to pass a static own object.
     threads: worker threads for large batches (default: the CPU count; 1 = no pool).
     min_chunk, max_chunk: the fewest pixels worth a thread's chunk, the most in one chunk.
+    matrices: M(t) of each of rs.moving's objects, as SceneObject.matrix(t) gives it, where
+    the caller has them already (RayScene.intersect's).
     """
     if layers < 1:
         raise ValueError(f"layers must be at least 1, got {layers}")
@@ -225,13 +229,13 @@ def reveal(rs: RayScene, camera: Camera, t: float, pixels_ij, own_ids, layers: i
                    min(threads * 4, n // max(1, min_chunk)) if threads > 1 else 1)
     if n_chunks <= 1:     # one chunk: its independent Embree calls may share the threads
         return _reveal_chunk(rs, camera, t, pixels_ij, own_ids, layers, max_depth, view,
-                             threads)
+                             threads, matrices)
     bounds = np.linspace(0, n, n_chunks + 1).astype(np.int64)
 
     def run(k):
         a, b = bounds[k], bounds[k + 1]
         return _reveal_chunk(rs, camera, t, pixels_ij[a:b], own_ids[a:b], layers, max_depth,
-                             view)
+                             view, matrices=matrices)
 
     if threads == 1:
         return _concatenate([run(k) for k in range(n_chunks)])

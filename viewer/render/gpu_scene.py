@@ -235,6 +235,9 @@ class GpuScene:
                     memo[("camera", t, t_open, t_close)] = poses
             eye, view_open, view_close = poses
             model = obj.matrix(t)
+            model.flags.writeable = False   # (a copy, kept read-only: shared below)
+            if memo is not None:            # (M(t) itself: the reveal's poses, frame_models)
+                memo[("model", obj.id, t)] = model
             model_eye = model.copy()
             model_eye[:3, 3] -= eye
             mats = (model_eye, view_open @ obj.matrix(t_open),

@@ -247,6 +247,15 @@ def read_masked_pixels(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
     return kernels.nonzero_pixels(gl_rows, i0, h - y1)
 
 
+def frame_models(frame: Frame, moving) -> list | None:
+    """M(t) of the objects of `moving` ((object, Embree scene) pairs) as this frame's
+    G-buffer made them (GpuScene.object_matrices' memo), or None where it did not (the
+    reveal then asks each object)."""
+    memo = frame.object_matrices
+    models = [memo.get(("model", o.id, frame.time)) for o, _ in moving]
+    return None if any(m is None for m in models) else models
+
+
 BLOCKS_PER_ROW = 256     # record blocks (SHADE_TILE x SHADE_TILE) per row; both powers of 2
 
 
@@ -292,7 +301,8 @@ class RevealTrace(Pass):
         result = None
         if len(pixels) and p.trace:
             result = st.rays.reveal(frame.camera, frame.time, pixels, own, layers=p.layers,
-                                    max_depth=p.max_depth, threads=p.threads or None)
+                                    max_depth=p.max_depth, threads=p.threads or None,
+                                    matrices=frame_models(frame, st.rays.moving))
         t2 = time.perf_counter()
         st.layers = [layer_hits(pixels, result.layers[k], frame.size[1], st.static_key)
                      if result else None for k in range(p.layers)]
