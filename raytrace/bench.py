@@ -43,10 +43,10 @@ def ceiling_jobs(batch: dict, front: bool = False) -> list[tuple]:
         rows = np.flatnonzero(rest)
         if rows.size:
             jobs.append((rs._static, o[rows], d[rows], rows))
-    for obj, es in rs.moving:
+    poses = rs._poses(t)                     # M(t)^-1 as the reveal takes them
+    for (obj, es), inv in zip(rs.moving, poses.inv):
         rows = np.flatnonzero(own != obj.id)
         if rows.size:
-            inv = np.linalg.inv(obj.matrix(t)).astype(np.float32)
             jobs.append((es, transform_points(inv, o[rows]), transform_vectors(inv, d[rows]),
                          rows))
     return jobs
