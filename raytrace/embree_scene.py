@@ -336,23 +336,24 @@ class RayScene:
         from_eye = n > 1 and (o.strides[0] == 0 or bool((o == o[0]).all()))
         shared = from_eye and tnear is None
         o32, d32, inv_d = kernels.ray_arrays(o, d, start, from_eye)
-        o_box = o[:1].astype(np.float32) if from_eye else o.astype(np.float32)
         no_ids = np.zeros(1, np.uint32)
-        poses = self._poses(t, matrices)
-        index = (RowIndex.of(o[0], d, *image_axes)
-                 if self.cull and from_eye and image_axes is not None
-                 and len(self.moving) >= ROW_INDEX_MOVERS else None)
-        spans = (np.tile(np.array([0, n], np.int64), (len(self.moving), 1)) if index is None
-                 else index.spans(poses.lo, poses.hi))
         # Rays that may hit each object's world box within [start, best] (best as it
         # stands before any of them: one compiled call, not one per object); a moving
-        # excluded object is not traced at all.
+        # excluded object is not traced at all. (Nothing of this without moving objects:
+        # a camera passing static ones pays it in every frame.)
+        poses = self._poses(t, matrices) if self.moving else None
         if self.cull and self.moving:
+            o_box = o[:1].astype(np.float32) if from_eye else o.astype(np.float32)
+            index = (RowIndex.of(o[0], d, *image_axes)
+                     if from_eye and image_axes is not None
+                     and len(self.moving) >= ROW_INDEX_MOVERS else None)
+            spans = (np.tile(np.array([0, n], np.int64), (len(self.moving), 1))
+                     if index is None else index.spans(poses.lo, poses.hi))
             culled, cuts = kernels.boxes_rows(o_box, inv_d, from_eye, poses.lo, poses.hi,
                                               start, best, excl, self._moving_ids, spans)
             cuts = cuts.tolist()
-        for k, ((obj, es), inv, rotate) in enumerate(zip(self.moving, poses.inv,
-                                                         poses.rotate.tolist())):
+        movers = zip(self.moving, poses.inv, poses.rotate.tolist()) if self.moving else ()
+        for k, ((obj, es), inv, rotate) in enumerate(movers):
             rows = (culled[cuts[k]:cuts[k + 1]] if self.cull
                     else np.flatnonzero(excl != obj.id))
             if not rows.size:

@@ -286,7 +286,7 @@ def pack_blocks(gx, gy, key, face, bary, tile_bits, row_bits):
     order of (key, tile row, tile column), 2^row_bits to a row of the record texture
     (powers of two: shifts and masks, not divisions, per pixel).
     Returns (records (rows, 2^row_bits * tile, 4) float32, each block's key, each
-    block's tile (tx, ty))."""
+    block's tile (tx, ty), each key's run of blocks (key, first, count) in order)."""
     n = gx.shape[0]
     tile, per_row = 1 << tile_bits, 1 << row_bits
     cols = rows_t = top = 0
@@ -367,7 +367,14 @@ def pack_blocks(gx, gy, key, face, bary, tile_bits, row_bits):
                     records[((o >> row_bits) << tile_bits) + oy,
                             ((o & (per_row - 1)) << tile_bits) + ox, 3] = -1.0
                 o = after[o]
-    return records, block_key, block_tile
+    # The blocks are in key order: each key's blocks are one run.
+    runs = np.zeros((n_keys, 3), np.int64)
+    for b in range(blocks):
+        r = rank[block_key[b]]
+        if runs[r, 2] == 0:
+            runs[r, 0], runs[r, 1] = block_key[b], b
+        runs[r, 2] += 1
+    return records, block_key, block_tile, runs
 
 
 @njit(**_JIT)

@@ -181,7 +181,7 @@ def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
         rows = np.flatnonzero(deeper) if rows is None else rows[deeper]
         exclude = hits.object_id[deeper]
         tnear = hits.distance[deeper]
-    result.pixels_hit = int(result.layers[0].hit.sum())
+    result.pixels_hit = int(np.count_nonzero(result.layers[0].object_id))
     return result
 
 

@@ -287,6 +287,15 @@ def test_camera_rays_equal_the_numpy_formula():
     i, j = rng.integers(0, 33, 100), rng.integers(0, 17, 100)
     np.testing.assert_allclose(wide.rays(0.1, i, j)[1], numpy_directions(wide, 0.1, i, j),
                                rtol=0, atol=4e-16)
+    # The camera's basis (made in the compiled pass): random poses, any up not along the
+    # view, and a turning camera.
+    for k in range(50):
+        pose = dataclasses.replace(spec, position=rng.normal(size=3) * 10,
+                                   look_at=rng.normal(size=3), up=rng.normal(size=3),
+                                   angular_velocity=rng.normal(size=3) * (k % 2))
+        cam = Camera(pose, 33, 17)
+        np.testing.assert_allclose(cam.rays(0.2, i, j)[1], numpy_directions(cam, 0.2, i, j),
+                                   rtol=0, atol=4e-16)
 
 
 def test_pass_timer_splits_host_cpu_from_waiting(ctx):

@@ -226,9 +226,13 @@ def test_record_blocks_match_a_brute_force_packing(seed, tile_bits):
     key = rng.choice([1, 3, 4, 9], n)
     face = rng.integers(-1, 1000, n)
     bary = rng.uniform(0, 1, (n, 2)).astype(np.float32)
-    records, block_key, tiles = pack_blocks(gx, gy, key, face, bary, tile_bits, 2)
+    records, block_key, tiles, runs = pack_blocks(gx, gy, key, face, bary, tile_bits, 2)
     cells = sorted({(int(k), int(y) // tile, int(x) // tile) for k, x, y in zip(key, gx, gy)})
     np.testing.assert_array_equal(block_key, [c[0] for c in cells])
+    # Each key's run of blocks (key, first, count), in key order.
+    firsts = [[c[0] for c in cells].index(k) for k in (1, 3, 4, 9)]
+    np.testing.assert_array_equal(runs, [(k, f, sum(c[0] == k for c in cells))
+                                         for k, f in zip((1, 3, 4, 9), firsts)])
     np.testing.assert_array_equal(tiles, [(c[2], c[1]) for c in cells])
     want = np.zeros(records.shape, np.float32)
     assert records.shape == (-(-len(cells) // per_row) * tile, per_row * tile, 4)

@@ -111,10 +111,3 @@ def test_integer_inputs_are_not_garbage():
     v = tf.look_at(np.array([0, 0, 5]), np.array([0, 0, -1]), np.array([0, 1, 0]))
     assert np.allclose(v @ [0, 0, 5, 1], [0, 0, 0, 1])
     assert np.allclose(tf.perspective(90, 2, 1, 10)[1, 1], 1.0)
-
-
-def test_camera_cross_is_numpys():
-    from viewer.camera import _cross
-    rng = np.random.default_rng(5)
-    for a, b in rng.normal(size=(200, 2, 3)) * rng.uniform(1e-3, 1e3, (200, 2, 1)):
-        assert np.array_equal(_cross(a, b), np.cross(a, b))

@@ -1,7 +1,6 @@
 """One camera for the rasteriser and the ray tracer: GL matrices and pixel-centre rays."""
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -58,16 +57,13 @@ class Camera:
         The origins are one read-only row, the eye, broadcast to (n, 3) (stride 0: the
         ray caster sees at once that they are shared)."""
         eye, fwd, up = self.spec.pose(t)
-        right = _cross(fwd, up)
-        right /= math.sqrt(right.dot(right))      # np.linalg.norm's value, without its checks
-        true_up = _cross(right, fwd)
         # Every column's and row's pixel-centre NDC (the convention's one place), then one
-        # compiled pass over the rays (numpy's dozen passes cost more than the rays).
-        cols, rows = self._centres()
-        tan_half = np.tan(np.radians(self.spec.fov_y) * 0.5)
+        # compiled pass over the rays, which also makes the camera's basis (numpy's dozen
+        # passes, and its small-vector calls, cost more than the rays).
+        cols, rows, scale_y = self._lens()
         d = _directions(np.asarray(i, np.int64).reshape(-1), np.asarray(j, np.int64).reshape(-1),
-                        cols, rows, np.asarray(fwd, np.float64), right, true_up,
-                        tan_half * self.aspect, tan_half)
+                        cols, rows, np.asarray(fwd, np.float64), np.asarray(up, np.float64),
+                        scale_y * self.aspect, scale_y)
         # (np.broadcast_to's result, built directly: ~5x cheaper; read-only like the eye)
         eye = np.ascontiguousarray(eye, np.float64)
         if eye.flags.writeable:
@@ -75,15 +71,18 @@ class Camera:
             eye.flags.writeable = False
         return np.ndarray(d.shape, np.float64, buffer=eye, strides=(0, 8)), d
 
-    def _centres(self) -> tuple[np.ndarray, np.ndarray]:
-        key = (self.width, self.height)
-        kept = self.__dict__.get("_centres_cache")
+    def _lens(self) -> tuple[np.ndarray, np.ndarray, float]:
+        """The pixel centres' NDC x of every column and y of every row, and tan(fov_y / 2),
+        kept while the size and the field of view hold."""
+        key = (self.width, self.height, self.spec.fov_y)
+        kept = self.__dict__.get("_lens_cache")
         if kept is None or kept[0] != key:
             x, _ = pixel_centres_ndc(np.arange(self.width), np.zeros(self.width),
                                      self.width, self.height)
             _, y = pixel_centres_ndc(np.zeros(self.height), np.arange(self.height),
                                      self.width, self.height)
-            kept = self.__dict__["_centres_cache"] = (key, (x, y))
+            kept = self.__dict__["_lens_cache"] = (
+                key, (x, y, float(np.tan(np.radians(self.spec.fov_y) * 0.5))))
         return kept[1]
 
     def project(self, t: float, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -96,24 +95,29 @@ class Camera:
         return win, -view[:, 2]
 
 
-def _cross(a, b) -> np.ndarray:
-    """np.cross of two 3-vectors, the same products and differences (np.cross costs
-    ~25 us a call, and the reveal asks for two a frame)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                     a[0] * b[1] - a[1] * b[0]], dtype=np.float64)
-
-
 @njit(cache=True, nogil=True)
-def _directions(i, j, cols, rows, fwd, right, up, scale_x, scale_y):
-    """Unit directions fwd + x sx right + y sy up through pixels (i, j), x = cols[i] and
-    y = rows[j] their centres in NDC (in numpy's order of operations)."""
+def _directions(i, j, cols, rows, fwd, up, scale_x, scale_y):
+    """Unit directions fwd + x sx right + y sy up' through pixels (i, j), x = cols[i] and
+    y = rows[j] their centres in NDC, right = fwd x up normalised, up' = right x fwd (in
+    numpy's order of operations: np.cross, and right / sqrt(right . right))."""
+    right = np.empty(3)
+    right[0] = fwd[1] * up[2] - fwd[2] * up[1]
+    right[1] = fwd[2] * up[0] - fwd[0] * up[2]
+    right[2] = fwd[0] * up[1] - fwd[1] * up[0]
+    norm = np.sqrt(right[0] * right[0] + right[1] * right[1] + right[2] * right[2])
+    for c in range(3):
+        right[c] /= norm
+    true_up = np.empty(3)
+    true_up[0] = right[1] * fwd[2] - right[2] * fwd[1]
+    true_up[1] = right[2] * fwd[0] - right[0] * fwd[2]
+    true_up[2] = right[0] * fwd[1] - right[1] * fwd[0]
     n = i.shape[0]
     d = np.empty((n, 3))
     for k in range(n):
         sx = cols[i[k]] * scale_x
         sy = rows[j[k]] * scale_y
         for c in range(3):
-            d[k, c] = fwd[c] + sx * right[c] + sy * up[c]
+            d[k, c] = fwd[c] + sx * right[c] + sy * true_up[c]
         inv_len = 1.0 / np.sqrt(d[k, 0] * d[k, 0] + d[k, 1] * d[k, 1] + d[k, 2] * d[k, 2])
         for c in range(3):
             d[k, c] *= inv_len

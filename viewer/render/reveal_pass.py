@@ -266,24 +266,20 @@ def layer_hits(pixels: np.ndarray, layer, height: int, static_key: int | None = 
     one SHADE_TILE x SHADE_TILE block per (key, screen tile) holding its pixels, blocks in
     rows of BLOCKS_PER_ROW, sorted by key: each key's draw covers only its own run of
     tiles (raytrace.kernels.pack_blocks); None when nothing was traced."""
-    rows = np.flatnonzero(layer.traced)
-    if not len(rows):
+    every = bool(layer.traced.all())          # layer 1: no gather needed
+    rows = None if every else np.flatnonzero(layer.traced)
+    if not len(pixels) or rows is not None and not len(rows):
         return None
-    every = len(rows) == len(pixels)          # layer 1: no gather needed
 
     def pick(a):
         return a if every else np.take(a, rows, axis=0)
     gx, gy, key, face = kernels.record_inputs(
         pick(pixels), height, pick(layer.object_id), pick(layer.prim_id),
         layer.table.face_offset, pick(layer.static_view), -1 if static_key is None else static_key)
-    records, block_key, tiles = kernels.pack_blocks(
+    records, _, tiles, runs = kernels.pack_blocks(
         gx, gy, key, face, pick(layer.barycentrics), SHADE_TILE.bit_length() - 1,
         BLOCKS_PER_ROW.bit_length() - 1)
-    # Each key's run of blocks: (key, first, count).
-    ends = (np.flatnonzero(np.diff(block_key)) + 1).tolist() + [len(block_key)]
-    starts = [0] + ends[:-1]
-    return LayerHits(records, [(int(block_key[f]), f, e - f) for f, e in zip(starts, ends)],
-                     tiles)
+    return LayerHits(records, [tuple(r) for r in runs.tolist()], tiles)
 
 
 class RevealTrace(Pass):
@@ -312,7 +308,7 @@ class RevealTrace(Pass):
         s["rays"] = int(result.rays) if result else 0
         s["revealed_pixels"] = int(result.pixels_hit) if result else 0
         # Revealed surfaces copied from the static objects' raster (RevealState.static_layer).
-        s["static_layer_hits"] = int(result.layers[0].static_view.sum()) if result else 0
+        s["static_layer_hits"] = np.count_nonzero(result.layers[0].static_view) if result else 0
         s["restarts"] = int(result.restarts) if result else 0
         s["unresolved"] = int(result.unresolved) if result else 0
         s["reveal_readback_ms"] = (t1 - t0) * 1e3
