@@ -76,8 +76,9 @@ def host_table(reports) -> str:
 def reveal_table(reports) -> str:
     lines = ["| scene | size | masked pixels | rays | reveal ms | of which tracing | "
              "M rays/s (whole / tracing) | bare Embree M rays/s | whole / bare | tracing / bare | "
+             "read-back ms | whole / bare with bare tracing and the read-back | "
              "bare, stopping at the own object |",
-             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for _, r in reports:
         rv = r.get("reveal")
         if not rv:
@@ -88,6 +89,8 @@ def reveal_table(reports) -> str:
             f"{rv['rays_per_s'] / 1e6:.2f} / {rv['trace_rays_per_s'] / 1e6:.2f} | "
             f"{rv['embree_rays_per_s'] / 1e6:.2f} | {rv['fraction_of_embree'] or 0:.0%} | "
             f"{rv['trace_fraction_of_embree'] or 0:.0%} | "
+            + (f"{rv['readback_ms']:.2f} | {rv['fraction_with_bare_tracing']:.0%} | "
+               if rv.get("fraction_with_bare_tracing") else "- | - | ")
             + (f"{rv['embree_front_rays_per_s'] / 1e6:.2f} ({rv['fraction_of_embree_front']:.0%}) |"
                if rv.get("fraction_of_embree_front") else "- |"))
     return "\n".join(lines)

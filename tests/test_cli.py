@@ -309,6 +309,12 @@ def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys):
     assert rv["rays"] >= rv["masked_pixels"] > 0
     assert rv["rays_per_s"] > 0 and rv["embree_rays_per_s"] > 0
     assert rv["fraction_of_embree"] == pytest.approx(rv["rays_per_s"] / rv["embree_rays_per_s"])
+    # The fraction a reveal would reach that traced at bare Embree's speed and did nothing
+    # else but read the mask back.
+    bare_ms = 1e3 * rv["rays"] / rv["embree_rays_per_s"]
+    assert 0 < rv["readback_ms"] < rv["reveal_ms"] and rv["records_ms"] > 0
+    assert rv["fraction_with_bare_tracing"] == pytest.approx(
+        bare_ms / (bare_ms + rv["readback_ms"]))
     # Slower objects mask fewer pixels.
     scaling = rep["scaling"]
     assert [row["speed"] for row in scaling] == [0.5, 1.0]
