@@ -39,13 +39,16 @@ class FullscreenPass(Pass):
 
     def draw(self, frame: Frame, outputs: tuple[str, ...], textures: dict[str, str],
              uniforms: dict | None = None, blend: bool = False, tiles=None,
-             clear: bool = True):
+             clear: bool = True, zeros_outside: bool = False):
         """Bind pool textures to sampler uniforms, set uniforms, draw into `outputs`.
 
         tiles: a TileList (viewer/render/tile_lists.py) to draw only its tiles, every
         texel of which the pass writes; the targets are zero elsewhere (what they held
         outside the tiles is cleared first: tile_lists.clear_outside) unless `clear` is
-        False (the caller filled them). None: the full-screen triangle."""
+        False (the caller filled them). None: the full-screen triangle.
+        zeros_outside: the shader writes 0 by itself outside `tiles` (the list holds every
+        texel that can be nonzero): last frame's other tiles are zeroed by drawing them
+        with it, in the same draw."""
         ctx = frame.ctx
         if tiles is not None and not tiles.count:
             # No tiles: nothing to bind or draw (a program, its textures and uniforms cost
@@ -67,9 +70,10 @@ class FullscreenPass(Pass):
         fbo.use()
         fbo.viewport = (0, 0) + fbo.size
         ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
+        drawn = tiles
         if tiles is not None and clear:
             from .tile_lists import clear_outside   # (tile_lists builds on this module)
-            clear_outside(frame, tuple(outputs), tiles)
+            drawn = clear_outside(frame, tuple(outputs), tiles, zeros_outside)
         frame.pool.mark_written(outputs, None if tiles is None else tiles.box)
         if blend:
             ctx.enable(moderngl.BLEND)
@@ -77,7 +81,7 @@ class FullscreenPass(Pass):
         if tiles is None:
             frame.programs.empty_vao(prog).render(moderngl.TRIANGLES, vertices=3)
         else:
-            tiles.render(prog)
+            drawn.render(prog)
             if clear:
                 frame.pool.mark_tiles(tuple(outputs), tiles)
         if blend:
