@@ -6,8 +6,7 @@
 // Drawn over the tiles holding traced pixels (viewer/render/reveal_pass.py), in draws
 // of one or more revealed objects over their own tiles, each of whose pixels a draw
 // writes: its record's key is one of the draw's (shaded), 0 (no ray: cleared), or -1
-// (another draw writes it); the last draw also clears last frame's tiles not drawn again
-// (their quads' record coordinate is -1: not a texel). The hit
+// (another draw writes it). The hit
 // (face row, Embree u, v) is turned into mesh-space position, normal and uv here, from the
 // face's three corners in u_faces, with the weights (1 - u - v, u, v).
 // OBJECT_TABLE compiles the draw of several objects at once: each fragment takes its
@@ -58,11 +57,6 @@ layout(location = 1) out vec4 out_packed_color;
 
 
 void main() {
-    if (v_record.x < -0.5) {                // last frame's tile, not drawn again: cleared
-        out_packed = vec4(0.0);             // (TileList.add_zeros' quads, record -1)
-        out_packed_color = vec4(0.0);
-        return;
-    }
     vec4 hit = texelFetch(u_hits, ivec2(floor(v_record)), 0);
     if (hit.w < 0.0) discard;               // another object's draw writes this pixel
     if (hit.w == 0.0) {                     // no ray here: "nothing revealed"

@@ -39,16 +39,13 @@ class FullscreenPass(Pass):
 
     def draw(self, frame: Frame, outputs: tuple[str, ...], textures: dict[str, str],
              uniforms: dict | None = None, blend: bool = False, tiles=None,
-             clear: bool = True, zeros_outside: bool = False):
+             clear: bool = True):
         """Bind pool textures to sampler uniforms, set uniforms, draw into `outputs`.
 
         tiles: a TileList (viewer/render/tile_lists.py) to draw only its tiles, every
         texel of which the pass writes; the targets are zero elsewhere (what they held
         outside the tiles is cleared first: tile_lists.clear_outside) unless `clear` is
-        False (the caller filled them). None: the full-screen triangle.
-        zeros_outside: the shader writes 0 by itself outside `tiles` (the list holds every
-        texel that can be nonzero): last frame's other tiles are zeroed by drawing them
-        with it, in the same draw."""
+        False (the caller filled them). None: the full-screen triangle."""
         ctx = frame.ctx
         if tiles is not None and not tiles.count:
             # No tiles: nothing to bind or draw (a program, its textures and uniforms cost
@@ -70,10 +67,9 @@ class FullscreenPass(Pass):
         fbo.use()
         fbo.viewport = (0, 0) + fbo.size
         ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
-        drawn = tiles
         if tiles is not None and clear:
             from .tile_lists import clear_outside   # (tile_lists builds on this module)
-            drawn = clear_outside(frame, tuple(outputs), tiles, zeros_outside)
+            clear_outside(frame, tuple(outputs), tiles)
         frame.pool.mark_written(outputs, None if tiles is None else tiles.box)
         if blend:
             ctx.enable(moderngl.BLEND)
@@ -81,7 +77,7 @@ class FullscreenPass(Pass):
         if tiles is None:
             frame.programs.empty_vao(prog).render(moderngl.TRIANGLES, vertices=3)
         else:
-            drawn.render(prog)
+            tiles.render(prog)
             if clear:
                 frame.pool.mark_tiles(tuple(outputs), tiles)
         if blend:

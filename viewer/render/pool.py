@@ -129,7 +129,7 @@ class ResourcePool:
         not drawn again (a boolean tile map; all False when the tiles repeat, as under a
         still camera), the only texels outside `tiles` that are not 0; None where that is
         not known (clear() then)."""
-        key, grid = tile_map(tiles)
+        key, grid = _tile_map(tiles)
         marks = [self._tiles.get(n) for n in names]
         if not all(m is not None and m[0] == key for m in marks):
             return None
@@ -141,7 +141,7 @@ class ResourcePool:
     def mark_tiles(self, names, tiles):
         """`names` hold nonzero texels only inside `tiles` (a TileList), every texel of
         which a pass has just written (after tile_lists.clear_outside)."""
-        key, grid = tile_map(tiles)
+        key, grid = _tile_map(tiles)
         for n in names:
             self._written[n] = tiles.box
             self._tiles[n] = (key, grid)
@@ -172,9 +172,8 @@ class ResourcePool:
         self._tiles.clear()
 
 
-def tile_map(tiles) -> tuple[tuple, np.ndarray]:
-    """(tile geometry, boolean map (rows, columns) of the listed tiles) of a TileList
-    (GL orientation: rows = ty)."""
+def _tile_map(tiles) -> tuple[tuple, np.ndarray]:
+    """(tile geometry, boolean map (rows, columns) of the listed tiles) of a TileList."""
     tile, tile_h, (w, h) = tiles.tile, tiles.tile_h, tiles.size
     grid = np.zeros((-(-h // tile_h), -(-w // tile)), bool)
     if tiles.count:

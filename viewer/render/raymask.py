@@ -89,7 +89,7 @@ class SurfaceTests(FullscreenPass):
             self._step = 3
             clear_unwritten(frame, self.produces[:-1] + EdgeIdTiles.produces)
             return self.draw(frame, ("ray_mask",), {"u_front": "hybrid_front"}, first,
-                             tiles=tiles, zeros_outside=True)
+                             tiles=tiles)
         if not reach_test(frame):
             self._step = 0
             if tiles is not None:       # where the edge outputs were written (EdgeIdTiles)

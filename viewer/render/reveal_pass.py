@@ -366,11 +366,10 @@ class RevealShade(FullscreenPass):
                 continue
             # The tiles holding this layer's pixels; each key's draw keeps its own run.
             # Its draws together write every pixel of them (records: the key's own, 0 "no
-            # ray", -1 another key's), so only last frame's other tiles are cleared: by the
-            # last draw, which takes them as quads whose records read -1 (zeros).
+            # ray", -1 another key's), so only last frame's other tiles are cleared.
             tl.set(hits.tiles, SHADE_TILE, frame.size, BLOCKS_PER_ROW,
                    cuts=[first for _, first, _ in hits.keys])
-            clear_outside(frame, names, tl, zeros_outside=True)
+            clear_outside(frame, names, tl)
             records = st.records_texture(k, hits.records.shape[:2])
             h, w = hits.records.shape[:2]
             records.write(hits.records.tobytes(), viewport=(0, 0, w, h))
@@ -385,7 +384,7 @@ class RevealShade(FullscreenPass):
             if ids:
                 table.write(frame, ids)
             table.texture.use(OBJECT_UNIT)
-            for n, (keys, first, count) in enumerate(draws):
+            for keys, first, count in draws:
                 key = keys[0]
                 self._static = int(key == st.static_key)
                 self._table = int(table.has_row(key))
@@ -403,8 +402,7 @@ class RevealShade(FullscreenPass):
                 elif not self._static:          # an image-textured object
                     gpu.bind_object(prog, objects[key - 1], cam, t, t_open, t_close,
                                     frame.object_matrices)
-                self.draw(frame, names, textures,
-                          tiles=tl.part(first, count, zeros=n == len(draws) - 1), clear=False)
+                self.draw(frame, names, textures, tiles=tl.part(first, count), clear=False)
             self._static = self._table = 0
             frame.stats[f"shade_draws{k}"] = len(draws)
             frame.pool.mark_tiles(names, tl)

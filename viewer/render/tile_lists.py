@@ -34,7 +34,7 @@ from .blur_common import max_radius_px
 from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
-from .pool import TexSpec, tile_map
+from .pool import TexSpec
 from . import tile_kernels
 from .tiles import StripSpec
 
@@ -55,8 +55,6 @@ class TileList:
         self.vaos: dict[int, moderngl.VertexArray] = {}
         self.count = 0                 # tiles in the current list
         self.quads = 0                 # quads drawn: one per tile, or merged rectangles
-        self.zero_quads = 0            # quads after them whose records read -1 (add_zeros)
-        self._data = np.zeros(0, np.float32)
         self.tiles = np.zeros((0, 2), np.int64)
         self.box = None                # (x0, y0, x1, y1) GL pixels around the tiles
         self.vertex_shader = "tiles.vert"
@@ -87,27 +85,11 @@ class TileList:
             data, box = tile_kernels.rect_quads(rects, tile, self.tile_h, w, h)
             self.quad_first = None
         self.quads = len(data) // (24 if blocks_per_row else 12)
-        self.zero_quads = 0
         self.box = tuple(int(b) for b in box) if self.count else None
         if blocks_per_row != self.blocks_per_row:
             self._release_buffer()                      # the vertex layout changes
         self.blocks_per_row = blocks_per_row
         self.vertex_shader = "reveal_tiles.vert" if blocks_per_row else "tiles.vert"
-        self._data = data
-        self._upload(data)
-
-    def add_zeros(self, tiles: np.ndarray):
-        """Append to a block-mapped list quads over `tiles` (not among its own) whose
-        records read (-1, -1): glsl/reveal_shade.frag writes 0 there. The last run drawn
-        takes them (part(..., zeros=True)); `tiles`, `count` and `box` stay the list's own."""
-        rects = tile_kernels.merge_tiles(np.ascontiguousarray(tiles, np.int64).reshape(-1, 2))
-        corners, _ = tile_kernels.rect_quads(rects, self.tile, self.tile_h, *self.size)
-        zeros = np.full((len(corners) // 2, 4), -1.0, np.float32)
-        zeros[:, :2] = corners.reshape(-1, 2)
-        self.zero_quads = len(rects)
-        self._upload(np.concatenate([self._data, zeros.ravel()]))
-
-    def _upload(self, data: np.ndarray):
         nbytes = max(data.nbytes, 4)
         if self.buffer is None or self.buffer.size < nbytes:
             self._release_buffer()
@@ -132,18 +114,14 @@ class TileList:
             vao = self.vaos[prog.glo] = self.ctx.vertex_array(prog, [layout])
         vao.render(moderngl.TRIANGLES, vertices=6 * count, first=6 * first)
 
-    def part(self, first: int, count: int, zeros: bool = False) -> "TileRange":
+    def part(self, first: int, count: int) -> "TileRange":
         """Tiles first .. first + count - 1 of this (block-mapped) list, drawable like a
-        list; with `zeros`, and the quads add_zeros appended."""
+        list."""
         if not self.blocks_per_row:
             raise ValueError("TileList.part: only a block-mapped list draws runs apart")
         q0, q1 = np.searchsorted(self.quad_first, (first, first + count))
         if count and self.quad_first[q0] != first:
             raise ValueError(f"TileList.part: tile {first} is not a cut given to set()")
-        if zeros and self.zero_quads:
-            if q1 != len(self.quad_first):
-                raise ValueError("TileList.part: the zero quads follow the last run only")
-            q1 += self.zero_quads
         return TileRange(self, first, count, int(q0), int(q1 - q0))
 
     def _release_buffer(self):
@@ -267,40 +245,22 @@ class ZeroTiles(FullscreenPass):
 _ZERO = ZeroTiles()
 
 
-def clear_outside(frame: Frame, outputs: tuple[str, ...], tiles: TileList,
-                  zeros_outside: bool = False) -> TileList:
+def clear_outside(frame: Frame, outputs: tuple[str, ...], tiles: TileList):
     """Before a pass draws `tiles`, writing every texel of them in `outputs`: zero what
-    the targets hold outside them, and return the list the pass is to draw. Where a tiled
-    pass of the same geometry wrote them last, what is left is its tiles not drawn again
-    (none when the tiles repeat): zeroed in a draw of their own, or, where the pass's
-    shader writes 0 there by itself (`zeros_outside`: outside its tiles its answer is the
-    clear value, as the ray mask's off the surface tiles), drawn by the pass with its own
-    tiles, in one draw (llvmpipe charges ~0.1 ms a draw, whatever its size): the list
-    returned then holds both (a block-mapped list takes them as its zero quads,
-    TileList.add_zeros). Otherwise the box written since the last clear is cleared."""
+    the targets hold outside them. Where a tiled pass of the same geometry wrote them
+    last, that is its tiles not drawn again, zeroed tile by tile in one draw (nothing
+    when the tiles repeat); otherwise the box written since the last clear."""
     stale = frame.pool.stale_tiles(outputs, tiles)
     if stale is None:
         frame.pool.clear(outputs)
-        return tiles
-    if not stale.any():
-        return tiles
-    state = frame.host.setdefault("state", {})
-    if zeros_outside and tiles.blocks_per_row:      # (reveal_shade's records)
-        tiles.add_zeros(tile_coords(stale))
-        return tiles
-    if zeros_outside:
-        tl = state.get(("with_stale",) + tuple(outputs))
+        return
+    if stale.any():
+        state = frame.host.setdefault("state", {})
+        tl = state.get("zero_tiles")
         if tl is None:
-            tl = state[("with_stale",) + tuple(outputs)] = TileList(frame.ctx)
-        tl.set(tile_coords(stale | tile_map(tiles)[1]), tiles.tile, tiles.size,
-               tile_h=tiles.tile_h)
-        return tl
-    tl = state.get("zero_tiles")
-    if tl is None:
-        tl = state["zero_tiles"] = TileList(frame.ctx)
-    tl.set(tile_coords(stale), tiles.tile, tiles.size, tile_h=tiles.tile_h)
-    _ZERO.zero(frame, outputs, tl)
-    return tiles
+            tl = state["zero_tiles"] = TileList(frame.ctx)
+        tl.set(tile_coords(stale), tiles.tile, tiles.size, tile_h=tiles.tile_h)
+        _ZERO.zero(frame, outputs, tl)
 
 
 def tile_coords(selected: np.ndarray) -> np.ndarray:

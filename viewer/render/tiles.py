@@ -52,9 +52,7 @@ class TileMaxPass(FullscreenPass):
         tiles = self.select(frame, k) if self.select is not None else None
         if tiles is not None:
             uniforms["u_viewport"] = tuple(float(x) for x in tiles.size)
-        # (Outside `select`'s texels the strip's value is 0: it zeroes last frame's.)
-        self.draw(frame, (self.output,), {"u_velocity": self.source}, uniforms, tiles=tiles,
-                  zeros_outside=True)
+        self.draw(frame, (self.output,), {"u_velocity": self.source}, uniforms, tiles=tiles)
 
 
 class NeighborMaxPass(FullscreenPass):
