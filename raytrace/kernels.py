@@ -419,7 +419,9 @@ def nonzero_pixels(gl_rows, i0, j0):
     (rows top-down, then columns): their image coordinates (i, j), with (i0, j0) the
     window's top-left image pixel, and their values. No flipped copy; a first pass counts
     each row's pixels (a branch-free sum that vectorises), the second reads only the rows
-    holding any (the mask is mostly 0)."""
+    holding any, and in them tests runs of 8 pixels at once (one OR, one branch), then
+    only the runs holding any: the mask is mostly 0, in bands (pan 1280x720 0.46 -> 0.15-0.20
+    ms alone; written out: a loop for the OR, or a helper for the pixels, ran slower)."""
     h, w = gl_rows.shape
     per_row = np.zeros(h, np.int64)
     for y in range(h):
@@ -431,12 +433,25 @@ def nonzero_pixels(gl_rows, i0, j0):
     ij = np.empty((count, 2), np.int64)
     values = np.empty(count, gl_rows.dtype)
     k = 0
+    whole = w - w % 8
     for r in range(h):
         y = h - 1 - r
         if per_row[y] == 0:
             continue
-        for x in range(w):
-            v = gl_rows[y, x]
+        row = gl_rows[y]
+        for x0 in range(0, whole, 8):
+            if (row[x0] | row[x0 + 1] | row[x0 + 2] | row[x0 + 3] | row[x0 + 4]
+                    | row[x0 + 5] | row[x0 + 6] | row[x0 + 7]) == 0:
+                continue
+            for x in range(x0, x0 + 8):
+                v = row[x]
+                if v != 0:
+                    ij[k, 0] = x + i0
+                    ij[k, 1] = r + j0
+                    values[k] = v
+                    k += 1
+        for x in range(whole, w):
+            v = row[x]
             if v != 0:
                 ij[k, 0] = x + i0
                 ij[k, 1] = r + j0

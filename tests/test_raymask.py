@@ -255,15 +255,20 @@ def test_without_the_range_check_the_mask_is_the_displacement_tests_survivors(
 def test_masked_pixels_read_in_image_order_from_gl_rows():
     # The reveal's read-back: the nonzero pixels of a GL-orientation window in image order
     # (top row first) with the window's top-left image pixel added, and their values.
+    # Widths below, at and past its runs of 8 pixels; dense, banded and empty windows.
     from raytrace.kernels import nonzero_pixels
-    gl_rows = np.random.default_rng(5).integers(0, 4, (7, 9)).astype(np.uint32)
-    gl_rows[gl_rows == 3] = 0
-    ij, values = nonzero_pixels(gl_rows, 20, 30)
-    image = gl_rows[::-1]
-    jj, ii = np.nonzero(image)
-    np.testing.assert_array_equal(ij, np.c_[ii + 20, jj + 30])
-    np.testing.assert_array_equal(values, image[jj, ii])
-    assert values.dtype == np.uint32 and len(values) > 10
+    rng = np.random.default_rng(5)
+    for h, w, density in ((7, 9, 0.5), (5, 8, 0.9), (12, 31, 0.05), (40, 64, 0.01),
+                          (3, 7, 1.0), (6, 17, 0.0), (1, 1, 1.0)):
+        gl_rows = np.where(rng.random((h, w)) < density,
+                           rng.integers(1, 2 ** 32, (h, w), dtype=np.uint64), 0).astype(np.uint32)
+        gl_rows[h // 2, w // 3:] = 7 if density else 0          # a band across a row
+        ij, values = nonzero_pixels(gl_rows, 20, 30)
+        image = gl_rows[::-1]
+        jj, ii = np.nonzero(image)
+        np.testing.assert_array_equal(ij, np.c_[ii + 20, jj + 30])
+        np.testing.assert_array_equal(values, image[jj, ii])
+        assert values.dtype == np.uint32 and len(values) == np.count_nonzero(gl_rows)
 
 
 def test_static_frame_masks_nothing(synthetic_frame):
