@@ -311,10 +311,10 @@ def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys):
     assert rv["fraction_of_embree"] == pytest.approx(rv["rays_per_s"] / rv["embree_rays_per_s"])
     # The fraction a reveal would reach that traced at bare Embree's speed and did nothing
     # else but read the mask back.
-    bare_ms = 1e3 * rv["rays"] / rv["embree_rays_per_s"]
+    bare_ms = 1e3 * rv["masked_pixels"] / rv["embree_rays_per_s"]
     assert 0 < rv["readback_ms"] < rv["reveal_ms"] and rv["records_ms"] > 0
     assert rv["fraction_with_bare_tracing"] == pytest.approx(
-        bare_ms / (bare_ms + rv["readback_ms"]))
+        1e3 * rv["rays"] / (bare_ms + rv["readback_ms"]) / rv["embree_rays_per_s"])
     # Slower objects mask fewer pixels.
     scaling = rep["scaling"]
     assert [row["speed"] for row in scaling] == [0.5, 1.0]

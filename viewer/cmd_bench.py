@@ -153,14 +153,15 @@ def reveal_summary(results: dict) -> dict | None:
     rps = rays / (reveal_ms / 1e3) if reveal_ms > 0 else 0.0
     trace_rps = rays / (trace_ms / 1e3) if trace_ms > 0 else 0.0
     # What the whole would reach against bare Embree if its tracing took bare Embree's
-    # time and nothing else were left but the mask read-back (which no CPU reveal can
-    # skip: the mask is made on the GPU): bare / (bare + read-back). Where the reveal
-    # traces every query (a moving camera) the whole cannot do better; where it looks hits
-    # up or culls rays (a still camera, moving objects' boxes) it can.
+    # time (the ceiling's calls: one ray per masked pixel) and nothing else were left but
+    # the mask read-back, which no CPU reveal can skip (the mask is made on the GPU).
+    # Where the reveal traces every query (a moving camera) the whole cannot do better;
+    # where it looks hits up or culls rays (a still camera, moving objects' boxes) it can.
     readback_ms = st.get("reveal_readback_ms", 0.0)
-    bare_ms = 1e3 * rays / ceiling if ceiling else 0.0
-    bound = bare_ms / (bare_ms + readback_ms) if bare_ms > 0 else None
-    return {"rays": rays, "masked_pixels": int(st.get("masked_pixels", 0)),
+    masked = int(st.get("masked_pixels", 0))
+    bare_ms = 1e3 * masked / ceiling if ceiling else 0.0
+    bound = (rays / ((bare_ms + readback_ms) / 1e3) / ceiling) if bare_ms > 0 else None
+    return {"rays": rays, "masked_pixels": masked,
             "reveal_ms": reveal_ms, "trace_ms": trace_ms, "readback_ms": readback_ms,
             "records_ms": st.get("reveal_pack_ms", 0.0), "rays_per_s": rps,
             "trace_rays_per_s": trace_rps, "embree_rays_per_s": ceiling,
