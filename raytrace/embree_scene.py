@@ -57,13 +57,6 @@ class StaticHits:
         self.v = np.zeros(size, dtype=np.float32)
         self.distance = np.full(size, np.inf)
 
-    def store(self, keys, object_id, r, distance):
-        self.object_id[keys] = object_id
-        self.prim_id[keys] = r["primID"]
-        self.u[keys], self.v[keys] = r["u"], r["v"]
-        self.distance[keys] = distance
-        self.known[keys] = True
-
 
 @dataclass
 class Hits:
@@ -404,9 +397,10 @@ class RayScene:
                 r = _embree_run(self._static,
                                 *kernels.gather_rays(o32, d32, start, limit, r_new), threads)
                 queries += r_new.size
-                hits.store(k_new, id_of[r["geomID"] + 1], r, start[r_new] + r["tfar"])
-                kernels.view_merge(r_new, k_new, hits.object_id, hits.prim_id, hits.u, hits.v,
-                                   hits.distance, best, object_id, prim_id, u, v, from_view)
+                kernels.view_store(r_new, k_new, r["geomID"], r["primID"], r["u"], r["v"],
+                                   r["tfar"], start, id_of, hits.known, hits.object_id,
+                                   hits.prim_id, hits.u, hits.v, hits.distance, best,
+                                   object_id, prim_id, u, v, from_view)
         if self._static is not None and (rows is None or rows.size):
             offset, org = start.copy(), None
             for depth in range(max_restarts + 1):

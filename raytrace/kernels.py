@@ -204,7 +204,7 @@ def view_lookup(left, static_own, pixels, known, v_id, v_prim, v_u, v_v, v_dist,
                 object_id, prim_id, u, v, from_view):
     """Of the rays `left`, those without a static own object take the view's kept static
     hit of their pixel where it is known and nearer than the best so far, in place (as
-    view_merge); returned: the rays whose pixel's hit is not known yet and those pixels,
+    view_store); returned: the rays whose pixel's hit is not known yet and those pixels,
     and the rays with a static own object. One pass: a still camera's frames know them
     all."""
     n = left.shape[0]
@@ -230,13 +230,22 @@ def view_lookup(left, static_own, pixels, known, v_id, v_prim, v_u, v_v, v_dist,
 
 
 @njit(**_JIT)
-def view_merge(use, keys, v_id, v_prim, v_u, v_v, v_dist, best, object_id, prim_id, u, v,
-               from_view):
-    """The view's kept static hits for rays `use` (pixels `keys`) where nearer than the
-    best so far, in place; from_view marks the rays that took one."""
-    for k in range(use.shape[0]):
-        _take_view_hit(use[k], keys[k], v_id, v_prim, v_u, v_v, v_dist, best, object_id,
-                       prim_id, u, v, from_view)
+def view_store(rows, keys, geom, prim, hu, hv, htfar, start, id_of, known, v_id, v_prim, v_u,
+               v_v, v_dist, best, object_id, prim_id, u, v, from_view):
+    """The static scene's hits of rays `rows` (Embree's output for them, traced from their
+    starts) kept as the view's hits of pixels `keys` (object id_of[geomID + 1], distance
+    start + tfar), then taken by each ray where nearer than its best so far, in place;
+    from_view marks the rays that took one. (One pass, not ten numpy calls.)"""
+    for k in range(rows.shape[0]):
+        i, key = rows[k], keys[k]
+        v_id[key] = id_of[geom[k] + 1]
+        v_prim[key] = prim[k]
+        v_u[key] = hu[k]
+        v_v[key] = hv[k]
+        v_dist[key] = start[i] + htfar[k]
+        known[key] = True
+        _take_view_hit(i, key, v_id, v_prim, v_u, v_v, v_dist, best, object_id, prim_id, u, v,
+                       from_view)
 
 
 @njit(**_JIT)
