@@ -93,7 +93,8 @@ def run(args) -> int:
     if not isinstance(scene, str) or not scene:
         raise UserError("video: expected a SCENE (a file or built-in name), or --params "
                         "with the sidecar of an earlier video")
-    setup_args = argparse.Namespace(scene=scene, time=args.start, size=args.size,
+    start = None if args.start is None else repr(cliargs.parse_time("--start", args.start))
+    setup_args = argparse.Namespace(scene=scene, time=start, size=args.size,
                                     samples=args.samples, seed=args.seed, set=args.set,
                                     params=args.params)
     s = cliargs.setup(setup_args)
