@@ -263,3 +263,38 @@ def test_a_failure_mid_video_leaves_no_file(tmp_path, capsys, monkeypatch):
         assert main(["video", BASIC, "--size", "16x9", "--frames", "4", "--modes", "off",
                      "--out", str(tmp_path / out)]) == 130
     assert listing(tmp_path) == []
+
+
+# --- the viewer records ----------------------------------------------------------------------------
+
+def test_the_viewer_records_what_it_animates_and_video_reproduces_it(tmp_path):
+    """`hmblur view --record` of a playing animation: one frame per displayed frame, 1/fps
+    of scene time apart; `hmblur video --params` of its sidecar renders the same frames
+    (to the window's rounding: the viewer draws through its own context)."""
+    import subprocess
+    import sys
+    from tests.xvfb import Xvfb
+    x = Xvfb().start()
+    try:
+        script = tmp_path / "s.txt"
+        script.write_text("0 play\n0 panel off\n")
+        cmd = [sys.executable, "-m", "viewer", "view", "spinner", "--mode", "mcguire",
+               "--size", "96x64", "--frames", "4", "--record", str(tmp_path / "rec"),
+               "--record-fps", "12", "--script", str(script)]
+        p = subprocess.run(cmd, cwd=ROOT, env=x.env(), capture_output=True, text=True, timeout=240)
+        assert p.returncode == 0, p.stderr
+    finally:
+        x.stop()
+    rec = tmp_path / "rec"
+    assert pngs(rec) == [f"frame_{k:04d}.png" for k in range(4)]
+    side = json.loads((rec / "video.json").read_text())
+    assert side["modes"] == ["mcguire"] and side["frames"] == 4 and side["fps"] == 12.0
+    assert side["time"] == pytest.approx(1 / 12)       # played one step before the first frame
+    assert main(["video", "--params", str(rec / "video.json"), "--out", str(tmp_path / "again")]) == 0
+    for name in pngs(rec):
+        a = np.asarray(Image.open(rec / name).convert("RGB")).astype(int)
+        b = np.asarray(Image.open(tmp_path / "again" / name).convert("RGB")).astype(int)
+        assert a.shape == b.shape == (64, 96, 3)
+        assert np.abs(a - b).mean() < 0.5, name
+    first, last = (np.asarray(Image.open(rec / n)).astype(int) for n in (pngs(rec)[0], pngs(rec)[-1]))
+    assert np.abs(first - last).mean() > 0.5          # the animation moved
