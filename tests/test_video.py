@@ -88,6 +88,10 @@ def test_a_single_mode_frame_is_the_shot_of_that_time(tmp_path, mode):
         assert main(["shot", BASIC, "--mode", mode, "--size", "64x36", "--samples", "4",
                      "--seed", "3", "--time", repr(0.1 + k / 10), "--out", str(shot)]) == 0
         assert (folder / f"frame_{k:04d}.png").read_bytes() == shot.read_bytes()
+    # a shot's sidecar animates that shot: its mode, time, size and seed
+    assert main(["video", "--params", str(tmp_path / "s2.json"), "--frames", "1",
+                 "--out", str(tmp_path / "from_shot")]) == 0
+    assert (tmp_path / "from_shot" / "frame_0000.png").read_bytes() == (tmp_path / "s2.png").read_bytes()
     # and the frames move: frame 2 is not frame 0
     assert (folder / "frame_0000.png").read_bytes() != (folder / "frame_0002.png").read_bytes()
 

@@ -33,7 +33,11 @@ MODE_COLOURS = {"off": (127, 127, 127), "mcguire": PALETTE[0], "ue4": PALETTE[1]
 
 
 def register(sub):
-    p = sub.add_parser("video", help="a sequence of frames, modes side by side, as MP4, GIF or PNGs")
+    p = sub.add_parser(
+        "video", help="a sequence of frames, modes side by side, as MP4, GIF or PNGs",
+        description="Frame k at time START + k / FPS (objects, keys and camera advance); two "
+                    "or more modes side by side with labels, one mode as its bare image (a PNG "
+                    "frame is then byte-identical to `hmblur shot` at that time).")
     p.add_argument("scene", nargs="?", default=None,
                    help="scene file (.toml) or built-in scene name (default: the --params file's)")
     p.add_argument("--modes", default=None,
@@ -57,9 +61,10 @@ def register(sub):
                         "times, size and parameters (flags given override it)")
     p.add_argument("--out", required=True, help=OUT_HELP)
     p.add_argument("--metrics", action="store_true",
-                   help="also write, beside the video, per-frame FLIP/PSNR/SSIM against the "
-                        "reference per region (_metrics.csv), each mode's flicker "
-                        "(_flicker.csv) and a plot of FLIP over time (_flip.png)")
+                   help="also render the reference of every frame and write per-frame "
+                        "FLIP/PSNR/SSIM against it per region (PATH_metrics.csv), each mode's "
+                        "flicker (PATH_flicker.csv) and a plot of FLIP over time "
+                        "(PATH_flip.png); in a folder metrics.csv, flicker.csv, flip.png")
     p.set_defaults(run=run)
 
 
@@ -99,8 +104,11 @@ def run(args) -> int:
                                     params=args.params)
     s = cliargs.setup(setup_args)
     src = f"--params {args.params}"
-    modes_text = args.modes if args.modes is not None else (
-        ",".join(side["modes"]) if isinstance(side.get("modes"), list) else None)
+    modes_text = args.modes
+    if modes_text is None and isinstance(side.get("modes"), list):
+        modes_text = ",".join(map(str, side["modes"]))
+    elif modes_text is None and isinstance(side.get("mode"), str):   # a shot's sidecar
+        modes_text = side["mode"]
     if modes_text is None:
         modes = [m for m in MODES if m != "reference"]
     else:
