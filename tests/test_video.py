@@ -249,6 +249,12 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys):
         assert len(err) == 1 and needle in err[0], (name, err)
     assert main(["video", "--out", str(tmp_path / "v.mp4")]) == 2
     assert "SCENE" in capsys.readouterr().err
+    # the viewer's recording checks its path and rate before it opens a window
+    for argv, needle in ((["--record", str(tmp_path / "r.avi")], "--record"),
+                         (["--record", str(tmp_path / "r.mp4"), "--record-fps", "0"], "--record-fps")):
+        assert main(["view", BASIC, *argv]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and needle in err[0], err
     assert listing(tmp_path) == before
 
 
