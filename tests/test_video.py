@@ -288,7 +288,7 @@ def test_the_viewer_records_what_it_animates_and_video_reproduces_it(tmp_path):
     try:
         script = tmp_path / "s.txt"
         script.write_text("0 play\n0 panel off\n")
-        cmd = [sys.executable, "-m", "viewer", "view", "spinner", "--mode", "mcguire",
+        cmd = [sys.executable, "-m", "viewer", "view", BASIC, "--mode", "mcguire",
                "--size", "96x64", "--frames", "4", "--record", str(tmp_path / "rec"),
                "--record-fps", "12", "--script", str(script)]
         p = subprocess.run(cmd, cwd=ROOT, env=x.env(), capture_output=True, text=True, timeout=240)
