@@ -15,7 +15,7 @@ from PIL import Image
 
 from conftest import CONFORMANCE, ROOT
 from viewer.cli import main
-from viewer.plot import line_plots, nice_ticks
+from viewer.plot import line_plots, nice_ticks, tick_label
 from viewer.temporal import flicker
 from viewer.video_writer import gif_durations
 
@@ -213,6 +213,8 @@ def test_plot_ticks_are_round_and_the_plot_has_one_colour_per_series():
     assert nice_ticks(0.0, 0.27) == [0.0, 0.1, 0.2, 0.3]
     assert nice_ticks(0.0, 0.02) == [0.0, 0.005, 0.01, 0.015, 0.02]
     assert nice_ticks(0.0, 1.0) == [0.0, 0.2, 0.4, 0.6, 0.8, 1.0]
+    ticks = nice_ticks(-0.5, 0.46)
+    assert [tick_label(v, ticks) for v in ticks] == ["-0.6", "-0.4", "-0.2", "0.0", "0.2", "0.4", "0.6"]
     red, blue = (214, 39, 40), (31, 119, 180)
     img = line_plots([("a", {"x": ([0, 1], [0.1, 0.2]), "y": ([0, 1], [0.3, None])})],
                      {"x": red, "y": blue}, "t", "v")

@@ -55,9 +55,11 @@ def nice_ticks(lo: float, hi: float, target: int = 5) -> list[float]:
     return ticks
 
 
-def _label(v: float, ticks: list[float]) -> str:
+def tick_label(v: float, ticks: list[float]) -> str:
     step = ticks[1] - ticks[0] if len(ticks) > 1 else 1.0
     digits = max(0, -int(math.floor(math.log10(step) + 1e-9)))
+    if abs(v) < 1e-6 * step:          # no "-0.0" from a tick summed up to a hair below 0
+        v = 0.0
     return f"{v:.{digits}f}"
 
 
@@ -115,11 +117,11 @@ def _panel(canvas, draw, origin, name, series, colours, x_label, y_label):
     for v in yt:
         draw.line([(ox, py(v)), (ox + pw, py(v))], fill=GRID)
         draw.line([(ox - 5, py(v)), (ox, py(v))], fill=INK)
-        _paste(canvas, text_image(_label(v, yt)), ox - 8, py(v), "rm")
+        _paste(canvas, text_image(tick_label(v, yt)), ox - 8, py(v), "rm")
     for v in xt:
         if x_lo - 1e-9 <= v <= x_hi + 1e-9:
             draw.line([(px(v), oy + ph), (px(v), oy + ph + 5)], fill=INK)
-            _paste(canvas, text_image(_label(v, xt)), px(v), oy + ph + 8, "mt")
+            _paste(canvas, text_image(tick_label(v, xt)), px(v), oy + ph + 8, "mt")
     draw.rectangle([ox, oy, ox + pw, oy + ph], outline=INK)
     _paste(canvas, text_image(name), ox + pw / 2, oy - 6, "mb")
     _paste(canvas, text_image(x_label), ox + pw / 2, oy + ph + 32, "mt")
