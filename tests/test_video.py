@@ -243,6 +243,8 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys):
         "mode twice": (["--modes", "off,off", "--out", str(tmp_path / "v.mp4")], "twice"),
         "missing folder": (["--out", str(tmp_path / "no" / "v.mp4")], "does not exist"),
         "bad start": (["--start", "soon", "--out", str(tmp_path / "v.mp4")], "--start"),
+        "metrics of the reference alone": (["--modes", "reference", "--metrics", "--out",
+                                            str(tmp_path / "v.mp4")], "--metrics"),
     }
     before = listing(tmp_path)
     for name, (argv, needle) in cases.items():

@@ -119,6 +119,9 @@ def run(args) -> int:
               else DEFAULT_FRAMES)
     fps = (parse_fps("--fps", args.fps) if args.fps is not None else
            parse_fps(f"{src}: fps", str(side["fps"])) if "fps" in side else DEFAULT_FPS)
+    if args.metrics and modes == ["reference"]:
+        raise UserError("--metrics: measures modes against the reference: expected --modes "
+                        "with a mode other than reference")
     out = video_paths(args.out, "--out", METRIC_FILES if args.metrics else ())
     times = frame_times(s.time, frames, fps)
     cliargs.parse_time("last frame time", repr(times[-1]))
