@@ -355,3 +355,18 @@ def test_every_key_mistake_is_one_line_naming_file_and_key_exit_2(tmp_path, caps
     assert len(lines) == 1, lines
     assert str(path) in lines[0] and f"{key}:" in lines[0], (key, lines[0])
     assert not out.exists()
+
+
+def test_viewer_moves_leave_a_keyed_camera_at_the_shown_pose_and_reset_restores_it(tmp_path):
+    from viewer.ui.camera_control import CameraControl
+    spec = load_scene(scene_file(tmp_path, "", camera_text(CAM_KEYS, "smooth"))).camera
+    eye = np.array(spec.pose(0.13)[0])
+    control = CameraControl(spec, lambda: 0.13)
+    control.zoom(0)                                   # a move of nothing: only the detach
+    assert spec.keys is None
+    np.testing.assert_allclose(spec.position, eye, atol=1e-15)
+    control.pan(10, 0, 100)
+    assert not np.allclose(spec.position, eye)
+    control.reset()
+    assert spec.keys is not None and spec.moving
+    np.testing.assert_allclose(spec.pose(0.13)[0], eye, atol=1e-15)

@@ -1,6 +1,6 @@
 """The scene model: what a scene file describes, after loading and validation.
 
-`viewer.scene_loader.load_scene` builds these from TOML (SCENE_FORMAT.md). Everything here
+`viewer.scene_loader.load_scene` builds these from TOML (docs/scene-format.md). Everything here
 is plain numpy (float64) so the rasteriser, the ray tracer and the tests share one truth
 for transforms and motion.
 """

@@ -1,10 +1,11 @@
-"""Scene files (SCENE_FORMAT.md) -> `viewer.scene.Scene`, with every mistake a SceneError.
+"""Scene files (docs/scene-format.md) -> `viewer.scene.Scene`, with every mistake a SceneError.
 
 `load_scene` takes a path to a TOML file or the name of a built-in scene in `scenes/`.
 Validation is strict and happens here, once: the renderers may trust a loaded Scene.
 Whatever the document holds, the loader raises nothing but SceneError, and each message
 names the file, the dotted key and what was expected. Array entries are numbered from 1
-in file order (`objects[2]` is the object with id 2), with the object's name beside it.
+in file order (`objects[2]` is the object with id 2, with its name beside it;
+`camera.keys[1]` the camera's first key).
 
 Primitive parameters that the format leaves out are left out of the trimesh call too, so
 trimesh's own defaults apply (sphere radius 1, subdivisions 3; cylinder and revolve
@@ -584,7 +585,7 @@ def image_srgb(im: Image.Image) -> np.ndarray:
 
 
 def check_camera(data: dict, source: str) -> CameraSpec:
-    """A camera table (SCENE_FORMAT.md [camera]) from elsewhere than a scene file (an
+    """A camera table ([camera], docs/scene-format.md) from elsewhere than a scene file (an
     image's sidecar), checked as a scene file's is; errors name `source`."""
     return _Loader(Path(source)).camera(data)
 

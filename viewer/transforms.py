@@ -37,7 +37,7 @@ def scale(s) -> np.ndarray:
 
 
 def axis_angle(w) -> np.ndarray:
-    """3x3 rotation by angle |w| about w/|w| (identity for w = 0): SCENE_FORMAT's Rot(w)."""
+    """3x3 rotation by angle |w| about w/|w| (identity for w = 0): the scene format's Rot(w)."""
     w = _f64(w)
     theta = float(np.linalg.norm(w))
     if theta == 0.0:
