@@ -134,16 +134,16 @@ def test_object_keys_against_the_formulas(tmp_path, interpolation):
     obj = sc.objects[0]
     assert obj.moving
     for t in TIMES:
-        np.testing.assert_allclose(obj.matrix(t), expected_matrix(ARC, t, interpolation == "smooth"),
-                                   rtol=0, atol=1e-12, err_msg=f"t={t}")
+        want = expected_matrix(ARC, t, interpolation == "smooth")
+        np.testing.assert_allclose(obj.matrix(t), want, rtol=0, atol=1e-12, err_msg=f"t={t}")
     # clamped: before the first key and after the last, the end poses
     np.testing.assert_array_equal(obj.matrix(-5.0), obj.matrix(-0.1))
     np.testing.assert_array_equal(obj.matrix(7.0), obj.matrix(0.1))
 
 
 def test_smooth_differs_from_linear_between_keys_and_agrees_at_them(tmp_path):
-    lin = load_scene(scene_file(tmp_path, object_with_keys(ARC, "linear"), name="a.toml")).objects[0]
-    smo = load_scene(scene_file(tmp_path, object_with_keys(ARC, "smooth"), name="b.toml")).objects[0]
+    lin, smo = (load_scene(scene_file(tmp_path, object_with_keys(ARC, i), name=f"{i}.toml"))
+                .objects[0] for i in ("linear", "smooth"))
     for k in ARC:
         np.testing.assert_allclose(lin.matrix(k["time"]), smo.matrix(k["time"]), atol=1e-12)
     assert np.abs(lin.matrix(0.013)[:3, 3] - smo.matrix(0.013)[:3, 3]).max() > 1e-3

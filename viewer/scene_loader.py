@@ -613,4 +613,5 @@ def srgb_to_linear(c: np.ndarray) -> np.ndarray:
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
-__all__ = ["load_scene", "builtin_scene_names", "builtin_scene_path", "check_camera", "merge_camera", "image_srgb", "srgb_to_linear"]
+__all__ = ["load_scene", "builtin_scene_names", "builtin_scene_path", "check_camera",
+           "merge_camera", "image_srgb", "srgb_to_linear"]
