@@ -327,7 +327,7 @@ def display():
     x.stop()
 
 
-def view(display, tmp_path, *args, script=None, frames=6, size=f"{W}x{H}", name="win"):
+def view(display, tmp_path, *args, script=None, frames=6, size=f"{W}x{H}", name="win", rc=0):
     shot, stats = tmp_path / f"{name}.png", tmp_path / f"{name}.json"
     cmd = [sys.executable, "-m", "viewer", "view", SCENE, "--size", size, "--frames", str(frames),
            "--screenshot", str(shot), "--stats-json", str(stats), "--shot-dir", str(tmp_path), *args]
@@ -337,7 +337,10 @@ def view(display, tmp_path, *args, script=None, frames=6, size=f"{W}x{H}", name=
         cmd += ["--script", str(path)]
     p = subprocess.run(cmd, cwd=ROOT, env=display.env(), capture_output=True, text=True,
                        timeout=TIMEOUT)
-    assert p.returncode == 0, p.stderr
+    assert p.returncode == rc, p.stderr
+    if rc:                              # a failed scripted run: one line, after its outputs
+        lines = p.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("hmblur: error: --script "), p.stderr
     return np.asarray(Image.open(shot).convert("RGB")), json.loads(stats.read_text())
 
 
@@ -421,11 +424,15 @@ def test_screenshot_key_reproduces_headless_byte_for_byte(display, tmp_path):
 
 
 def test_errors_show_in_the_panel_and_panel_drags_miss_the_camera(display, tmp_path):
+    # A scene file that does not load: the panel shows why, the window stays open, and the
+    # scripted run exits 2 with that line at the end.
+    bad = tmp_path / "broken.toml"
+    bad.write_text("[camera\n")
     script = ("2 drag left 100 250 180 200\n"       # over the panel
-              "8 open no_such_scene\n")
-    img, stats = view(display, tmp_path, script=script, frames=12, name="err")
+              f"8 open {bad}\n")
+    img, stats = view(display, tmp_path, script=script, frames=12, name="err", rc=2)
     assert stats["frames"] == 12 and stats["scene"] == SCENE
-    assert len(stats["errors"]) == 1 and "no_such_scene" in stats["errors"][0]
+    assert len(stats["errors"]) == 1 and "broken.toml" in stats["errors"][0]
     assert stats["camera"]["position"] == [0.25, 1.35, 3.2]
     x, y, w, h = (int(v) for v in stats["panel_rect"])
     panel = img[y:y + h, x:x + w].astype(int)
@@ -481,3 +488,45 @@ def test_no_display_is_one_line_and_exit_2(tmp_path):
     lines = p.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(
         "hmblur: error: no display: install xvfb and run under xvfb-run, or set DISPLAY")
+
+
+def test_panel_width_and_overlay_levels():
+    from viewer.ui.overlay import initial_level, next_level
+    from viewer.ui.panel import MAX_WIDTH, panel_width
+    assert panel_width(640) < 640 / 3 and panel_width(960) == 240
+    assert panel_width(1920) == MAX_WIDTH and panel_width(300) < 300
+    assert initial_level(360) == "compact" and initial_level(720) == "full"
+    assert [next_level(x) for x in ("full", "compact", "off")] == ["compact", "off", "full"]
+
+
+def inside(rect, w, h):
+    x, y, rw, rh = rect
+    return 0 <= x and 0 <= y and x + rw <= w and y + rh <= h
+
+
+def test_small_window_leaves_most_of_the_image_and_the_overlay_fits(display, tmp_path):
+    # 640x360, the hybrid (the overlay with the most rows): the panel covers under a third
+    # of the window, the overlay starts compact, and both leave most of the image.
+    img, stats = view(display, tmp_path, "--mode", "hybrid", frames=4, name="small")
+    assert stats["errors"] == [] and stats["overlay"] == "compact"
+    px, py, pw, ph = stats["panel_rect"]
+    assert pw * ph <= 0.3 * W * H
+    assert inside(stats["overlay_rect"], W, H)
+    assert stats["overlay_rect"][0] >= px + pw                     # beside the panel
+    assert scene_mask(stats, img.shape).sum() > 0.55 * W * H
+    # The full overlay (O twice: compact -> off -> full) stays inside the window too,
+    # beside the panel (scrolled by the wheel where it is taller).
+    _, full = view(display, tmp_path, "--mode", "hybrid", script="1 key O\n3 key O\n",
+                   frames=5, name="full")
+    assert full["overlay"] == "full" and inside(full["overlay_rect"], W, H)
+    assert full["overlay_rect"][0] >= px + pw and full["overlay_rect"][3] > stats["overlay_rect"][3]
+
+
+def test_o_key_hides_the_overlay(display, tmp_path, ctx):
+    img, stats = view(display, tmp_path, script="1 key O\n", frames=4, name="hide")
+    assert stats["overlay"] == "off" and stats["overlay_rect"] is None
+    free = scene_mask(stats, img.shape)
+    x, y, w, h = (int(v) for v in stats["panel_rect"])
+    assert free[:, x + w + 4:].all()                 # nothing drawn right of the panel
+    diff = np.abs(img.astype(int) - headless(ctx).astype(int))[free]
+    assert diff.mean() < 0.5
