@@ -169,8 +169,19 @@ def test_script_text_and_json_agree(tmp_path):
     ("x mode off\n", "s.txt:1", "frame number"),
     ('[{"frame": -1, "mode": "off"}]', "s.txt[0]", "frame number"),
     ('[{"frame": 1, "mode": "off", "key": "P"}]', "s.txt[0]", "expected {"),
+    ("2 mode hybird\n", "s.txt:1", "mode: expected one of off, reference"),
+    ("2 set blur.max_radius=9\n", "s.txt:1", "set blur.max_radius: expected at most 0.25"),
+    ("2 key NOPE\n", "s.txt:1", "key: expected a GLFW key name"),
+    ("2 resize 0x3\n", "s.txt:1", "resize: expected WxH"),
+    ("2 orbit 1 x\n", "s.txt:1", "orbit: expected a number, got 'x'"),
+    ("2 shutter -1\n", "s.txt:1", "shutter: expected seconds >= 0"),
+    ("2 visual fancy\n", "s.txt:1", "visual: expected auto or one of"),
+    ("2 overlay maybe\n", "s.txt:1", "overlay: expected full, compact or off"),
+    ("2 seed 1.5\n", "s.txt:1", "seed: expected an integer >= 0"),
+    ("2 open no_such_scene\n", "s.txt:1", "open: expected a scene file or built-in name"),
 ])
 def test_script_errors_name_the_place(tmp_path, text, where, words):
+    # Every argument is checked on load: a bad one is an error before the window opens.
     p = tmp_path / "s.txt"
     p.write_text(text)
     with pytest.raises(UserError) as e:

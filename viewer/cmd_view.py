@@ -37,8 +37,8 @@ def register(sub):
                        epilog=KEYS + "\n\n" + script_help)
     cliargs.add_scene_args(p)
     p.add_argument("--mode", default=None,
-                   help=f"one of: {', '.join(MODES)} (default: the --params sidecar's, else off)")
-    p.add_argument("--frames", type=str, default=None,
+                   help=f"one of: {', '.join(MODES)} (default: off, or the --params file's)")
+    p.add_argument("--frames", type=str, default=None, metavar="N",
                    help="run this many frames, then exit (no person needed)")
     p.add_argument("--screenshot", default=None, metavar="PNG",
                    help="with --frames: save the window (panel and overlay included) at the end")
