@@ -32,7 +32,7 @@ def register(sub):
     cliargs.add_scene_args(p)
     p.add_argument("--out", required=True, metavar="DIR",
                    help="output folder (made, with missing parents, if missing)")
-    p.add_argument("--modes", default=None,
+    p.add_argument("--modes", default=None, metavar="M1,M2",
                    help=f"comma-separated real-time modes (default: every one of {', '.join(REALTIME)} that exists)")
     p.add_argument("--inset", type=str, default=None, metavar="WxH",
                    help="inset size in pixels (default: a quarter of the image height, square)")
@@ -98,7 +98,8 @@ def run(args) -> int:
     text = (header + md).encode("utf-8")
     files.add(out / "metrics.md", lambda f: f.write(text))
     files.json(out / "metrics.json", {
-        "scene": args.scene, "scene_name": s.scene.name, "size": [w, h], "time": s.time,
+        **cliargs.scene_source(args.scene), "scene_name": s.scene.name, "size": [w, h],
+        "time": s.time,
         "seed": s.seed, "device": device_name(ctx), "params": s.params.to_dict(),
         "regions": region_counts(region), "region_definitions": DEFINITIONS,
         "inset": list(box), "metrics": table, "space": SPACE,

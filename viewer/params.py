@@ -125,8 +125,13 @@ class ParamSet:
 def value_range(f: dataclasses.Field) -> str:
     """The accepted values as text: choices, a closed range, a bound, or the type."""
     meta, kind = f.metadata, type(f.default)
-    if meta.get("choices") is not None:
-        return "|".join(map(str, meta["choices"]))
+    choices = meta.get("choices")
+    if choices is not None:
+        steps = {b - a for a, b in zip(choices, choices[1:])} if all(
+            isinstance(c, int) and not isinstance(c, bool) for c in choices) else set()
+        if len(choices) > 4 and len(steps) == 1:          # an arithmetic run: its ends
+            return f"{choices[0]}, {choices[1]}, ..., {choices[-1]}"
+        return "|".join(map(str, choices))
     if kind is bool:
         return "true|false"
     lo, hi = meta.get("lo"), meta.get("hi")
