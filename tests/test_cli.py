@@ -83,6 +83,10 @@ def bad_cases(tmp_path):
             ["shot", "--params", write(tmp_path, "ns.json", '{"params": {}}'), "--out", out],
             "names no scene"),
         "unknown mode for params": (["params", "fancy"], "params fancy: expected one of"),
+        "a conformance scene by name": (["shot", "basic", "--out", out],
+                                        "'basic' is the scene file tests/conformance/basic.toml"),
+        "a bench scene by name": (["shot", "crowd", "--out", out],
+                                  "'crowd' is the scene file scenes/bench/crowd.toml"),
         "a bad value in a viewer script": (
             ["view", BASIC, "--frames", "1", "--script", write(tmp_path, "bad.script",
                                                                "2 mode hybird\n")],

@@ -9,10 +9,40 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from .errors import UserError
+from .errors import SceneError, UserError
 from .params import ParamSet
 from .scene import Scene
-from .scene_loader import builtin_scene_names, builtin_scene_path, check_camera, load_scene
+from .scene_loader import (builtin_dir, builtin_scene_names, builtin_scene_path, check_camera,
+                           load_scene)
+
+# Scene files beside the built-in ones that are not built-in names: the bench scenes, the
+# examples and (in a source checkout) the conformance scenes.
+OTHER_SCENE_DIRS = ("bench", "examples", "../tests/conformance")
+
+
+def other_scene(name: str) -> Path | None:
+    """The file a scene name that is not built-in most likely means, if there is one."""
+    for folder in OTHER_SCENE_DIRS:
+        path = (builtin_dir() / folder / f"{name}.toml").resolve()
+        if path.is_file():
+            return path
+    return None
+
+
+def load(source: str):
+    """load_scene, with the file named when `source` is the name of a bench, example or
+    conformance scene rather than a built-in one."""
+    try:
+        return load_scene(source)
+    except SceneError as exc:
+        path = None if Path(source).exists() or source.endswith(".toml") else other_scene(source)
+        if path is None:
+            raise
+        try:
+            shown = path.relative_to(Path.cwd())
+        except ValueError:
+            shown = path
+        raise UserError(f"{exc}; {source!r} is the scene file {shown}") from None
 
 
 def add_scene_args(p, samples: bool = True):
@@ -172,7 +202,7 @@ def setup(args) -> Setup:
             raise UserError("SCENE: expected a scene file (.toml) or built-in name ("
                             + ", ".join(builtin_scene_names()) + "), or --params FILE.json")
         args.scene = sidecar_scene(side, args.params)
-    scene = load_scene(args.scene)
+    scene = load(args.scene)
     size = (scene.render.width, scene.render.height)
     t = scene.render.time
     seed = 0
