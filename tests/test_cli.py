@@ -278,12 +278,12 @@ def test_a_write_that_fails_is_one_line_and_leaves_no_output(tmp_path, capsys, m
             raise OSError(28, "No space left on device", str(path))
         return real(path, write)
     monkeypatch.setattr(io, "_write_temp", failing)
-    out = tmp_path / "c"
+    out = tmp_path / "c" / "d"                   # two missing folders: both made, both undone
     assert main(["compare", BASIC, "--size", "32x20", "--samples", "2", "--modes", "mcguire",
                  "--out", str(out)]) == 2
     err = [x for x in capsys.readouterr().err.splitlines() if x.startswith("hmblur")]
     assert len(err) == 1 and err[0].endswith("reference.png: No space left on device")
-    assert not out.exists()
+    assert not (tmp_path / "c").exists()
 
 
 def test_buffers_are_dumped(tmp_path):
