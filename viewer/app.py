@@ -27,7 +27,7 @@ from .scene_loader import load_scene
 from .ui import capture
 from .ui.camera_control import CameraControl
 from .ui.input import InputRouter
-from .ui.overlay import FrameTimes, draw_overlay
+from .ui.overlay import FrameTimes, draw_overlay, initial_level, next_level
 from .ui.panel import draw_panel
 from .ui.progressive import Progressive, accumulating_pass
 from .ui.script import Action, Timeline
@@ -64,7 +64,7 @@ class App:
     def __init__(self, setup: Setup, scene_arg: str, mode: str, options: RunOptions):
         self.options = options
         self.state = ViewState(scene_arg, setup.scene, mode, setup.time, setup.params, setup.seed,
-                               scene_text=scene_arg)
+                               scene_text=scene_arg, overlay=initial_level(setup.size[1]))
         self.camera = CameraControl(setup.scene.camera, lambda: self.state.time)
         self.router = InputRouter(lambda: self.camera, lambda: self.window.size[1])
         self.router.actions.update({
@@ -72,6 +72,7 @@ class App:
             glfw.KEY_SPACE: self.toggle_play, glfw.KEY_R: self.camera_reset,
             glfw.KEY_F: self.toggle_fly, glfw.KEY_H: self.toggle_panel,
             glfw.KEY_V: self.toggle_record,
+            glfw.KEY_O: self.cycle_overlay,
             glfw.KEY_ESCAPE: lambda: self.window.close(),
         })
         self.window = Window(setup.size, f"hmblur view - {setup.scene.name}", self.router)
@@ -88,6 +89,7 @@ class App:
         self.stats: dict = {}
         self.shown_name = self.shown_kind = ""
         self.panel_rect = self.overlay_rect = (0.0, 0.0, 0.0, 0.0)
+        self.script_failure: str | None = None      # the first scripted action that failed
         self.rss: list[tuple[int, int]] = []
         self.frame_index = 0
         self.recorder = None
@@ -110,6 +112,9 @@ class App:
 
     def toggle_panel(self):
         self.state.show_panel = not self.state.show_panel
+
+    def cycle_overlay(self):
+        self.state.overlay = next_level(self.state.overlay)
 
     def camera_reset(self):
         self.camera.reset()
@@ -259,12 +264,14 @@ class App:
                     self.router.fly_look = args[0] == "on"
                 else:
                     s.show_panel = args[0] == "on"
+            elif a.name == "overlay":
+                s.overlay = args[0]
             elif a.name == "subframes":
                 s.sub_frames = parse_int("subframes", args[0], 1)
             elif a.name == "quit":
                 self.window.close()
         except UserError as exc:
-            s.report(f"script {a.where}: {exc}")
+            s.report(f"--script {a.where}: {str(exc).removeprefix(f'--script {a.where}: ')}")
 
     def scene_centre(self) -> tuple[float, float]:
         """The middle of the part of the window the panel does not cover."""
@@ -331,7 +338,15 @@ class App:
                 break
             self.window.poll()
             for item in self.timeline.due(self.frame_index):
-                item() if callable(item) else self.perform(item)
+                if callable(item):
+                    item()
+                    continue
+                errors = len(self.state.errors)
+                self.perform(item)
+                if len(self.state.errors) > errors and self.script_failure is None:
+                    err = self.state.errors[-1]
+                    self.script_failure = (err if err.startswith("--script ")
+                                           else f"--script {item.where}: {err}")
             now = _time.perf_counter()
             seconds = FIXED_STEP if fixed else now - last
             if self.recorder is not None:       # recordings play at the scene's speed
@@ -348,9 +363,11 @@ class App:
                 self.record_frame()
             if self.state.show_panel:
                 self.panel_rect = draw_panel(self)
+            left = self.panel_rect[0] + self.panel_rect[2] if self.state.show_panel else 0.0
             self.overlay_rect = draw_overlay(self.times, self.pass_ms, self.pass_cpu_ms,
                                              self.stats, self.clock.method,
-                                             self.ctx.info["GL_RENDERER"], self.window.size[0])
+                                             self.ctx.info["GL_RENDERER"], self.window.size,
+                                             left, self.state.overlay)
             self.window.end_gui()
             self.frame_index += 1
             if opts.screenshot is not None and self.frame_index == opts.frames:
@@ -365,6 +382,8 @@ class App:
             write_png_atomic(opts.screenshot, grab)
         if opts.stats_json is not None:
             write_json_atomic(opts.stats_json, self.summary())
+        if self.script_failure is not None:     # a scripted run that went wrong: exit 2
+            raise UserError(self.script_failure)
         return 0
 
     def summary(self) -> dict:
@@ -377,7 +396,8 @@ class App:
             "pass_ms": self.pass_ms, "pass_cpu_ms": self.pass_cpu_ms, "stats": self.stats,
             "rss_kb": self.rss, "errors": s.errors, "screenshots": s.shots,
             "panel_rect": list(self.panel_rect) if s.show_panel else None,
-            "overlay_rect": list(self.overlay_rect),
+            "overlay_rect": list(self.overlay_rect) if self.overlay_rect else None,
+            "overlay": s.overlay,
             "camera": {k: list(map(float, v)) for k, v in
                        (("position", s.scene.camera.position), ("look_at", s.scene.camera.look_at))},
             "shown": {"buffer": self.shown_name, "visual": self.shown_kind},

@@ -102,7 +102,11 @@ class VideoWriter:
         if not (fps > 0 and np.isfinite(fps)):
             raise UserError(f"--fps {fps!r}: expected a number > 0")
         self.out, self.fps = out, float(fps)
+        # Staged beside the destination, in its nearest existing folder (one file system,
+        # so the move is a rename); missing folders are made only at commit (OutputSet).
         parent = out.video.parent if str(out.video.parent) else Path(".")
+        while not parent.exists() and parent != parent.parent:
+            parent = parent.parent
         self.stage = Path(tempfile.mkdtemp(prefix=f".{out.video.name}.", suffix=".part",
                                            dir=parent))
         self.count = 0

@@ -14,7 +14,7 @@ from .pool import TexSpec
 
 @group("reference")
 class ReferenceParams:
-    samples: int = param(64, lo=1, hi=4096, help="sharp sub-frames averaged over the exposure")
+    samples: int = param(64, unit="sub-frames", lo=1, hi=4096, help="sharp sub-frames averaged over the exposure")
 
 
 class Accumulate(FullscreenPass):
