@@ -72,16 +72,14 @@ class Renderer:
                      params, seed=seed, timing=timing, host={"state": self._host_passes},
                      shutter=shutter)
 
-    def run(self, mode: str, t: float, params: ParamSet, seed: int,
-            make_frame: MakeFrame, execute, measure: Measure = PassTimer) -> Frame:
+    def run(self, mode: str, t: float, params: ParamSet, seed: int, make_frame: MakeFrame,
+            measure: Measure = PassTimer) -> Frame:
         """The frame at t of `mode`, as its sub-exposure steps (viewer/render/steps.py):
-        `make_frame(time, shutter, seed)` makes each sub-frame, `execute` runs the mode's
-        pipeline on it (Pipeline.run, or a caller's timed loop), `measure` times the
-        accumulation as that loop times passes."""
+        `make_frame(time, shutter, seed)` makes each sub-frame, Pipeline.run runs the
+        mode's passes on it, each inside `measure(frame, name)`, and the accumulation."""
         shutter = float(self.scene.camera.shutter)
         n = step_count(mode, params, shutter)
-        return run_steps(make_frame, execute, self.pipeline(mode).output, float(t), shutter,
-                         seed, n, measure)
+        return run_steps(make_frame, self.pipeline(mode), float(t), shutter, seed, n, measure)
 
     def render(self, mode: str, t: float, params: ParamSet | None = None, seed: int = 0,
                timing: bool = False, record_visibility: bool = False,
@@ -96,7 +94,7 @@ class Renderer:
             if progress is not None:
                 f.host["progress"] = progress
             return f
-        frame = self.run(mode, t, params, seed, make_frame, pipe.run)
+        frame = self.run(mode, t, params, seed, make_frame)
         image = frame.read(pipe.output)[..., :3].copy() if read_image else None
         frame.host.pop("state", None)
         return RenderResult(mode, image, frame.stats, frame.pass_ms, frame.host)

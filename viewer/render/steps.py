@@ -43,7 +43,7 @@ from ..params import ParamSet
 from .frame import Frame, PassTimer
 from .modes import MODE_GROUPS
 from .motion_params import MotionParams  # noqa: F401  (registers the "motion" group)
-from .passes import FullscreenPass
+from .passes import FullscreenPass, Pipeline
 from .pool import TexSpec
 
 GROUP = "motion"
@@ -83,16 +83,16 @@ MakeFrame = Callable[[float, float, int], Frame]      # (time, shutter, seed) ->
 Measure = Callable[[Frame, str], AbstractContextManager]
 
 
-def run_steps(make_frame: MakeFrame, execute: Callable[[Frame], None], output: str,
-              t: float, shutter: float, seed: int, n: int,
-              measure: Measure = PassTimer) -> Frame:
+def run_steps(make_frame: MakeFrame, pipeline: Pipeline, t: float, shutter: float,
+              seed: int, n: int, measure: Measure = PassTimer) -> Frame:
     """Render the frame at t as n sub-frames (module doc): `make_frame` makes each
-    sub-frame's Frame, `execute` runs the pipeline on it, `measure(frame, name)` times the
-    accumulation as the caller times passes. Returns the whole frame's Frame."""
+    sub-frame's Frame, the pipeline runs on it with every pass and the accumulation inside
+    `measure(frame, name)`. Returns the whole frame's Frame."""
     subs = sub_exposures(t, shutter, seed, n)
+    output = pipeline.output
     if n == 1:
         frame = make_frame(*subs[0])
-        execute(frame)
+        pipeline.run(frame, measure=measure)
         return frame
     stats: dict = {}
     pass_ms: dict = {}
@@ -100,7 +100,7 @@ def run_steps(make_frame: MakeFrame, execute: Callable[[Frame], None], output: s
     weight = 1.0 / n
     for k, (tk, sk, seed_k) in enumerate(subs):
         frame = make_frame(tk, sk, seed_k)
-        execute(frame)
+        pipeline.run(frame, measure=measure)
         with measure(frame, PASS_NAME):
             if k == 0:
                 frame.pool.texture(SUM, TexSpec(4, "f4"))

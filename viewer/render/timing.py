@@ -58,22 +58,13 @@ class PassClock:
     def render(self, renderer: Renderer, mode: str, t: float, params: ParamSet, seed: int) -> Frame:
         """Run every pass of `mode`, as its sub-exposure steps where set (the image stays
         on the GPU, in the pool)."""
-        passes = renderer.pipeline(mode).passes
-
         def make_frame(tk, shutter, seed_k):
             f = renderer.frame(tk, params, seed_k, timing=self.method == "cpu", shutter=shutter)
             f.host["record_visibility"] = False
             return f
-
-        def execute(frame):
-            try:
-                for p in passes:                     # Pipeline.run, with our clock
-                    p.allocate(frame)
-                    with self.measure(frame, p.name):
-                        p.execute(frame)
-            finally:
-                frame.host.pop("state", None)
-        return renderer.run(mode, t, params, seed, make_frame, execute, self.measure)
+        frame = renderer.run(mode, t, params, seed, make_frame, measure=self.measure)
+        frame.host.pop("state", None)
+        return frame
 
     # Queries are kept, one per pass name, for the context's lifetime: moderngl 5 has no
     # Query.release(), and reusing them keeps the count bounded.
