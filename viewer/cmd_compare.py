@@ -88,8 +88,10 @@ def run(args) -> int:
     files.png(out / "regions.png", region_picture(region))
     files.png(out / "strip.png", strip)
     md = metrics_markdown(table)
+    steps = s.params["motion"].steps
     header = (f"# {s.scene.name}: {w}x{h}, t = {s.time:g} s, shutter {s.scene.camera.shutter:g} s, "
-              f"reference {s.params['reference'].samples} sub-frames\n\nSpace: {SPACE}.\n\n")
+              + (f"motion.steps={steps} (the blurring modes), " if steps > 1 else "")
+              + f"reference {s.params['reference'].samples} sub-frames\n\nSpace: {SPACE}.\n\n")
     text = (header + md).encode("utf-8")
     files.add(out / "metrics.md", lambda f: f.write(text))
     files.json(out / "metrics.json", {
