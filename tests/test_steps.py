@@ -26,13 +26,39 @@ def steps(n: int) -> ParamSet:
 
 
 @pytest.fixture(scope="module")
-def spinner(request):
+def spinner():
     from conftest import _context
     ctx = _context()
     scene = load_scene("spinner")
     r = Renderer(ctx, scene, SIZE)
     yield r
     r.release()
+
+
+# The CLI first: a shot makes a GL context of its own current, and the module's renderer
+# (below) must be made and released while the shared context is current.
+
+@pytest.mark.parametrize("value, needle", [("0", "at least 1"), ("2.5", "expected int"),
+                                           ("many", "expected int"), ("1000", "at most")])
+def test_bad_steps_exit_2_with_one_line(tmp_path, capsys, value, needle):
+    out = tmp_path / "o.png"
+    code = main(["shot", str(CONFORMANCE / "basic.toml"), "--size", "16x9",
+                 "--set", f"motion.steps={value}", "--out", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "motion.steps" in err[0] and needle in err[0]
+    assert not out.exists()
+
+
+def test_steps_reach_the_sidecar(tmp_path):
+    import json
+    out = tmp_path / "o.png"
+    assert main(["shot", str(CONFORMANCE / "basic.toml"), "--size", "16x9", "--mode",
+                 "mcguire", "--set", "motion.steps=2", "--out", str(out)]) == 0
+    side = json.loads(out.with_suffix(".json").read_text())
+    assert side["params"]["motion"] == {"steps": 2}
+    assert main(["shot", str(CONFORMANCE / "basic.toml"), "--size", "16x9", "--mode", "off",
+                 "--set", "motion.steps=2", "--out", str(out)]) == 0
+    assert "motion" not in json.loads(out.with_suffix(".json").read_text())["params"]
 
 
 def test_every_real_time_mode_takes_steps_and_off_and_reference_do_not():
@@ -147,23 +173,3 @@ def test_reference_and_off_ignore_steps(spinner):
         base = r.render(mode, t, p).image
         p.set("motion.steps", 4)
         assert np.array_equal(r.render(mode, t, p).image, base), mode
-
-
-@pytest.mark.parametrize("value, needle", [("0", "at least 1"), ("2.5", "expected int"),
-                                           ("many", "expected int"), ("1000", "at most")])
-def test_bad_steps_exit_2_with_one_line(tmp_path, capsys, value, needle):
-    out = tmp_path / "o.png"
-    code = main(["shot", str(CONFORMANCE / "basic.toml"), "--size", "16x9",
-                 "--set", f"motion.steps={value}", "--out", str(out)])
-    err = capsys.readouterr().err.strip().splitlines()
-    assert code == 2 and len(err) == 1 and "motion.steps" in err[0] and needle in err[0]
-    assert not out.exists()
-
-
-def test_steps_reach_the_sidecar(tmp_path):
-    import json
-    out = tmp_path / "o.png"
-    assert main(["shot", str(CONFORMANCE / "basic.toml"), "--size", "16x9", "--mode",
-                 "mcguire", "--set", "motion.steps=2", "--out", str(out)]) == 0
-    side = json.loads(out.with_suffix(".json").read_text())
-    assert side["params"]["motion"] == {"steps": 2}
