@@ -45,6 +45,8 @@ class RunOptions:
     stats_json: Path | None = None
     shot_dir: Path = Path(".")
     script: list[Action] = ()
+    record: str | None = None            # record from the first frame to this video path
+    record_fps: float = 30.0
 
 
 def rss_kb() -> int:
@@ -69,6 +71,7 @@ class App:
             glfw.KEY_F12: self.screenshot, glfw.KEY_P: self.screenshot,
             glfw.KEY_SPACE: self.toggle_play, glfw.KEY_R: self.camera_reset,
             glfw.KEY_F: self.toggle_fly, glfw.KEY_H: self.toggle_panel,
+            glfw.KEY_V: self.toggle_record,
             glfw.KEY_ESCAPE: lambda: self.window.close(),
         })
         self.window = Window(setup.size, f"hmblur view - {setup.scene.name}", self.router)
@@ -87,6 +90,7 @@ class App:
         self.panel_rect = self.overlay_rect = (0.0, 0.0, 0.0, 0.0)
         self.rss: list[tuple[int, int]] = []
         self.frame_index = 0
+        self.recorder = None
 
     # -- actions (panel, keys, script)
     def set_mode(self, mode: str):
@@ -167,6 +171,34 @@ class App:
             return
         s.shots.append(str(path))
         print(f"{path}: {s.mode} {self.renderer.size[0]}x{self.renderer.size[1]} t={s.time:g}")
+
+    def toggle_record(self, path=None):
+        """Start recording the shown image (viewer/ui/record.py), or stop and write it."""
+        from .ui.record import Recorder, next_path
+        s = self.state
+        if self.recorder is not None:
+            rec, self.recorder = self.recorder, None
+            try:
+                written = rec.stop()
+            except Exception as exc:
+                s.report(f"recording {rec.out.video}: {exc}")
+                return
+            if written is not None:
+                s.shots.append(str(written))
+                print(f"{written}: {rec.writer.count} frames at {rec.fps:g} fps")
+            return
+        path = path or next_path(self.options.shot_dir, f"{s.scene.name}_{s.mode}")
+        try:
+            self.recorder = Recorder.open(str(path), self.options.record_fps, s,
+                                          self.window.framebuffer_size)
+        except Exception as exc:
+            s.report(f"record {path}: {exc}")
+
+    def record_frame(self):
+        grab = capture.grab_window(self.ctx, self.window.framebuffer_size)
+        if not self.recorder.add(grab, self.state.time):
+            self.state.report("recording stopped: the window changed size")
+            self.toggle_record()
 
     def perform(self, a: Action):
         """One script action (viewer/ui/script.py)."""
@@ -292,6 +324,8 @@ class App:
         fixed = opts.frames is not None              # scripted runs step time by a fixed amount
         last = _time.perf_counter()
         grab = None
+        if opts.record is not None:
+            self.toggle_record(opts.record)
         while not self.window.should_close():
             if opts.frames is not None and self.frame_index >= opts.frames:
                 break
@@ -300,6 +334,8 @@ class App:
                 item() if callable(item) else self.perform(item)
             now = _time.perf_counter()
             seconds = FIXED_STEP if fixed else now - last
+            if self.recorder is not None:       # recordings play at the scene's speed
+                seconds = self.recorder.step
             if self.frame_index:
                 self.times.add((now - last) * 1e3)
             last = now
@@ -308,6 +344,8 @@ class App:
             self.router.dispatch(io.want_capture_mouse, io.want_capture_keyboard, seconds)
             self.advance(seconds)
             self.render_scene()
+            if self.recorder is not None:
+                self.record_frame()
             if self.state.show_panel:
                 self.panel_rect = draw_panel(self)
             self.overlay_rect = draw_overlay(self.times, self.pass_ms, self.pass_cpu_ms,
@@ -321,6 +359,8 @@ class App:
                 self.rss.append((self.frame_index, rss_kb()))
             self.window.swap()
         self.rss.append((self.frame_index, rss_kb()))
+        if self.recorder is not None:
+            self.toggle_record()
         if grab is not None:
             write_png_atomic(opts.screenshot, grab)
         if opts.stats_json is not None:
@@ -345,5 +385,7 @@ class App:
         }
 
     def release(self):
+        if self.recorder is not None:          # an error on the way: no half-written video
+            self.recorder.abort()
         self.renderer.release()
         self.window.release()

@@ -8,7 +8,7 @@ import sys
 from .errors import UserError
 from .progress import end_line
 
-COMMANDS = ("shot", "compare", "bench", "view")
+COMMANDS = ("shot", "compare", "bench", "view", "video")
 
 
 class _Parser(argparse.ArgumentParser):

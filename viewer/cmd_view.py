@@ -6,6 +6,7 @@ from pathlib import Path
 
 from . import cliargs
 from .render.modes import MODES
+from .video_writer import OUT_HELP, video_paths
 
 
 def register(sub):
@@ -21,6 +22,12 @@ def register(sub):
                    help="scripted UI actions by frame number (text or JSON; see viewer/ui/script.py)")
     p.add_argument("--stats-json", default=None, metavar="FILE",
                    help="write fps, per-pass ms, memory (RSS) samples and errors at exit")
+    p.add_argument("--record", default=None, metavar="PATH",
+                   help="record the shown image from the first frame to the end (key V starts "
+                        "and stops a recording into --shot-dir): " + OUT_HELP)
+    p.add_argument("--record-fps", default=None, metavar="F",
+                   help="frames per second of recordings; while recording, a playing "
+                        "animation advances 1/F per frame (default 30)")
     p.add_argument("--shot-dir", default=".", metavar="DIR",
                    help="folder for screenshots taken with F12 / P (default: current folder)")
     p.set_defaults(run=run)
@@ -38,11 +45,17 @@ def run(args) -> int:
     screenshot = cliargs.check_output_file(args.screenshot, "--screenshot") if args.screenshot is not None else None
     stats = cliargs.check_output_file(args.stats_json, "--stats-json") if args.stats_json is not None else None
     shot_dir = cliargs.check_output_dir(args.shot_dir, "--shot-dir", create=False)
+    if args.record is not None:
+        video_paths(args.record, "--record")
+    fps = 30.0 if args.record_fps is None else cliargs.parse_float("--record-fps", args.record_fps)
+    if fps <= 0:
+        raise cliargs.UserError(f"--record-fps {args.record_fps}: expected frames per second > 0")
     from .ui.script import load_script
     script = load_script(args.script) if args.script else []
     # Imported here so that `hmblur shot` and `--help` never load glfw or imgui.
     from .app import App, RunOptions
-    app = App(s, args.scene, args.mode, RunOptions(frames, screenshot, stats, Path(shot_dir), script))
+    app = App(s, args.scene, args.mode, RunOptions(frames, screenshot, stats, Path(shot_dir), script,
+                                                      args.record, fps))
     try:
         return app.run()
     finally:

@@ -51,6 +51,8 @@ def draw_panel(app: "App") -> tuple[float, float, float, float]:
     imgui.separator()
     if imgui.button("Screenshot (F12 / P)"):
         app.screenshot()
+    if imgui.button("Stop recording (V)" if app.recorder else "Record (V)"):
+        app.toggle_record()
     if s.shots:
         imgui.text_wrapped(f"saved {s.shots[-1]}")
     imgui.pop_item_width()
