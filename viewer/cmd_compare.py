@@ -91,8 +91,10 @@ def run(args) -> int:
     files.png(out / "strip.png", strip)
     files.png(out / "flip.png", errors)
     md = metrics_markdown(table)
+    steps = s.params["motion"].steps
     header = (f"# {s.scene.name}: {w}x{h}, t = {s.time:g} s, shutter {s.scene.camera.shutter:g} s, "
-              f"reference {s.params['reference'].samples} sub-frames\n\nSpace: {SPACE}.\n\n"
+              + (f"motion.steps={steps} (the blurring modes), " if steps > 1 else "")
+              + f"reference {s.params['reference'].samples} sub-frames\n\nSpace: {SPACE}.\n\n"
               "Regions (regions.png), from the reference's own visibility at each of its "
               "sub-frames:\n\n" + "".join(f"- {d}\n" for d in DEFINITIONS.values()) + "\n")
     text = (header + md).encode("utf-8")
