@@ -17,6 +17,7 @@ from viewer.conventions import to_image
 from viewer.params import ParamSet
 from viewer.render.blur_common import max_radius_px
 from viewer.render.gbuffer import GBUFFER
+from viewer.render.reference import REGIONS
 from viewer.render.mcguire import EARLY_OUT_PX, JITTER_STREAM, mcguire_passes
 from viewer.render.tiles import TileMaxPass
 
@@ -384,7 +385,7 @@ def test_mode_beats_off_in_outer_blur_on_basic(ctx):
         names = r.pipeline("mcguire").describe()
     finally:
         r.release()
-    region = ref.host["regions"]
+    region = ref.host[REGIONS]
     outer = region == OUTER
     assert outer.sum() > 50
     err = {k: float(((img - ref.image) ** 2)[outer].mean()) for k, img in

@@ -23,11 +23,13 @@ from raytrace import kernels
 
 from .blur_common import max_radius_px
 from .frame import Frame
+from .host import HostResource
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
+from .reveal_pass import MASKED_PIXELS
 from .tile_kernels import outlines_along, pixel_tiles, square_max
-from .tile_lists import FINE, moving_strips, tile_coords, tile_list
+from .tile_lists import FINE, TILE_LISTS, moving_strips, tile_coords, tile_list
 from .tiles import tile_passes
 
 # Which noise stream of glsl/noise.glsl's hash01 jitters the time samples or taps.
@@ -47,6 +49,8 @@ MERGE_ANGLE_DEG = 7.0
 MERGE_COS = math.cos(math.radians(MERGE_ANGLE_DEG))
 MERGE_SPREAD = math.sin(math.radians(MERGE_ANGLE_DEG))
 FRAGMENTS = {"time": "hybrid_time.frag", "bucket": "hybrid_bucket.frag"}
+NEIGHBORMAX = HostResource("neighbormax", np.ndarray,
+                           "hybrid_neighbormax read back (GL rows), for near_outlines")
 
 
 def near_outlines(frame: Frame, todo: np.ndarray) -> np.ndarray:
@@ -59,10 +63,10 @@ def near_outlines(frame: Frame, todo: np.ndarray) -> np.ndarray:
     lines miss the outlines above and below). Elsewhere every tap lands on the pixel's own
     object, and the buckets of other objects stay empty: the SIMPLE variant, which skips
     them, gives the same image. Decided for the tiles of `todo` only."""
-    lists = frame.host.get("tile_lists")
+    lists = frame.host.get(TILE_LISTS)
     if lists is None or lists.boundary.shape != todo.shape:
         return np.ones(todo.shape, bool)
-    vn = frame.host.get("neighbormax")
+    vn = frame.host.get(NEIGHBORMAX)
     if vn is None:                      # (not read back: the composite run on its own)
         vn = read_neighbormax(frame)
     k = max_radius_px(frame)
@@ -81,11 +85,12 @@ class ReadNeighborMax(Pass):
     (the hybrid runs the tile passes before the ray mask), so a GPU driver waits only for
     those passes, not for the reveal's, as a read in the composite would."""
     name = "hybrid_neighbormax_read"
+    runs_on = "cpu"
     inputs = ("hybrid_neighbormax",)
-    produces = ("neighbormax",)         # host-side: frame.host["neighbormax"]
+    host_outputs = (NEIGHBORMAX,)
 
     def execute(self, frame: Frame):
-        frame.host["neighbormax"] = read_neighbormax(frame)
+        frame.host.put(NEIGHBORMAX, read_neighbormax(frame))
 
 
 def composite_kind(frame: Frame) -> str:
@@ -131,7 +136,7 @@ def write_mask_tiles(frame: Frame):
     reveal) reads what its caller wrote there."""
     k = max_radius_px(frame)
     frame.pool.texture(MASK_TILES, TexSpec(2, "f4", tile=k))
-    pixels = frame.host.get("masked_pixels")
+    pixels = frame.host.get(MASKED_PIXELS)
     if pixels is not None:
         frame.write(MASK_TILES, mask_tiles(pixels, frame.size, k))
 
@@ -143,20 +148,14 @@ class Composite(FullscreenPass):
     inputs = ("color", "hybrid_front", "hybrid_back", "hybrid_back_color", "hybrid_back2",
               "hybrid_back2_color", "hybrid_tilemax", "hybrid_neighbormax")
     produces = ("hybrid", MASK_TILES)   # ray_mask_tiles: held only while "time" draws
+    host_inputs = (TILE_LISTS, NEIGHBORMAX, MASKED_PIXELS)
 
-    def __init__(self):
-        self._kind = "time"
-        self._back, self._still, self._simple = 1, 0, 0
-
-    def program(self, frame: Frame, vertex: str = "fullscreen.vert"):
-        self.fragment = FRAGMENTS[self._kind]
-        return super().program(frame, vertex)
+    fragment = FRAGMENTS["time"]
 
     def defines(self, frame: Frame):
         p = frame.params["hybrid"]
         return {"LAYERS": int(p.layers), "MAX_SEEDS": int(p.seeds),
-                "JITTER_STREAM": f"{JITTER_STREAM}u", "BACK_LAYER": self._back,
-                "OWN_STILL": self._still, "SIMPLE": self._simple, "MERGE_COS": repr(MERGE_COS)}
+                "JITTER_STREAM": f"{JITTER_STREAM}u", "MERGE_COS": repr(MERGE_COS)}
 
     def outputs(self, frame: Frame):
         return {"hybrid": TexSpec(4, "f4")}
@@ -166,7 +165,7 @@ class Composite(FullscreenPass):
         if kind == "bucket":
             frame.pool.discard(MASK_TILES)     # (made by an earlier time composite)
         tiles = tile_list(frame, "active")
-        lists = frame.host.get("tile_lists")
+        lists = frame.host.get(TILE_LISTS)
         if tiles is not None and tiles.count < lists.shape[0] * lists.shape[1]:
             # Outside the active tiles nothing reaches a pixel: its sharp colour stands.
             # (Where every tile is active, as under a moving camera, the draws below
@@ -177,7 +176,7 @@ class Composite(FullscreenPass):
             return self._draw(frame, "time" if kind == "split" else kind, tiles)
         active = np.zeros(lists.shape, bool)
         active[tiles.tiles[:, 1], tiles.tiles[:, 0]] = True
-        masked = frame.host.get("masked_pixels", np.zeros((0, 2), int))
+        masked = frame.host.get(MASKED_PIXELS, np.zeros((0, 2), int))
         # Only tiles holding a masked pixel have a revealed layer to blur (line 3); in
         # tiles where nothing moves (own D < 1e-3 px) the own surface needs no line.
         if kind == "split":
@@ -204,7 +203,6 @@ class Composite(FullscreenPass):
               simple: int = 0):
         p = frame.params["hybrid"]
         k = max_radius_px(frame)
-        self._kind, self._back, self._still, self._simple = kind, back, own_still, simple
         textures = {"u_front_color": "color", "u_front": "hybrid_front",
                     "u_back_color": "hybrid_back_color", "u_back": "hybrid_back",
                     "u_back2_color": "hybrid_back2_color", "u_back2": "hybrid_back2",
@@ -218,13 +216,15 @@ class Composite(FullscreenPass):
                    "u_samples_max": int(max(p.samples_max, p.samples_min)),
                    "u_spacing": float(p.sample_spacing), "u_jitter": float(p.jitter),
                    "u_tolerance": float(p.tolerance), "u_iterations": int(p.iterations)},
-                  tiles=tiles, clear=False)
+                  tiles=tiles, clear=False, fragment=FRAGMENTS[kind],
+                  defines={"BACK_LAYER": back, "OWN_STILL": own_still, "SIMPLE": simple})
 
 
 def composite_tile_passes() -> list:
     """The raster displacement's tiles for the composite (and NeighborMax on the host):
     they need only the G-buffer and the tile lists."""
-    return [*tile_passes("hybrid_front", "hybrid", select_x=moving_strips), ReadNeighborMax()]
+    return [*tile_passes("hybrid_front", "hybrid", select_x=moving_strips,
+                         select_reads=(TILE_LISTS,)), ReadNeighborMax()]
 
 
 def composite_passes() -> list:

@@ -31,15 +31,18 @@ class TileMaxPass(FullscreenPass):
     axis "y" reduces 1 x k (strip -> tiles)."""
     fragment = "tilemax.frag"
 
-    def __init__(self, source: str, output: str, axis: str, tile=max_radius_px, select=None):
+    def __init__(self, source: str, output: str, axis: str, tile=max_radius_px, select=None,
+                 select_reads=()):
         """select(frame, k): a TileList over the output's texels that can be nonzero (the
-        rest is cleared to 0, the value of a still strip), or None for all of them."""
+        rest is cleared to 0, the value of a still strip), or None for all of them;
+        select_reads: the host resources it reads (the pass's host_inputs)."""
         if axis not in ("x", "y"):
             raise ValueError(f"TileMaxPass axis must be 'x' or 'y', got {axis!r}")
         self.name = output
         self.inputs, self.produces = (source,), (output,)
         self.source, self.output, self.axis, self.tile = source, output, axis, tile
         self.select = select
+        self.host_inputs = tuple(select_reads)
 
     def outputs(self, frame: Frame):
         k = self.tile(frame)
@@ -71,9 +74,11 @@ class NeighborMaxPass(FullscreenPass):
         self.draw(frame, (self.output,), {"u_tiles": self.source})
 
 
-def tile_passes(source: str, prefix: str, tile=max_radius_px, select_x=None) -> list[Pass]:
+def tile_passes(source: str, prefix: str, tile=max_radius_px, select_x=None,
+                select_reads=()) -> list[Pass]:
     """TileMax x, TileMax y and NeighborMax of `source`, producing PREFIX_tilemax_x,
-    PREFIX_tilemax and PREFIX_neighbormax; select_x: TileMaxPass's `select` for the first."""
-    return [TileMaxPass(source, f"{prefix}_tilemax_x", "x", tile, select_x),
+    PREFIX_tilemax and PREFIX_neighbormax; select_x, select_reads: TileMaxPass's `select`
+    for the first and the host resources it reads."""
+    return [TileMaxPass(source, f"{prefix}_tilemax_x", "x", tile, select_x, select_reads),
             TileMaxPass(f"{prefix}_tilemax_x", f"{prefix}_tilemax", "y", tile),
             NeighborMaxPass(f"{prefix}_tilemax", f"{prefix}_neighbormax", tile)]
