@@ -10,8 +10,8 @@ import pytest
 from PIL import Image
 
 from viewer.imageio import linear_to_srgb8
-from viewer.render.reference import REGIONS
 from viewer.render.renderer import Renderer
+from viewer.render.reference import REGIONS  # (after modes: the modes' order)
 from viewer.scene_loader import load_scene
 
 from conftest import CONFORMANCE

@@ -17,9 +17,9 @@ from viewer.conventions import to_image
 from viewer.params import ParamSet
 from viewer.render.blur_common import max_radius_px
 from viewer.render.gbuffer import GBUFFER
-from viewer.render.reference import REGIONS
 from viewer.render.mcguire import EARLY_OUT_PX, JITTER_STREAM, mcguire_passes
 from viewer.render.tiles import TileMaxPass
+from viewer.render.reference import REGIONS  # (after a mode module: the modes' order)
 
 SIZE = (32, 16)          # W, H
 

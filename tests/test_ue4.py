@@ -17,9 +17,9 @@ from viewer.conventions import to_image
 from viewer.params import ParamSet
 from viewer.render.gbuffer import GBUFFER
 from viewer.render.pool import TexSpec
-from viewer.render.reference import REGIONS
 from viewer.render.blur_common import max_radius_px
 from viewer.render.ue4 import Dilate, Flatten, Gather, TileMinMax, dilation_reach, tile_spec
+from viewer.render.reference import REGIONS  # (after a mode module: the modes' order)
 
 
 def make_params(**ue4) -> ParamSet:
