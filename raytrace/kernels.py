@@ -17,9 +17,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from viewer import jit_notice
 from viewer.conventions import flip_row
 
 _JIT = dict(cache=True, nogil=True)
+jit_notice.install()
 _flip_row = njit(inline="always")(flip_row)     # conventions' row flip, compiled in
 
 

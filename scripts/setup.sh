@@ -22,3 +22,6 @@ if [ ! -x .venv/bin/python ]; then
 fi
 .venv/bin/python -m pip install -q --upgrade pip
 .venv/bin/python -m pip install -q -e ".[test]"
+# Compile the ray-tracing kernels into their on-disk cache now (~35 s once; seconds when
+# cached), so that the first hybrid frame does not wait for the compiler.
+.venv/bin/python -m viewer.warmup
