@@ -234,7 +234,12 @@ def test_compare_of_an_image_smaller_than_the_ssim_window(tmp_path):
                  "--out", str(tmp_path / "c")]) == 0
     m = json.loads((tmp_path / "c" / "metrics.json").read_text())
     assert m["metrics"]["hybrid"]["all"]["ssim"] is None
-    assert m["metrics"]["hybrid"]["all"]["flip"] is not None
+    # FLIP has no window: its mean over the written PNGs, from the evaluator itself.
+    import flip_evaluator
+    png = [np.asarray(Image.open(tmp_path / "c" / f"{n}.png"), np.float32) / 255
+           for n in ("reference", "hybrid")]
+    want = float(np.mean(flip_evaluator.evaluate(*png, "LDR", applyMagma=False)[0]))
+    assert m["metrics"]["hybrid"]["all"]["flip"] == pytest.approx(want, rel=1e-6, abs=1e-9)
 
 
 def test_a_write_that_fails_is_one_line_and_leaves_no_output(tmp_path, capsys, monkeypatch):

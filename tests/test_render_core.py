@@ -82,7 +82,7 @@ def test_velocity_is_the_exposure_displacement(ctx, tmp_path, camera_motion):
     finally:
         r.release()
     cam = Camera(sc.camera, 128, 96)
-    t0, t1 = sc.exposure(t)
+    t0, t1 = t - sc.camera.shutter / 2, t + sc.camera.shutter / 2     # the contract's exposure
     checked = 0
     for obj in sc.objects:
         jj, ii = np.nonzero(b["id"] == obj.id)
