@@ -3,7 +3,7 @@
     python -m viewer.warmup
 
 scripts/setup.sh runs this once, so that the first hybrid frame afterwards loads the
-kernels from the cache (well under a second) instead of compiling them (~35 s). It renders
+kernels from the cache (well under a second) instead of compiling them (~40 s). It renders
 two tiny hybrid frames of every built-in scene, with the default mask and with the range
 check: the scenes between them take every path whose argument types differ (a still and a
 moving camera, the static view, static and moving hits), so nothing is left to compile
