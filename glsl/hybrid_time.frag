@@ -33,17 +33,11 @@ float g_own_depth;
 
 vec4 motion(int layer, ivec2 p) {
     if (layer == 0) return front_motion(p);
-#if LAYERS >= 2
-    if (layer == 2) return back2_motion(p);
-#endif
     return back_motion(p);
 }
 
 vec3 colour(int layer, ivec2 p) {
     if (layer == 0) return front_colour(p);
-#if LAYERS >= 2
-    if (layer == 2) return back2_colour(p);
-#endif
     return back_colour(p);
 }
 
@@ -123,10 +117,6 @@ void main() {
     ivec2 tile = x / u_tile;
     vec2 vn = clamp_length(texelFetch(u_neighbormax, tile, 0).xy);
     float reach = max(length(vn), max(length(fx.xy), length(bx.xy)));
-#if LAYERS >= 2
-    vec4 b2x = back2_motion(x);
-    reach = max(reach, length(b2x.xy));
-#endif
     // Nothing within reach moves half a pixel either way: the sharp pixel is the answer.
     if (reach <= 1.0) {
         out_color = vec4(own, 1.0);
@@ -161,9 +151,6 @@ void main() {
         consider(0, u, fx.xy);
         for (int i = 0; i < g_num_seeds; ++i) consider(0, u, g_seeds[i]);
         if (back_walk) consider(1, u, bx.xy);
-#if LAYERS >= 2
-        if (back_walk) consider(2, u, b2x.xy);
-#endif
         sum += g_covered ? g_best : g_stand_in;
     }
     out_color = vec4(sum / float(n), 1.0);

@@ -140,8 +140,8 @@ class Composite(FullscreenPass):
     """The composite composite_kind picks: "time" (glsl/hybrid_time.frag), "bucket"
     (glsl/hybrid_bucket.frag), or "split" between them by tiles."""
     name = "hybrid_composite"
-    inputs = ("color", "hybrid_front", "hybrid_back", "hybrid_back_color", "hybrid_back2",
-              "hybrid_back2_color", "hybrid_tilemax", "hybrid_neighbormax")
+    inputs = ("color", "hybrid_front", "hybrid_back", "hybrid_back_color", "hybrid_tilemax",
+              "hybrid_neighbormax")
     produces = ("hybrid", MASK_TILES)   # ray_mask_tiles: held only while "time" draws
 
     def __init__(self):
@@ -154,7 +154,7 @@ class Composite(FullscreenPass):
 
     def defines(self, frame: Frame):
         p = frame.params["hybrid"]
-        return {"LAYERS": int(p.layers), "MAX_SEEDS": int(p.seeds),
+        return {"MAX_SEEDS": int(p.seeds),
                 "JITTER_STREAM": f"{JITTER_STREAM}u", "BACK_LAYER": self._back,
                 "OWN_STILL": self._still, "SIMPLE": self._simple, "MERGE_COS": repr(MERGE_COS)}
 
@@ -207,7 +207,6 @@ class Composite(FullscreenPass):
         self._kind, self._back, self._still, self._simple = kind, back, own_still, simple
         textures = {"u_front_color": "color", "u_front": "hybrid_front",
                     "u_back_color": "hybrid_back_color", "u_back": "hybrid_back",
-                    "u_back2_color": "hybrid_back2_color", "u_back2": "hybrid_back2",
                     "u_tilemax": "hybrid_tilemax", "u_neighbormax": "hybrid_neighbormax"}
         if kind == "time":
             write_mask_tiles(frame)

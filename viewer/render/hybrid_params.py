@@ -40,9 +40,6 @@ class HybridParams:
     # ---- ray reveal (viewer/render/reveal_pass.py)
     trace: bool = param(True, help="cast the masked pixels' rays; off leaves the revealed "
                                    "layer empty (the composite alone, for comparison)")
-    layers: int = param(1, choices=(1, 2), effect="realloc",
-                        help="revealed layers: 1 = the paper; 2 also reveals what lies "
-                             "behind a revealed moving object")
     max_depth: int = param(8, lo=0, hi=64,
                            help="restarts allowed to pass through the pixel's own static "
                                 "object (recursion depth of the reveal)")
