@@ -27,7 +27,7 @@ from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" g
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
 from .tile_kernels import outlines_along, pixel_tiles, square_max
-from .tile_lists import FINE, moving_strips, tile_coords, tile_list
+from .tile_lists import FINE, moving_strips, path_textures, segments, tile_coords, tile_list
 from .tiles import tile_passes
 
 # Which noise stream of glsl/noise.glsl's hash01 jitters the time samples or taps.
@@ -60,7 +60,8 @@ def near_outlines(frame: Frame, todo: np.ndarray) -> np.ndarray:
     object, and the buckets of other objects stay empty: the SIMPLE variant, which skips
     them, gives the same image. Decided for the tiles of `todo` only."""
     lists = frame.host.get("tile_lists")
-    if lists is None or lists.boundary.shape != todo.shape:
+    if lists is None or lists.boundary.shape != todo.shape or segments(frame) > 1:
+        # (a path's lines are not the NeighborMax chord's: every tile may meet one)
         return np.ones(todo.shape, bool)
     vn = frame.host.get("neighbormax")
     if vn is None:                      # (not read back: the composite run on its own)
@@ -141,7 +142,8 @@ class Composite(FullscreenPass):
     (glsl/hybrid_bucket.frag), or "split" between them by tiles."""
     name = "hybrid_composite"
     inputs = ("color", "hybrid_front", "hybrid_back", "hybrid_back_color", "hybrid_tilemax",
-              "hybrid_neighbormax")
+              "hybrid_neighbormax", "hybrid_path", "hybrid_path2", "hybrid_neighbormax_path",
+              "hybrid_neighbormax_path2")
     produces = ("hybrid", MASK_TILES)   # ray_mask_tiles: held only while "time" draws
 
     def __init__(self):
@@ -154,7 +156,7 @@ class Composite(FullscreenPass):
 
     def defines(self, frame: Frame):
         p = frame.params["hybrid"]
-        return {"MAX_SEEDS": int(p.seeds),
+        return {"MAX_SEEDS": int(p.seeds), "SEGMENTS": segments(frame),
                 "JITTER_STREAM": f"{JITTER_STREAM}u", "BACK_LAYER": self._back,
                 "OWN_STILL": self._still, "SIMPLE": self._simple, "MERGE_COS": repr(MERGE_COS)}
 
@@ -207,7 +209,10 @@ class Composite(FullscreenPass):
         self._kind, self._back, self._still, self._simple = kind, back, own_still, simple
         textures = {"u_front_color": "color", "u_front": "hybrid_front",
                     "u_back_color": "hybrid_back_color", "u_back": "hybrid_back",
-                    "u_tilemax": "hybrid_tilemax", "u_neighbormax": "hybrid_neighbormax"}
+                    "u_tilemax": "hybrid_tilemax", "u_neighbormax": "hybrid_neighbormax",
+                    **path_textures(frame),
+                    **path_textures(frame, {"u_neighbormax_path0": "hybrid_neighbormax_path",
+                                            "u_neighbormax_path1": "hybrid_neighbormax_path2"})}
         if kind == "time":
             write_mask_tiles(frame)
             textures["u_mask_tiles"] = MASK_TILES
@@ -223,7 +228,8 @@ class Composite(FullscreenPass):
 def composite_tile_passes() -> list:
     """The raster displacement's tiles for the composite (and NeighborMax on the host):
     they need only the G-buffer and the tile lists."""
-    return [*tile_passes("hybrid_front", "hybrid", select_x=moving_strips), ReadNeighborMax()]
+    return [*tile_passes("hybrid_front", "hybrid", select_x=moving_strips, segments=segments,
+                         paths=("hybrid_path", "hybrid_path2")), ReadNeighborMax()]
 
 
 def composite_passes() -> list:

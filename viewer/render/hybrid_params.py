@@ -4,12 +4,19 @@ importing any of them has the group)."""
 from __future__ import annotations
 
 from ..params import group, param
+from .gbuffer import SEGMENT_CHOICES
 
 COMPOSITES = ("bucket", "split", "time")
 
 
 @group("hybrid")
 class HybridParams:
+    # ---- motion (viewer/render/gbuffer.py, glsl/path.glsl)
+    segments: int = param(1, choices=SEGMENT_CHOICES, effect="recompile",
+                          help="linear pieces of each pixel's screen path over the "
+                               "exposure (its points projected at evenly spaced times): "
+                               "tiles, ray mask and composite follow the path (rotation, "
+                               "approach, a reversal); 1 = the chord alone (the paper)")
     # ---- ray mask (viewer/render/raymask.py)
     min_speed: float = param(1.0, lo=0.0, hi=64.0,
                              help="displacement over the exposure (px) below which a pixel "
