@@ -13,7 +13,7 @@ from viewer.camera import Camera
 from viewer.errors import SceneError
 from viewer.scene_loader import builtin_scene_names, builtin_scene_path, load_scene
 
-NAMES = ["living_room", "pan", "spinner", "thin"]
+NAMES = ["living_room", "pan", "spinner", "thin", "wheel"]
 
 
 def world(obj, t, local_points):
@@ -171,6 +171,33 @@ def test_spinner_blade_tips_move_fast_on_arcs(scenes):
         chord = c - a
         off = abs(chord[0] * (m - a)[1] - chord[1] * (m - a)[0]) / np.linalg.norm(chord)
         assert off > 2.0, off
+
+
+def test_wheel_rolls_faster_and_the_ball_turns_back_inside_the_exposure(scenes):
+    s = scenes["wheel"]
+    tyre, rim, ball = (by_name(s, n) for n in ("tyre", "rim", "ball"))
+    assert not s.camera.moving and [o.name for o in s.objects if o.moving] == [
+        "tyre", "rim", "ball"]
+    assert np.array_equal(tyre.keys.token, rim.keys.token)       # one wheel
+    turns = np.abs(np.diff(tyre.keys.rotations[:, 2]))
+    assert turns.max() < 180.0 and turns.max() > 90.0             # slerp goes the right way
+    t0, t1 = s.exposure(0.0)
+    r = tyre.mesh.vertices[:, 0].max()
+    # rolling: at the frame time, the wheel's top moves twice as fast as the hub and its
+    # contact point is still (velocities by central differences)
+    rot = tyre.matrix(0.0)[:3, :3]
+    top, hub, ground = ([rot.T @ [0.0, y, 0.0]] for y in (r, 0.0, -r))
+    speed = {n: np.linalg.norm(world(tyre, 1e-5, p) - world(tyre, -1e-5, p)) / 2e-5
+             for n, p in (("top", top), ("hub", hub), ("ground", ground))}
+    assert abs(speed["hub"] - 3.0) < 0.01
+    assert abs(speed["top"] / speed["hub"] - 2.0) < 0.02 and speed["ground"] < 0.02 * speed["hub"]
+    assert displacement(s, tyre, top)[0] > 60                    # px at 1280x720
+    assert displacement(s, tyre, hub, t=0.5)[0] > 1.4 * displacement(s, tyre, hub)[0]
+    # the ball: down to the floor and back up within the shutter, its chord short
+    c = centre(ball)
+    path = np.array([screen(s, ball, t, c)[0][0] for t in np.linspace(t0, t1, 33)])
+    length = np.linalg.norm(np.diff(path, axis=0), axis=1).sum()
+    assert length > 30 and np.linalg.norm(path[-1] - path[0]) < 0.6 * length
 
 
 def test_bench_scenes_hold_many_visible_movers():

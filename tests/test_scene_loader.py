@@ -1,4 +1,5 @@
-"""viewer.scene_loader against SCENE_FORMAT.md: values, defaults, motion, and errors.
+"""viewer.scene_loader against the scene format (docs/scene-format.md): values, defaults,
+motion, and errors.
 
 Invalid inputs are small TOML documents written to tmp_path; each must raise SceneError
 whose message names the file and the dotted key.

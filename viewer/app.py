@@ -63,7 +63,7 @@ class App:
         self.options = options
         self.state = ViewState(scene_arg, setup.scene, mode, setup.time, setup.params, setup.seed,
                                scene_text=scene_arg)
-        self.camera = CameraControl(setup.scene.camera)
+        self.camera = CameraControl(setup.scene.camera, lambda: self.state.time)
         self.router = InputRouter(lambda: self.camera, lambda: self.window.size[1])
         self.router.actions.update({
             glfw.KEY_F12: self.screenshot, glfw.KEY_P: self.screenshot,
@@ -147,7 +147,7 @@ class App:
         s = self.state
         s.scene, s.scene_arg, s.scene_text, s.time = scene, source, source, scene.render.time
         s.buffer, s.error = "", ""
-        self.camera = CameraControl(scene.camera)
+        self.camera = CameraControl(scene.camera, lambda: self.state.time)
         self.progressive.reset()
         glfw.set_window_title(self.window.handle, f"hmblur view - {scene.name}")
 

@@ -12,7 +12,7 @@ from pathlib import Path
 from .errors import UserError
 from .params import ParamSet
 from .scene import Scene
-from .scene_loader import check_camera, load_scene
+from .scene_loader import load_scene, merge_camera
 
 
 def add_scene_args(p, samples: bool = True):
@@ -98,16 +98,10 @@ def read_sidecar(path: str) -> dict:
 
 def apply_camera(scene: Scene, data, source: str):
     """Override the scene's camera with a sidecar's (the viewer may have moved it), checked
-    as the scene file's camera is (scene_loader.check_camera)."""
-    import dataclasses
-
-    import numpy as np
+    as the scene file's camera is (scene_loader.merge_camera)."""
     if not isinstance(data, dict):
         raise UserError(f"{source}: camera: expected a table")
-    merged = {k: (v.tolist() if isinstance(v, np.ndarray) else v)
-              for k, v in dataclasses.asdict(scene.camera).items()}
-    merged.update(data)
-    scene.camera = check_camera(merged, source)
+    scene.camera = merge_camera(scene.camera, data, source)
 
 
 def sidecar_size(value, source: str) -> tuple[int, int]:

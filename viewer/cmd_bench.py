@@ -42,7 +42,8 @@ def register(sub):
                         "gpu = GL timer queries (truthful on GPU drivers only); auto = gpu "
                         "where truthful (default)")
     p.add_argument("--speeds", default=None, metavar="S1,S2,...",
-                   help="also scale every object's velocity by each factor and tabulate the "
+                   help="also scale every object's velocity by each factor (a keyed path: "
+                        "run that many times as fast about the frame time) and tabulate the "
                         "hybrid reveal's ms against the masked pixel count")
     p.set_defaults(run=run)
 
@@ -174,11 +175,15 @@ def reveal_summary(results: dict) -> dict | None:
 
 def speed_table(r: Renderer, s, speeds: list[float], frames: int) -> list[dict]:
     rows = []
-    base = [(o.velocity.copy(), o.angular_velocity.copy()) for o in s.scene.objects]
+    # Velocities scale by f; keyed paths run f times as fast about the frame time (the pose
+    # at the frame time stays, the motion over the exposure scales as a velocity's would).
+    base = [(o.velocity.copy(), o.angular_velocity.copy(), o.keys) for o in s.scene.objects]
     try:
         for f in speeds:
-            for o, (v, w) in zip(s.scene.objects, base):
+            for o, (v, w, keys) in zip(s.scene.objects, base):
                 o.velocity, o.angular_velocity = v * f, w * f
+                if keys is not None:
+                    o.keys = keys.retimed(s.time, f)
             ms, masked, rays = [], [], []
             for _ in range(frames):
                 # timing=True: finish() around every pass, so reveal_ms is the reveal's own
@@ -191,8 +196,8 @@ def speed_table(r: Renderer, s, speeds: list[float], frames: int) -> list[dict]:
             rows.append({"speed": f, "masked_pixels": int(np.median(masked)),
                          "rays": int(np.median(rays)), "reveal_ms": float(np.median(ms))})
     finally:
-        for o, (v, w) in zip(s.scene.objects, base):
-            o.velocity, o.angular_velocity = v, w
+        for o, (v, w, keys) in zip(s.scene.objects, base):
+            o.velocity, o.angular_velocity, o.keys = v, w, keys
     return rows
 
 

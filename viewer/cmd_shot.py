@@ -1,11 +1,8 @@
 """`hmblur shot`: render one mode of a scene to an sRGB PNG, with a JSON sidecar."""
 from __future__ import annotations
 
-import dataclasses
 import time
 from pathlib import Path
-
-import numpy as np
 
 from . import cliargs
 from .glcontext import create_headless, device_name
@@ -27,8 +24,7 @@ def register(sub):
 
 
 def camera_dict(spec) -> dict:
-    return {k: (v.tolist() if isinstance(v, np.ndarray) else v)
-            for k, v in dataclasses.asdict(spec).items()}
+    return spec.to_dict()
 
 
 def sidecar(s: cliargs.Setup, mode: str, result, ctx, scene_arg: str) -> dict:

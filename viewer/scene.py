@@ -1,6 +1,6 @@
 """The scene model: what a scene file describes, after loading and validation.
 
-`viewer.scene_loader.load_scene` builds these from TOML (SCENE_FORMAT.md). Everything here
+`viewer.scene_loader.load_scene` builds these from TOML (docs/scene-format.md). Everything here
 is plain numpy (float64) so the rasteriser, the ray tracer and the tests share one truth
 for transforms and motion.
 """
@@ -47,6 +47,136 @@ def rotation_at(w, t: float) -> np.ndarray:
     return tf.axis_angle(np.asarray(w, dtype=np.float64) * t)
 
 
+# ---------------------------------------------------------------- keyframed motion (v1.1)
+
+INTERPOLATIONS = ("linear", "smooth")
+
+
+def key_segment(times: np.ndarray, t: float) -> tuple[int, float]:
+    """(i, u): t clamped to [times[0], times[-1]], the segment i with times[i] <= t <=
+    times[i+1] and u = (t - times[i]) / (times[i+1] - times[i]); (0, 0.0) for one key."""
+    n = len(times)
+    if n == 1:
+        return 0, 0.0
+    t = min(max(float(t), float(times[0])), float(times[-1]))
+    i = min(int(np.searchsorted(times, t, side="right")) - 1, n - 2)
+    return i, (t - float(times[i])) / (float(times[i + 1]) - float(times[i]))
+
+
+def key_curve(values: np.ndarray, i: int, u: float, smooth: bool) -> np.ndarray:
+    """Segment i of the keys' curve at u: linear P_i + u (P_(i+1) - P_i), or the uniform
+    Catmull-Rom spline with the end keys repeated (P_(-1) = P_0, P_n = P_(n-1))."""
+    n = len(values)
+    if n == 1:
+        return values[0].copy()
+    p1, p2 = values[i], values[i + 1]
+    if not smooth:
+        return p1 + u * (p2 - p1)
+    p0, p3 = values[max(i - 1, 0)], values[min(i + 2, n - 1)]
+    return 0.5 * (2.0 * p1 + (p2 - p0) * u + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * u * u
+                  + (3.0 * p1 - p0 - 3.0 * p2 + p3) * u * u * u)
+
+
+def _frozen(*arrays) -> bytes:
+    """Make the arrays read-only; their bytes together (a key's identity for the memos)."""
+    for a in arrays:
+        a.flags.writeable = False
+    return b"".join(a.tobytes() for a in arrays)
+
+
+@dataclass(frozen=True, eq=False)
+class ObjectKeys:
+    """An object's keyed pose: n keys at strictly increasing times (read-only arrays)."""
+    times: np.ndarray                 # (n,) seconds
+    positions: np.ndarray             # (n, 3)
+    rotations: np.ndarray             # (n, 3) Euler degrees, R0 = Rz @ Ry @ Rx
+    scales: np.ndarray                # (n, 3)
+    interpolation: str = "linear"     # "linear" or "smooth" (positions and scales)
+
+    def __post_init__(self):
+        quats = np.array([tf.quat_euler_xyz_degrees(r) for r in self.rotations])
+        object.__setattr__(self, "quats", quats)
+        object.__setattr__(self, "token", _frozen(self.times, self.positions, self.rotations,
+                                                  self.scales, quats)
+                           + self.interpolation.encode())
+
+    @property
+    def varies(self) -> bool:
+        """Whether the pose changes over time (some key differs from the first)."""
+        return bool((self.positions != self.positions[0]).any()
+                    or (self.rotations != self.rotations[0]).any()
+                    or (self.scales != self.scales[0]).any())
+
+    def pose(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(position, unit quaternion, scale) at time t; rotations slerped in both modes."""
+        i, u = key_segment(self.times, t)
+        smooth = self.interpolation == "smooth"
+        q = self.quats[0] if len(self.times) == 1 else tf.slerp(self.quats[i], self.quats[i + 1], u)
+        return (key_curve(self.positions, i, u, smooth), q,
+                key_curve(self.scales, i, u, smooth))
+
+    def matrix(self, t: float) -> np.ndarray:
+        """M(t) = T(p(t)) @ R(q(t)) @ S(s(t))."""
+        p, q, s = self.pose(t)
+        m = np.eye(4)
+        m[:3, :3] = tf.quat_matrix(q) * s      # R @ diag(s): column k scaled by s[k]
+        m[:3, 3] = p
+        return m
+
+    def retimed(self, t0: float, speed: float) -> "ObjectKeys":
+        """The same path run `speed` times as fast about the time t0 (pose'(t) =
+        pose(t0 + speed (t - t0))); speed 0 holds the pose of t0."""
+        if speed == 0.0:
+            p, q, s = self.pose(t0)
+            euler = tf.euler_xyz_degrees_of(tf.quat_matrix(q))
+            return ObjectKeys(np.array([float(t0)]), p[None], euler[None], s[None],
+                              self.interpolation)
+        times = t0 + (self.times - t0) / speed
+        order = slice(None) if speed > 0 else slice(None, None, -1)
+        return ObjectKeys(times[order].copy(), self.positions[order].copy(),
+                          self.rotations[order].copy(), self.scales[order].copy(),
+                          self.interpolation)
+
+    def to_dicts(self) -> list[dict]:
+        return [{"time": float(t), "position": p.tolist(), "rotation": r.tolist(),
+                 "scale": s.tolist()}
+                for t, p, r, s in zip(self.times, self.positions, self.rotations, self.scales)]
+
+
+@dataclass(frozen=True, eq=False)
+class CameraKeys:
+    """The camera's keyed path: n keys at strictly increasing times (read-only arrays)."""
+    times: np.ndarray                 # (n,) seconds
+    positions: np.ndarray             # (n, 3) eye
+    look_ats: np.ndarray              # (n, 3)
+    ups: np.ndarray                   # (n, 3)
+    interpolation: str = "linear"
+
+    def __post_init__(self):
+        object.__setattr__(self, "token", _frozen(self.times, self.positions, self.look_ats,
+                                                  self.ups) + self.interpolation.encode())
+
+    @property
+    def varies(self) -> bool:
+        return bool((self.positions != self.positions[0]).any()
+                    or (self.look_ats != self.look_ats[0]).any()
+                    or (self.ups != self.ups[0]).any())
+
+    def pose(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(eye, unit forward, up) at t: eye p(t), forward normalize(look_at(t) - p(t)),
+        up(t) (made orthonormal with forward where the view is built, as for every camera)."""
+        i, u = key_segment(self.times, t)
+        smooth = self.interpolation == "smooth"
+        eye = key_curve(self.positions, i, u, smooth)
+        fwd = key_curve(self.look_ats, i, u, smooth) - eye
+        return eye, fwd / np.linalg.norm(fwd), key_curve(self.ups, i, u, smooth)
+
+    def to_dicts(self) -> list[dict]:
+        return [{"time": float(t), "position": p.tolist(), "look_at": a.tolist(),
+                 "up": u.tolist()}
+                for t, p, a, u in zip(self.times, self.positions, self.look_ats, self.ups)]
+
+
 @dataclass
 class SceneObject:
     name: str
@@ -59,13 +189,19 @@ class SceneObject:
     scale: np.ndarray = field(default_factory=lambda: np.ones(3))
     velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
     angular_velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    # Keyed motion instead of the pose and velocities above (which then hold the first
+    # key's pose and zero velocities, for what reads a rest pose).
+    keys: ObjectKeys | None = None
 
     @property
     def moving(self) -> bool:
+        if self.keys is not None:
+            return self.keys.varies
         return bool(self.velocity.any() or self.angular_velocity.any())   # (np.any: 3x slower)
 
     def matrix(self, t: float) -> np.ndarray:
-        """M(t) = T(position + velocity t) @ Rot(angular_velocity t) @ R0 @ S.
+        """M(t) = T(position + velocity t) @ Rot(angular_velocity t) @ R0 @ S, or for a
+        keyed object T(p(t)) @ R(q(t)) @ S(s(t)).
 
         A frame asks for the same few times (t, shutter open and close) in many passes:
         the last few results are kept, keyed by t and every field they depend on. An
@@ -73,11 +209,20 @@ class SceneObject:
         turn): keyed as t = 0, so an animation's frames do not rebuild it three times
         each (living_room: 28 still objects)."""
         moving = self.moving
-        key = (float(t) if moving else 0.0, self.position.tobytes(), self.velocity.tobytes(),
-               self.angular_velocity.tobytes(), self.rotation.tobytes(), self.scale.tobytes())
+        if self.keys is not None:
+            key = (float(t) if moving else 0.0, self.keys.token)
+        else:
+            key = (float(t) if moving else 0.0, self.position.tobytes(), self.velocity.tobytes(),
+                   self.angular_velocity.tobytes(), self.rotation.tobytes(),
+                   self.scale.tobytes())
         memo = self.__dict__.setdefault("_matrix_memo", {})
         m = memo.get(key)
-        if m is None:
+        if m is None and self.keys is not None:
+            m = self.keys.matrix(t if moving else float(self.keys.times[0]))
+            if len(memo) >= 8:
+                memo.pop(next(iter(memo)))
+            memo[key] = m
+        elif m is None:
             # T(p) @ rest, written at once: rest's last column is (0, 0, 0, 1), so the
             # product's is p and its 3x3 rest's (a product by 1 and sums of zeros).
             m = self._rest()
@@ -110,21 +255,37 @@ class CameraSpec:
     shutter: float = 0.0
     velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
     angular_velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    # A keyed path instead of position, look_at and the velocities (which then hold the
+    # first key's pose and zero velocities; `up` is the keys' default up).
+    keys: CameraKeys | None = None
 
     @property
     def moving(self) -> bool:
+        if self.keys is not None:
+            return self.keys.varies
         return bool(self.velocity.any() or self.angular_velocity.any())   # (np.any: 3x slower)
 
     def pose(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(eye, forward, up) at time t; forward and up are turned by Rot(angular_velocity t).
+        """(eye, forward, up) at time t; forward and up are turned by Rot(angular_velocity t),
+        or for a keyed camera CameraKeys.pose(t).
 
         Read-only arrays, the last few kept by t and every field they depend on: a frame
         asks for a handful of times in many places (a turning camera's pose costs ~20 us)."""
-        key = (float(t), self.position.tobytes(), self.look_at.tobytes(), self.up.tobytes(),
-               self.velocity.tobytes(), self.angular_velocity.tobytes())
+        if self.keys is not None:
+            key = (float(t), self.keys.token)
+        else:
+            key = (float(t), self.position.tobytes(), self.look_at.tobytes(), self.up.tobytes(),
+                   self.velocity.tobytes(), self.angular_velocity.tobytes())
         memo = self.__dict__.setdefault("_pose_memo", {})
         pose = memo.get(key)
-        if pose is None:
+        if pose is None and self.keys is not None:
+            pose = tuple(np.array(a) for a in self.keys.pose(t))
+            for a in pose:
+                a.flags.writeable = False
+            if len(memo) >= 8:
+                memo.pop(next(iter(memo)))
+            memo[key] = pose
+        elif pose is None:
             r = rotation_at(self.angular_velocity, t)
             eye = self.position + self.velocity * t
             fwd = r @ (self.look_at - self.position)
@@ -135,6 +296,33 @@ class CameraSpec:
                 memo.pop(next(iter(memo)))
             memo[key] = pose
         return pose
+
+    def detach(self, t: float):
+        """Leave the keys for a still camera at the pose of time t (the viewer's mouse and
+        keyboard moves start from what is shown); the look-at point keeps its distance."""
+        if self.keys is None:
+            return
+        eye, fwd, up = self.keys.pose(t)
+        i, u = key_segment(self.keys.times, t)
+        look = key_curve(self.keys.look_ats, i, u, self.keys.interpolation == "smooth")
+        self.position = eye.copy()
+        self.look_at = eye + fwd * float(np.linalg.norm(look - eye))
+        self.up = up.copy()
+        self.velocity, self.angular_velocity = np.zeros(3), np.zeros(3)
+        self.keys = None
+
+    def to_dict(self) -> dict:
+        """The camera as a scene file's [camera] table (JSON types): what an image's sidecar
+        records, read back by scene_loader.check_camera."""
+        d = {"fov_y": self.fov_y, "up": self.up.tolist(), "near": self.near, "far": self.far,
+             "shutter": self.shutter}
+        if self.keys is not None:
+            d.update(interpolation=self.keys.interpolation, keys=self.keys.to_dicts())
+        else:
+            d.update(position=self.position.tolist(), look_at=self.look_at.tolist(),
+                     velocity=self.velocity.tolist(),
+                     angular_velocity=self.angular_velocity.tolist())
+        return d
 
 
 @dataclass

@@ -1,10 +1,11 @@
-"""Scene files (SCENE_FORMAT.md) -> `viewer.scene.Scene`, with every mistake a SceneError.
+"""Scene files (docs/scene-format.md) -> `viewer.scene.Scene`, with every mistake a SceneError.
 
 `load_scene` takes a path to a TOML file or the name of a built-in scene in `scenes/`.
 Validation is strict and happens here, once: the renderers may trust a loaded Scene.
 Whatever the document holds, the loader raises nothing but SceneError, and each message
 names the file, the dotted key and what was expected. Array entries are numbered from 1
-in file order (`objects[2]` is the object with id 2), with the object's name beside it.
+in file order (`objects[2]` is the object with id 2, with its name beside it;
+`camera.keys[1]` the camera's first key).
 
 Primitive parameters that the format leaves out are left out of the trimesh call too, so
 trimesh's own defaults apply (sphere radius 1, subdivisions 3; cylinder and revolve
@@ -25,8 +26,8 @@ from PIL import Image
 import scenes
 
 from .errors import SceneError
-from .scene import (CameraSpec, Light, Material, Mesh, RenderDefaults, Scene, SceneObject,
-                    Texture)
+from .scene import (INTERPOLATIONS, CameraKeys, CameraSpec, Light, Material, Mesh, ObjectKeys,
+                    RenderDefaults, Scene, SceneObject, Texture)
 
 PRIMITIVES = ("box", "sphere", "cylinder", "revolve")
 SHADINGS = ("smooth", "flat")
@@ -38,7 +39,10 @@ TEXTURE_KEYS = {
 MAX_SUBDIVISIONS = 7
 MAX_SECTIONS = 10000
 MAX_FRAME_SIZE = 16384
-NUMBERING = "objects[k] and lights[k] count from 1 in file order"
+NUMBERING = "objects[k], lights[k] and keys[k] count from 1 in file order"
+# What a keyed object or camera must not also have: its pose comes from the keys.
+OBJECT_UNKEYED = ("position", "rotation", "scale", "velocity", "angular_velocity")
+CAMERA_UNKEYED = ("position", "look_at", "velocity", "angular_velocity")
 
 
 # ---------------------------------------------------------------- built-in scenes
@@ -238,28 +242,26 @@ class _Loader:
     def camera(self, v) -> CameraSpec:
         k = "camera"
         t = self.table(v, k, ("position", "look_at", "up", "fov_y", "near", "far", "shutter",
-                              "velocity", "angular_velocity"))
-        position = self.vec3(self.require(t, "position", k, "3 numbers"), "camera.position")
-        look_at = self.vec3(self.require(t, "look_at", k, "3 numbers"), "camera.look_at")
+                              "velocity", "angular_velocity", "interpolation", "keys"))
+        interpolation = self.keyed(t, k, CAMERA_UNKEYED)
         fov_y = self.number(self.require(t, "fov_y", k, "degrees"), "camera.fov_y")
         if not 0 < fov_y < 180:
             self.fail("camera.fov_y", f"expected degrees strictly between 0 and 180, got {fov_y!r}")
         up = self.vec3(t.get("up", [0, 1, 0]), "camera.up")
-        up_unit = self.unit(up.tolist(), "camera.up")
-        with np.errstate(all="ignore"):
-            fwd = look_at - position
-        fwd_unit = _normalised(fwd)
-        if fwd_unit is None:
-            self.fail("camera.look_at", f"expected a point distinct from camera.position "
-                      f"{position.tolist()} (at a finite distance), got {look_at.tolist()}")
-        if np.linalg.norm(np.cross(fwd_unit, up_unit)) < 1e-6:
-            self.fail("camera.up", "expected a vector not parallel to the view direction "
-                      f"(look_at - position = {fwd.tolist()})")
+        self.unit(up.tolist(), "camera.up")
         near = self.positive(t.get("near", 0.05), "camera.near")
         far = self.number(t.get("far", 100.0), "camera.far")
         if not far > near:
             self.fail("camera.far", f"expected a number > near ({near!r}), got {far!r}")
         shutter = self.non_negative(t.get("shutter", 0.0), "camera.shutter")
+        if interpolation is not None:
+            keys = self.camera_keys(t["keys"], up, interpolation)
+            return CameraSpec(position=keys.positions[0].copy(), look_at=keys.look_ats[0].copy(),
+                              fov_y=fov_y, up=up, near=near, far=far, shutter=shutter,
+                              keys=keys)
+        position = self.vec3(self.require(t, "position", k, "3 numbers"), "camera.position")
+        look_at = self.vec3(self.require(t, "look_at", k, "3 numbers"), "camera.look_at")
+        self.view(position, look_at, up, k)
         return CameraSpec(
             position=position, look_at=look_at, fov_y=fov_y,
             up=up, near=near, far=far,
@@ -267,6 +269,82 @@ class _Loader:
             velocity=self.vec3(t.get("velocity", [0, 0, 0]), "camera.velocity"),
             angular_velocity=self.vec3(t.get("angular_velocity", [0, 0, 0]),
                                        "camera.angular_velocity"))
+
+    def view(self, position, look_at, up, k: str):
+        """A view direction exists (look_at apart from position) and up is not along it."""
+        up_unit = self.unit(up.tolist(), f"{k}.up")
+        with np.errstate(all="ignore"):
+            fwd = look_at - position
+        fwd_unit = _normalised(fwd)
+        if fwd_unit is None:
+            self.fail(f"{k}.look_at", f"expected a point distinct from {k}.position "
+                      f"{position.tolist()} (at a finite distance), got {look_at.tolist()}")
+        if np.linalg.norm(np.cross(fwd_unit, up_unit)) < 1e-6:
+            self.fail(f"{k}.up", "expected a vector not parallel to the view direction "
+                      f"(look_at - position = {fwd.tolist()})")
+
+    # -- keyed motion (v1.1)
+
+    def keyed(self, t: dict, k: str, unkeyed) -> str | None:
+        """The interpolation of a table with `keys` (None: not keyed), after the checks of
+        which keys exclude which."""
+        if "keys" not in t:
+            if "interpolation" in t:
+                self.fail(f"{k}.interpolation", "allowed only together with keys "
+                          f"([[{k.split(' ')[0].split('[')[0]}.keys]])")
+            return None
+        for other in unkeyed:
+            if other in t:
+                self.fail(f"{k}.{other}", "not allowed together with keys (a keyed pose comes "
+                          f"from the keys: put it in each key, or drop {k}.keys)")
+        interpolation = self.string(t.get("interpolation", "linear"), f"{k}.interpolation")
+        if interpolation not in INTERPOLATIONS:
+            self.fail(f"{k}.interpolation", f"expected \"linear\" or \"smooth\", got "
+                      f"{interpolation!r}")
+        keys = t["keys"]
+        if not isinstance(keys, list) or not all(isinstance(x, dict) for x in keys):
+            self.fail(f"{k}.keys", f"expected an array of key tables ([[keys]]), got "
+                      f"{_describe(keys)}")
+        if not keys:
+            self.fail(f"{k}.keys", "expected at least one key")
+        return interpolation
+
+    def key_times(self, keys: list, k: str, allowed) -> np.ndarray:
+        """Each key table checked against `allowed`, and the keys' strictly increasing times."""
+        times = []
+        for j, key in enumerate(keys, 1):
+            kk = f"{k}.keys[{j}]"
+            self.table(key, kk, allowed)
+            tj = self.number(self.require(key, "time", kk, "seconds"), f"{kk}.time")
+            if times and not tj > times[-1]:
+                self.fail(f"{kk}.time", f"expected a time greater than keys[{j - 1}]'s "
+                          f"({times[-1]!r}): key times increase strictly, got {tj!r}")
+            times.append(tj)
+        return np.array(times, dtype=np.float64)
+
+    def object_keys(self, keys: list, k: str, interpolation: str) -> ObjectKeys:
+        times = self.key_times(keys, k, ("time", "position", "rotation", "scale"))
+        pos, rot, sc = [], [], []
+        for j, key in enumerate(keys, 1):
+            kk = f"{k}.keys[{j}]"
+            pos.append(self.vec3(key.get("position", [0, 0, 0]), f"{kk}.position"))
+            rot.append(self.vec3(key.get("rotation", [0, 0, 0]), f"{kk}.rotation"))
+            sc.append(self.scale(key.get("scale", 1.0), f"{kk}.scale"))
+        return ObjectKeys(times, np.array(pos), np.array(rot), np.array(sc), interpolation)
+
+    def camera_keys(self, keys: list, up: np.ndarray, interpolation: str) -> CameraKeys:
+        k = "camera"
+        times = self.key_times(keys, k, ("time", "position", "look_at", "up"))
+        pos, look, ups = [], [], []
+        for j, key in enumerate(keys, 1):
+            kk = f"{k}.keys[{j}]"
+            pos.append(self.vec3(self.require(key, "position", kk, "3 numbers: every camera "
+                                              "key has its eye"), f"{kk}.position"))
+            look.append(self.vec3(self.require(key, "look_at", kk, "3 numbers: every camera "
+                                               "key has its look-at point"), f"{kk}.look_at"))
+            ups.append(self.vec3(key["up"], f"{kk}.up") if "up" in key else up.copy())
+            self.view(pos[-1], look[-1], ups[-1], kk)
+        return CameraKeys(times, np.array(pos), np.array(look), np.array(ups), interpolation)
 
     def render(self, v) -> RenderDefaults:
         t = self.table(v, "render", ("width", "height", "time"))
@@ -288,8 +366,9 @@ class _Loader:
         if isinstance(name, str):
             k = f"{k} ({name})"
         self.table(t, k, ("name", "mesh", "position", "rotation", "scale", "shading",
-                          "material", "velocity", "angular_velocity"))
+                          "material", "velocity", "angular_velocity", "interpolation", "keys"))
         name = self.string(name, f"{k}.name")
+        interpolation = self.keyed(t, k, OBJECT_UNKEYED)
         mesh_value = self.require(t, "mesh", k, "a file path or a primitive table")
         mesh = self.mesh(mesh_value, f"{k}.mesh")
         default_shading = "flat" if isinstance(mesh_value, dict) and "box" in mesh_value \
@@ -297,16 +376,14 @@ class _Loader:
         shading = self.string(t.get("shading", default_shading), f"{k}.shading")
         if shading not in SHADINGS:
             self.fail(f"{k}.shading", f"expected \"smooth\" or \"flat\", got {shading!r}")
-        scale_v = t.get("scale", 1.0)
-        if isinstance(scale_v, list):
-            scale = self.vec3(scale_v, f"{k}.scale")
-        elif isinstance(scale_v, (int, float)) and not isinstance(scale_v, bool):
-            scale = np.full(3, self.number(scale_v, f"{k}.scale"))
-        else:
-            self.fail(f"{k}.scale", f"expected a number or 3 numbers, got {_describe(scale_v)}")
-        if np.any(scale == 0):
-            self.fail(f"{k}.scale", f"expected non-zero scale factors, got {scale.tolist()}")
         material = self.material(t.get("material", {}), f"{k}.material", mesh)
+        if interpolation is not None:
+            keys = self.object_keys(t["keys"], k, interpolation)
+            return SceneObject(name=name, id=number, mesh=mesh, material=material,
+                               shading=shading, position=keys.positions[0].copy(),
+                               rotation=keys.rotations[0].copy(), scale=keys.scales[0].copy(),
+                               keys=keys)
+        scale = self.scale(t.get("scale", 1.0), f"{k}.scale")
         return SceneObject(
             name=name, id=number, mesh=mesh, material=material, shading=shading,
             position=self.vec3(t.get("position", [0, 0, 0]), f"{k}.position"),
@@ -315,6 +392,17 @@ class _Loader:
             velocity=self.vec3(t.get("velocity", [0, 0, 0]), f"{k}.velocity"),
             angular_velocity=self.vec3(t.get("angular_velocity", [0, 0, 0]),
                                        f"{k}.angular_velocity"))
+
+    def scale(self, v, key: str) -> np.ndarray:
+        if isinstance(v, list):
+            scale = self.vec3(v, key)
+        elif isinstance(v, (int, float)) and not isinstance(v, bool):
+            scale = np.full(3, self.number(v, key))
+        else:
+            self.fail(key, f"expected a number or 3 numbers, got {_describe(v)}")
+        if np.any(scale == 0):
+            self.fail(key, f"expected non-zero scale factors, got {scale.tolist()}")
+        return scale
 
     def material(self, v, k: str, mesh: Mesh) -> Material:
         t = self.table(v, k, ("albedo", "specular", "shininess", "texture"))
@@ -497,9 +585,26 @@ def image_srgb(im: Image.Image) -> np.ndarray:
 
 
 def check_camera(data: dict, source: str) -> CameraSpec:
-    """A camera table (SCENE_FORMAT.md [camera]) from elsewhere than a scene file (an
+    """A camera table ([camera], docs/scene-format.md) from elsewhere than a scene file (an
     image's sidecar), checked as a scene file's is; errors name `source`."""
     return _Loader(Path(source)).camera(data)
+
+
+def merge_camera(spec: CameraSpec, data: dict, source: str) -> CameraSpec:
+    """`spec` with the fields of a camera table `data` (a sidecar's) laid over it, checked
+    as a scene file's camera is: a keyed `data` replaces spec's pose and velocities, an
+    unkeyed one spec's keys."""
+    merged = spec.to_dict()
+    if "keys" in data:
+        for k in CAMERA_UNKEYED:
+            merged.pop(k, None)
+    elif any(k in data for k in CAMERA_UNKEYED) and "keys" in merged:
+        merged.pop("keys")
+        merged.pop("interpolation", None)
+        merged.setdefault("position", spec.position.tolist())
+        merged.setdefault("look_at", spec.look_at.tolist())
+    merged.update(data)
+    return check_camera(merged, source)
 
 
 def srgb_to_linear(c: np.ndarray) -> np.ndarray:
@@ -508,4 +613,5 @@ def srgb_to_linear(c: np.ndarray) -> np.ndarray:
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
-__all__ = ["load_scene", "builtin_scene_names", "builtin_scene_path", "check_camera", "image_srgb", "srgb_to_linear"]
+__all__ = ["load_scene", "builtin_scene_names", "builtin_scene_path", "check_camera",
+           "merge_camera", "image_srgb", "srgb_to_linear"]

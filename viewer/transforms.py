@@ -37,7 +37,7 @@ def scale(s) -> np.ndarray:
 
 
 def axis_angle(w) -> np.ndarray:
-    """3x3 rotation by angle |w| about w/|w| (identity for w = 0): SCENE_FORMAT's Rot(w)."""
+    """3x3 rotation by angle |w| about w/|w| (identity for w = 0): the scene format's Rot(w)."""
     w = _f64(w)
     theta = float(np.linalg.norm(w))
     if theta == 0.0:
@@ -72,3 +72,68 @@ def perspective(fov_y_deg: float, aspect: float, near: float, far: float) -> np.
 def normal_matrix(m4: np.ndarray) -> np.ndarray:
     """Inverse transpose of the upper 3x3: how normals go to world space."""
     return np.linalg.inv(m4[:3, :3]).T
+
+
+# ---------------------------------------------------------------- unit quaternions
+# (w, x, y, z), the rotation q v q*; keyed rotations (scene format v1.1) are slerped as these.
+
+def quat_axis(axis: int, angle: float) -> np.ndarray:
+    """The rotation by `angle` radians about coordinate axis 0, 1 or 2."""
+    q = np.zeros(4)
+    q[0] = np.cos(0.5 * angle)
+    q[1 + axis] = np.sin(0.5 * angle)
+    return q
+
+
+def quat_mul(a, b) -> np.ndarray:
+    """The Hamilton product a b: the rotation b, then a."""
+    aw, ax, ay, az = _f64(a)
+    bw, bx, by, bz = _f64(b)
+    return np.array([aw * bw - ax * bx - ay * by - az * bz,
+                     aw * bx + ax * bw + ay * bz - az * by,
+                     aw * by - ax * bz + ay * bw + az * bx,
+                     aw * bz + ax * by - ay * bx + az * bw])
+
+
+def quat_euler_xyz_degrees(deg) -> np.ndarray:
+    """R0 = Rz @ Ry @ Rx (euler_xyz_degrees) as a unit quaternion qz qy qx."""
+    rx, ry, rz = np.radians(_f64(deg))
+    return quat_mul(quat_axis(2, rz), quat_mul(quat_axis(1, ry), quat_axis(0, rx)))
+
+
+def quat_matrix(q) -> np.ndarray:
+    """3x3 rotation of the unit quaternion q = (w, x, y, z)."""
+    w, x, y, z = _f64(q)
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+SLERP_MIN_ANGLE = 1e-6     # below it, slerp's 1 / sin(theta) is replaced by a normalised lerp
+
+
+def slerp(q0, q1, u: float) -> np.ndarray:
+    """Shortest-arc spherical interpolation of unit quaternions (u = 0: q0, u = 1: q1):
+    q1 is negated where q0 . q1 < 0, then (sin((1-u) th) q0 + sin(u th) q1) / sin th with
+    cos th = q0 . q1; normalised q0 + u (q1 - q0) where th < SLERP_MIN_ANGLE."""
+    q0, q1 = _f64(q0), _f64(q1)
+    d = float(q0 @ q1)
+    if d < 0.0:
+        q1, d = -q1, -d
+    theta = float(np.arccos(min(d, 1.0)))
+    if theta < SLERP_MIN_ANGLE:
+        q = q0 + u * (q1 - q0)
+        return q / np.linalg.norm(q)
+    return (np.sin((1.0 - u) * theta) * q0 + np.sin(u * theta) * q1) / np.sin(theta)
+
+
+def euler_xyz_degrees_of(r3: np.ndarray) -> np.ndarray:
+    """Euler degrees (x, y, z) with euler_xyz_degrees(result) = r3 (a rotation matrix)."""
+    r3 = _f64(r3)
+    ry = -np.arcsin(np.clip(r3[2, 0], -1.0, 1.0))
+    if abs(r3[2, 0]) < 1.0 - 1e-12:
+        rx, rz = np.arctan2(r3[2, 1], r3[2, 2]), np.arctan2(r3[1, 0], r3[0, 0])
+    else:                                   # gimbal lock: the x and z turns share one axis
+        rx, rz = np.arctan2(-r3[1, 2], r3[1, 1]), 0.0
+    return np.degrees([rx, ry, rz])

@@ -28,9 +28,15 @@ def _rotate(v: np.ndarray, axis: np.ndarray, angle: float) -> np.ndarray:
 
 
 class CameraControl:
-    def __init__(self, spec: CameraSpec):
+    def __init__(self, spec: CameraSpec, time=lambda: 0.0):
+        """time: the shown frame's time; a keyed camera's first move leaves its keys for a
+        still camera at the pose of that time (reset returns to the keys)."""
         self.spec = spec
+        self.time = time
         self.home = copy.deepcopy(spec)
+
+    def _free(self):
+        self.spec.detach(self.time())
 
     # -- frame of the current view
     def basis(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -61,12 +67,14 @@ class CameraControl:
     def orbit(self, dx: float, dy: float):
         """Left drag: the eye circles the look-at point as if the scene were grabbed (drag
         right: it turns right; drag down: the eye rises and the view looks down on it)."""
+        self._free()
         offset = self.spec.position - self.spec.look_at
         offset = self._turn(offset, -dx * ORBIT_RAD_PER_PX, dy * ORBIT_RAD_PER_PX)
         self.spec.position = self.spec.look_at + offset
 
     def look(self, dx: float, dy: float):
         """Fly-mode left drag: the view turns about the eye (drag right: look right)."""
+        self._free()
         offset = self.spec.look_at - self.spec.position
         offset = self._turn(offset, -dx * LOOK_RAD_PER_PX, -dy * LOOK_RAD_PER_PX)
         self.spec.look_at = self.spec.position + offset
@@ -74,6 +82,7 @@ class CameraControl:
     def pan(self, dx: float, dy: float, viewport_height: int):
         """Right/middle drag: eye and look-at slide so the point at the look-at distance
         follows the mouse."""
+        self._free()
         _, right, up = self.basis()
         per_px = 2.0 * self.distance * math.tan(math.radians(self.spec.fov_y) * 0.5) / max(viewport_height, 1)
         move = (-dx * right + dy * up) * per_px
@@ -82,6 +91,7 @@ class CameraControl:
 
     def zoom(self, steps: float):
         """Wheel: each notch forward brings the eye 10% closer to the look-at point."""
+        self._free()
         offset = self.spec.position - self.spec.look_at
         n = float(np.linalg.norm(offset))
         factor = max(ZOOM_PER_STEP ** steps, MIN_DISTANCE / max(n, 1e-300))
@@ -91,6 +101,7 @@ class CameraControl:
     def fly(self, forward: float, right: float, upward: float, seconds: float):
         """WASD/QE: move eye and look-at together; speed scales with the look-at distance
         (one distance in two seconds) so small and large scenes both feel usable."""
+        self._free()
         fwd, r, _ = self.basis()
         up = self.spec.up / np.linalg.norm(self.spec.up)
         speed = max(self.distance, 0.1) * 0.5

@@ -161,7 +161,13 @@ def _camera(app):
     if imgui.button("Reset view (R)"):
         app.camera.reset()
     cam = s.scene.camera
-    imgui.text_disabled("eye  " + " ".join(f"{x:.2f}" for x in cam.position))
-    imgui.text_disabled("look " + " ".join(f"{x:.2f}" for x in cam.look_at))
+    if cam.keys is not None:
+        eye, fwd, _ = cam.pose(s.time)
+        imgui.text_disabled(f"keyed path, {len(cam.keys.times)} keys (a move leaves it)")
+        imgui.text_disabled("eye  " + " ".join(f"{x:.2f}" for x in eye))
+        imgui.text_disabled("fwd  " + " ".join(f"{x:.2f}" for x in fwd))
+    else:
+        imgui.text_disabled("eye  " + " ".join(f"{x:.2f}" for x in cam.position))
+        imgui.text_disabled("look " + " ".join(f"{x:.2f}" for x in cam.look_at))
     imgui.text_wrapped("left drag: orbit (fly look: turn); right/middle drag: pan; wheel: "
                        "zoom; WASD QE: fly; space: play; H: panel; Esc: quit")
