@@ -257,3 +257,14 @@ def test_a_reversal_is_blurred_by_the_composite(synthetic_frame):
     np.testing.assert_allclose(row[31:], colour[2, 31:], atol=1e-6)
     # The bar's pixels near its left edge are bare for part of the exposure.
     assert all(row[x, 0] < colour[2, x, 0] - 0.15 for x in (12, 13))
+
+
+def test_path_buffers_are_shown_as_motion():
+    # The viewer's buffer view and the --buffers pictures draw a path target's first point
+    # as a velocity (colour wheel), not as a colour.
+    from viewer.render.debug_view import auto_kind
+    from viewer.visualize import colour_wheel, visualise
+    for name in path_targets(4):
+        assert auto_kind(name, GBUFFER[name]) == ("velocity", 0)
+    a = np.random.default_rng(0).normal(size=(3, 5, 4)).astype(np.float32)
+    np.testing.assert_array_equal(visualise("hybrid_path", a), colour_wheel(a[..., :2].astype(np.float64)))
