@@ -27,7 +27,8 @@ from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" g
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
 from .tile_kernels import outlines_along, pixel_tiles, square_max
-from .tile_lists import FINE, moving_strips, path_textures, segments, tile_coords, tile_list
+from .tile_lists import (FINE, moving_strips, path_textures, segments, tile_coords, tile_list,
+                         within_reach)
 from .tiles import tile_passes
 
 # Which noise stream of glsl/noise.glsl's hash01 jitters the time samples or taps.
@@ -60,15 +61,37 @@ def near_outlines(frame: Frame, todo: np.ndarray) -> np.ndarray:
     object, and the buckets of other objects stay empty: the SIMPLE variant, which skips
     them, gives the same image. Decided for the tiles of `todo` only."""
     lists = frame.host.get("tile_lists")
-    if lists is None or lists.boundary.shape != todo.shape or segments(frame) > 1:
-        # (a path's lines are not the NeighborMax chord's: every tile may meet one)
+    if lists is None or lists.boundary.shape != todo.shape:
         return np.ones(todo.shape, bool)
+    if segments(frame) > 1:
+        return todo & within_reach(lists.boundary, path_reach(frame, todo.shape), FINE)
     vn = frame.host.get("neighbormax")
     if vn is None:                      # (not read back: the composite run on its own)
         vn = read_neighbormax(frame)
     k = max_radius_px(frame)
     return outlines_along(lists.boundary, todo, vn, FINE, k, frame.size[0], frame.size[1],
                           2.0 * k, OUTLINE_MARGIN_PX, MERGE_SPREAD)
+
+
+def path_reach(frame: Frame, shape: tuple[int, int]) -> np.ndarray:
+    """Per FINE tile (GL rows), how far (px) from its pixels the taps of a neighbourhood
+    path can land: half the largest NeighborMax path extent (clamped to the blur limit)
+    over the k-tiles it meets, plus rounding and the other pixel of a boundary pair. A
+    path bends, so this bounds it in every direction (glsl/hybrid_bucket.frag)."""
+    k = max_radius_px(frame)
+    w, h = frame.size
+    points = []
+    for name in ("hybrid_neighbormax_path", "hybrid_neighbormax_path2")[:segments(frame) // 2]:
+        tex = frame.pool.get(name)
+        points.append(np.frombuffer(tex.read(), np.float32).reshape(tex.size[1], tex.size[0], 2, 2))
+    o = np.concatenate(points, axis=2).astype(np.float64)
+    extent = np.minimum(2.0 * np.sqrt((o * o).sum(-1).max(-1)), 2.0 * k)
+    reach = 0.5 * extent + OUTLINE_MARGIN_PX + 1.0
+    per_pixel = np.repeat(np.repeat(reach, k, axis=0)[:h], k, axis=1)[:, :w]
+    rows, cols = shape
+    padded = np.zeros((rows * FINE, cols * FINE))
+    padded[:h, :w] = per_pixel
+    return padded.reshape(rows, FINE, cols, FINE).max(axis=(1, 3))
 
 
 def read_neighbormax(frame: Frame) -> np.ndarray:
