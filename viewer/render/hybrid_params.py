@@ -12,11 +12,12 @@ COMPOSITES = ("bucket", "split", "time")
 @group("hybrid")
 class HybridParams:
     # ---- motion (viewer/render/gbuffer.py, glsl/path.glsl)
-    segments: int = param(1, choices=SEGMENT_CHOICES, effect="recompile",
+    segments: int = param(2, choices=SEGMENT_CHOICES, effect="recompile",
                           help="linear pieces of each pixel's screen path over the "
                                "exposure (its points projected at evenly spaced times): "
                                "tiles, ray mask and composite follow the path (rotation, "
-                               "approach, a reversal); 1 = the chord alone (the paper)")
+                               "approach, a reversal); 1 = the chord alone (the paper); 4 "
+                               "is best on keyed arcs and bounces, worse on fast spins")
     # ---- ray mask (viewer/render/raymask.py)
     min_speed: float = param(1.0, lo=0.0, hi=64.0,
                              help="displacement over the exposure (px) below which a pixel "

@@ -32,6 +32,7 @@ import numpy as np
 
 from .blur_common import max_radius_px
 from .frame import Frame
+from .gbuffer import path_targets
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
@@ -269,8 +270,12 @@ def tile_coords(selected: np.ndarray) -> np.ndarray:
 
 
 def segments(frame: Frame) -> int:
-    """The hybrid's path segments this frame (glsl/path.glsl; 1: the chord alone)."""
-    return int(frame.params["hybrid"].segments)
+    """The hybrid's path segments this frame (glsl/path.glsl): hybrid.segments where the
+    G-buffer wrote the path targets (it discards them when it writes none), else 1, the
+    chord alone (passes run on buffers without a path)."""
+    k = int(frame.params["hybrid"].segments)
+    names = frame.pool.names()
+    return k if all(n in names for n in path_targets(k)) else 1
 
 
 PATH_TEXTURES = {"u_path0": "hybrid_path", "u_path1": "hybrid_path2"}
