@@ -158,6 +158,27 @@ float segment_line(vec2 o[PATH_POINTS], int k, out vec2 mid, out vec2 dir) {
     return 0.5 * l;
 }
 
+// The neighbourhood's line for segment k: from x out to the segment's farther point
+// (px offsets; its midpoint, unit direction and half length). A surface moving like the
+// NeighborMax tile's but slower passes x during segment k nearer x than the tile's own
+// segment: on the segment scaled towards the frame-time point, which the spoke covers.
+float spoke_line(vec2 o[PATH_POINTS], int k, out vec2 mid, out vec2 dir) {
+    vec2 far = dot(o[k], o[k]) > dot(o[k + 1], o[k + 1]) ? o[k] : o[k + 1];
+    float l = length(far);
+    mid = 0.5 * far;
+    dir = l > 1e-6 ? far / l : vec2(1.0, 0.0);
+    return 0.5 * l;
+}
+
+// Taps per spoke: as path_taps, by the longest spoke, twice the share (spokes overlap).
+int spoke_taps(vec2 o[PATH_POINTS]) {
+    float longest = 0.0;
+    for (int k = 0; k < PATH_POINTS; ++k) longest = max(longest, length(o[k]));
+    int lo = max(1, (u_samples_min + SEGMENTS - 1) / SEGMENTS);
+    int hi = max(lo, 2 * u_samples_max / SEGMENTS);
+    return clamp(int(ceil(longest / u_spacing)), lo, hi);
+}
+
 // Tap i of n on the line c + s dir, s in [-R, R] (tap()'s pieces and jitter), c in px.
 ivec2 tap_at(vec2 c, vec2 dir, float R, int i, int n, out float a, out float b) {
     float h = R / float(n);
@@ -361,13 +382,14 @@ void main() {
     }
 #endif
 #if SEGMENTS > 1
-    // The neighbourhood's line along the NeighborMax tile's path, segment by segment.
+    // The neighbourhood's line along the NeighborMax tile's path, segment by segment (each
+// on its spoke from x).
 #if !SIMPLE
     if (path_extent(pn) > 1.0) {
-        int n = path_taps(pn);
+        int n = spoke_taps(pn);
         for (int k = 0; k < SEGMENTS; ++k) {
             vec2 mid, dir;
-            float r = segment_line(pn, k, mid, dir);
+            float r = spoke_line(pn, k, mid, dir);
             for (int i = 0; i < n; ++i) {
                 ivec2 y = tap_at(vec2(x) + 0.5 - mid, dir, r, i, n, a, b);
                 vec4 m = texelFetch(u_front, y, 0);
