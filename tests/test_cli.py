@@ -37,6 +37,7 @@ GOOD = """
 def bad_cases(tmp_path):
     out = str(tmp_path / "o.png")
     (tmp_path / "s.json").mkdir(exist_ok=True)
+    (tmp_path / "f.txt").write_text("a file, not a folder")
     fifo = str(tmp_path / "fifo.png")
     if not os.path.exists(fifo):
         os.mkfifo(fifo)
@@ -65,13 +66,39 @@ def bad_cases(tmp_path):
         "unknown mode": (["shot", BASIC, "--mode", "fancy", "--out", out], "--mode"),
         "zero samples": (["shot", BASIC, "--mode", "reference", "--samples", "0", "--out", out], "--samples"),
         "NaN time": (["shot", BASIC, "--time", "nan", "--out", out], "--time"),
-        "output folder missing": (["shot", BASIC, "--out", str(tmp_path / "nodir" / "o.png")], "does not exist"),
+        "output folder under a file": (["shot", BASIC, "--out", str(tmp_path / "f.txt" / "o.png")],
+                                       "is not a folder"),
+        "--out not a PNG": (["shot", BASIC, "--out", str(tmp_path / "e.jpg")],
+                            "--out " + str(tmp_path / "e.jpg") + ": expected a path ending in .png"),
+        "--set for a group the mode does not use": (
+            ["shot", BASIC, "--mode", "off", "--set", "blur.max_radius=0.1", "--out", out],
+            "mode off does not use the blur parameters (used by mcguire, ue4, hybrid)"),
+        "--set for a group compare does not render": (
+            ["compare", BASIC, "--modes", "off,ue4", "--set", "mcguire.samples=9", "--out",
+             str(tmp_path / "c")], "modes off, ue4, reference does not use the mcguire"),
+        "--samples without the reference": (["shot", BASIC, "--mode", "mcguire", "--samples", "8",
+                                             "--out", out], "only the reference mode"),
+        "no SCENE and no --params": (["shot", "--out", out], "SCENE: expected a scene file"),
+        "--params without a scene, SCENE left out": (
+            ["shot", "--params", write(tmp_path, "ns.json", '{"params": {}}'), "--out", out],
+            "names no scene"),
+        "unknown mode for params": (["params", "fancy"], "params fancy: expected one of"),
+        "a conformance scene by name": (["shot", "basic", "--out", out],
+                                        "'basic' is the scene file tests/conformance/basic.toml"),
+        "a bench scene by name": (["shot", "crowd", "--out", out],
+                                  "'crowd' is the scene file scenes/bench/crowd.toml"),
+        "a bad value in a viewer script": (
+            ["view", BASIC, "--frames", "1", "--script", write(tmp_path, "bad.script",
+                                                               "2 mode hybird\n")],
+            "--script bad.script:1: mode: expected one of off, reference, mcguire"),
+        "--screenshot not a PNG": (["view", BASIC, "--frames", "1", "--screenshot",
+                                    str(tmp_path / "w.jpg")], "expected a path ending in .png"),
         "output is a folder": (["shot", BASIC, "--out", str(tmp_path)], "is a directory"),
         "--params not JSON": (["shot", BASIC, "--params", write(tmp_path, "p.json", "{oops"), "--out", out], "not JSON"),
         "unknown subcommand": (["paint", BASIC], "invalid choice"),
-        "missing --out": (["shot", BASIC], "--out"),
+        "missing --out": (["shot", BASIC], "shot: the following arguments are required: --out"),
         "--out where its sidecar goes": (["shot", BASIC, "--out", str(tmp_path / "o.json")],
-                                         "sidecar"),
+                                         "expected a path ending in .png"),
         "a folder where the sidecar goes": (["shot", BASIC, "--out", str(tmp_path / "s.png")],
                                             "s.json"),
         "--out a FIFO": (["shot", BASIC, "--out", fifo], "not a regular file"),
@@ -116,6 +143,7 @@ def test_every_user_mistake_is_one_line_and_exit_2(tmp_path, capsys):
         lines = err.strip().splitlines()
         assert len(lines) == 1, (name, err)
         assert lines[0].startswith("hmblur: error: "), (name, err)
+        assert not lines[0].startswith(("hmblur: error: hmblur", "hmblur: error: error")), err
         assert needle in lines[0], (name, lines[0])
         assert "Traceback" not in err
         assert not (tmp_path / "o.png").exists(), name
@@ -192,14 +220,15 @@ def test_compare_writes_images_regions_and_metrics_recomputable_from_them(tmp_pa
         assert main(["compare", BASIC, "--size", "64x40", "--samples", "4",
                      "--modes", "mcguire,hybrid", "--out", str(out)]) == 0
     names = {"mcguire.png", "mcguire.json", "hybrid.png", "hybrid.json", "reference.png",
-             "reference.json", "regions.png", "strip.png", "metrics.md", "metrics.json"}
+             "reference.json", "regions.png", "strip.png", "flip.png", "metrics.md",
+             "metrics.json"}
     assert {f.name for f in runs[0].iterdir()} == names
     for name in names - {"metrics.json", "metrics.md"}:
         if name.endswith(".png"):
             assert (runs[0] / name).read_bytes() == (runs[1] / name).read_bytes(), name
     m = json.loads((runs[0] / "metrics.json").read_text())
     assert "8-bit codes / 255" in m["space"] and "Space: sRGB" in (runs[0] / "metrics.md").read_text()
-    pic = np.asarray(Image.open(runs[0] / "regions.png"))
+    pic = np.asarray(Image.open(runs[0] / "regions.png"))[:40]     # the map; its key below
     region = np.zeros(pic.shape[:2], np.uint8)
     region[(pic == (230, 60, 40)).all(-1)] = INNER
     region[(pic == (40, 110, 230)).all(-1)] = OUTER
@@ -249,12 +278,12 @@ def test_a_write_that_fails_is_one_line_and_leaves_no_output(tmp_path, capsys, m
             raise OSError(28, "No space left on device", str(path))
         return real(path, write)
     monkeypatch.setattr(io, "_write_temp", failing)
-    out = tmp_path / "c"
+    out = tmp_path / "c" / "d"                   # two missing folders: both made, both undone
     assert main(["compare", BASIC, "--size", "32x20", "--samples", "2", "--modes", "mcguire",
                  "--out", str(out)]) == 2
     err = [x for x in capsys.readouterr().err.splitlines() if x.startswith("hmblur")]
     assert len(err) == 1 and err[0].endswith("reference.png: No space left on device")
-    assert not out.exists()
+    assert not (tmp_path / "c").exists()
 
 
 def test_buffers_are_dumped(tmp_path):
@@ -360,3 +389,171 @@ def test_bench_pass_times_by_gpu_timer_queries_on_request(tmp_path):
 def test_bench_rejects_an_unknown_mode(capsys):
     assert main(["bench", BASIC, "--modes", "mcguire,fancy"]) == 2
     assert "fancy" in capsys.readouterr().err
+
+
+# --- a newcomer's first hour -------------------------------------------------------------
+
+def test_version_bare_command_and_one_error_prefix(capsys):
+    import tomllib
+    with pytest.raises(SystemExit) as e:
+        main(["--version"])
+    assert e.value.code == 0
+    version = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
+    assert capsys.readouterr().out.strip() == f"hmblur {version}"
+    assert main([]) == 2                           # bare: the usage and commands, on stderr
+    err = capsys.readouterr().err
+    assert err.startswith("usage: hmblur") and all(c in err for c in
+                                                   ("shot", "compare", "bench", "view", "params"))
+    assert main(["shot", BASIC]) == 2
+    assert capsys.readouterr().err == ("hmblur: error: shot: the following arguments are "
+                                       "required: --out\n")
+
+
+def test_help_is_complete(capsys):
+    # Every flag of every command in its --help, --mode shown as optional with its default.
+    flags = {"shot": ["--mode", "--out", "--buffers", "--time", "--size", "--samples", "--seed",
+                      "--set", "--params"],
+             "compare": ["--out", "--modes", "--inset"],
+             "bench": ["--frames", "--warmup", "--modes", "--json", "--animate", "--pass-timers",
+                       "--speeds"],
+             "view": ["--mode", "--frames", "--screenshot", "--script", "--stats-json",
+                      "--shot-dir", "O ", "overlay", "resize"]}
+    for command, names in flags.items():
+        with pytest.raises(SystemExit):
+            main([command, "--help"])
+        text = " ".join(capsys.readouterr().out.split())
+        for name in names:
+            assert name in text, (command, name)
+        if "--mode" in names:
+            assert "[--mode MODE]" in text and "(default: off" in text
+
+
+def test_params_lists_every_parameter_from_the_dataclasses(capsys):
+    from viewer.params import GROUPS
+    from viewer.render.modes import MODE_GROUPS
+    assert main(["params"]) == 0
+    text = capsys.readouterr().out
+    for name, cls in GROUPS.items():
+        for f in __import__("dataclasses").fields(cls):
+            line = next(x for x in text.splitlines() if x.strip().startswith(f"{name}.{f.name} = "))
+            assert repr(f.default) in line, line
+            if f.metadata.get("unit"):
+                assert f"[{f.metadata['unit']}]" in line
+    assert "blur.max_radius = 0.08  (float: 0.002 .. 0.25)  [fraction of the image width]" in text
+    assert main(["params", "ue4"]) == 0
+    import re
+    listed = set(re.findall(r"^  (\w+)\.\w+ = ", capsys.readouterr().out, re.M))
+    assert listed == set(MODE_GROUPS["ue4"])
+    assert main(["params", "off"]) == 0 and "no parameters" in capsys.readouterr().out
+
+
+def test_shot_makes_missing_folders_and_png_sidecars_never_collide(tmp_path):
+    out = tmp_path / "new" / "deeper" / "e.png"
+    assert main(["shot", BASIC, "--size", "32x18", "--out", str(out)]) == 0
+    assert out.is_file() and (out.parent / "e.json").is_file()
+    # compare agrees: a folder under missing folders is made
+    assert main(["compare", BASIC, "--size", "16x10", "--samples", "2", "--modes", "off",
+                 "--out", str(tmp_path / "x" / "y")]) == 0
+    assert (tmp_path / "x" / "y" / "strip.png").is_file()
+    # Only .png is written, so e.png -> e.json is the one image that sidecar can belong to.
+    for bad in ("e.jpg", "e.PNG", "e", "e.png.json"):
+        assert main(["shot", BASIC, "--out", str(tmp_path / bad)]) == 2
+    assert sorted(f.name for f in tmp_path.iterdir() if f.is_file()) == []
+
+
+def test_sidecar_brings_the_scene_back_from_another_folder(tmp_path, monkeypatch, capsys):
+    """The sidecar stores the scene's absolute path (and a built-in's name); --params
+    without SCENE renders the same image from any folder."""
+    scene = tmp_path / "scenes" / "mine.toml"
+    scene.parent.mkdir()
+    scene.write_text((CONFORMANCE / "basic.toml").read_text().replace(
+        'path = "', f'path = "{CONFORMANCE}/'))
+    here = tmp_path / "work"
+    here.mkdir()
+    monkeypatch.chdir(tmp_path / "scenes")
+    assert main(["shot", "mine.toml", "--mode", "mcguire", "--size", "40x24",
+                 "--out", str(here / "a.png")]) == 0
+    side = json.loads((here / "a.json").read_text())
+    assert side["scene"] == str(scene) and "scene_builtin" not in side
+    assert side["timing"]["first_frame"] is True and "first frame" in side["timing"]["note"]
+    monkeypatch.chdir(here)
+    assert main(["shot", "--params", "a.json", "--out", "b.png"]) == 0
+    assert (here / "b.png").read_bytes() == (here / "a.png").read_bytes()
+    assert "first frame" in capsys.readouterr().out
+    assert main(["shot", "spinner", "--size", "16x10", "--out", "c.png"]) == 0
+    c = json.loads((here / "c.json").read_text())
+    assert c["scene_builtin"] == "spinner" and c["scene"] == str(ROOT / "scenes" / "spinner.toml")
+    assert main(["shot", "--params", "c.json", "--out", "d.png"]) == 0
+    assert (here / "d.png").read_bytes() == (here / "c.png").read_bytes()
+
+
+def test_first_scene_example_renders(tmp_path):
+    assert main(["shot", str(ROOT / "scenes" / "examples" / "first_scene.toml"), "--mode",
+                 "hybrid", "--size", "64x36", "--out", str(tmp_path / "f.png")]) == 0
+    side = json.loads((tmp_path / "f.json").read_text())
+    assert side["scene_name"] == "first_scene" and side["stats"]["masked_pixels"] > 0
+
+
+def test_buffers_readme_describes_every_file(tmp_path):
+    from viewer.buffer_docs import describe
+    d = tmp_path / "bufs"
+    for mode in ("mcguire", "ue4", "hybrid", "reference"):
+        samples = ["--samples", "2"] if mode == "reference" else []
+        assert main(["shot", BASIC, "--mode", mode, "--size", "32x18", *samples, "--out",
+                     str(tmp_path / f"{mode}.png"), "--buffers", str(d / mode)]) == 0
+        readme = (d / mode / "README.txt").read_text()
+        for npy in sorted((d / mode).glob("*.npy")):
+            a = np.load(npy)
+            assert describe(npy.stem), f"{npy.stem} is not in viewer/buffer_docs.BUFFERS"
+            entry = readme.split(f"\n{npy.name}  ", 1)[1].split("\n", 3)
+            assert entry[0] == f"{a.dtype}  {'x'.join(map(str, a.shape))}"
+            assert entry[1].strip() == describe(npy.stem)
+    ray = np.load(d / "hybrid" / "ray_mask.npy")
+    assert "ray_mask.npy  uint32" in (d / "hybrid" / "README.txt").read_text()
+    assert f"values here: {ray.min()}..{ray.max()}" in (d / "hybrid" / "README.txt").read_text()
+
+
+def test_compare_writes_keyed_regions_flip_maps_and_region_definitions(tmp_path):
+    from viewer.metrics import flip_map, to_srgb
+    from viewer.strip import REGION_COLOURS, heat
+    out = tmp_path / "c"
+    assert main(["compare", BASIC, "--size", "64x40", "--samples", "4", "--modes",
+                 "off,hybrid", "--out", str(out)]) == 0
+    md = (out / "metrics.md").read_text()
+    assert "static: the same object is seen for the whole exposure" in md
+    assert "surface of a spinning object is static" in md
+    m = json.loads((out / "metrics.json").read_text())
+    assert set(m["region_definitions"]) == {"static", "inner", "outer"}
+    pic = np.asarray(Image.open(out / "regions.png"))
+    assert pic.shape[0] > 40 and pic.shape[1] == 64                 # the key below the map
+    key = pic[40:]
+    for colour in REGION_COLOURS.values():                          # a swatch of each
+        assert (key == colour).all(-1).sum() >= 25
+    assert ((key == 0).all(-1)).sum() > 20                          # and text
+    # flip.png: each mode's FLIP map as heat colours, somewhere in its column
+    flip = np.asarray(Image.open(out / "flip.png"))
+    ref = np.asarray(Image.open(out / "reference.png"))
+    hyb = heat(flip_map(to_srgb(ref), to_srgb(np.asarray(Image.open(out / "hybrid.png")))))
+    col = flip[:, 64 + 4:64 + 4 + 64]
+    rows = [y for y in range(col.shape[0] - 39) if np.array_equal(col[y:y + 40], hyb)]
+    assert len(rows) == 1
+    bar = flip[-40:]
+    assert tuple(heat(np.array([[0.0]]))[0, 0]) in {tuple(c) for c in bar.reshape(-1, 3)}
+
+
+def test_bench_header_says_animated_and_explains_the_medians():
+    from viewer.cmd_bench import format_report
+    rv = {"masked_pixels": 10, "rays": 12, "reveal_ms": 2.0, "rays_per_s": 6e3,
+          "fraction_of_embree": 0.5, "trace_ms": 1.0, "trace_rays_per_s": 1.2e4,
+          "trace_fraction_of_embree": 1.0, "embree_rays_per_s": 1.2e4,
+          "embree_front_rays_per_s": 2e4, "readback_ms": 0.5, "fraction_with_bare_tracing": 0.8}
+    mode = {"frame_ms": 20.0, "frame": {"p10": 19.0, "p90": 21.0}, "passes": {"gbuffer": 21.0}}
+    rep = {"scene": "s", "size": [8, 4], "device": "d", "pass_timing": "t", "frames": 3,
+           "time": 0.5, "animate_fps": 30.0, "modes": {"off": mode}, "ratios": {}, "reveal": rv}
+    text = format_report(rep)
+    assert "animated at 30 fps" in text.splitlines()[1]
+    assert "a pass's median can exceed its frame's median" in " ".join(text.split())
+    reveal = text[text.index("reveal (hybrid"):].splitlines()
+    assert len(reveal) == 6 and all(len(x) < 100 for x in reveal)
+    rep["animate_fps"] = None
+    assert "one frame time, t = 0.5 s" in format_report(rep).splitlines()[1]

@@ -6,10 +6,11 @@ import pytest
 
 from viewer.imageio import srgb8_to_linear
 from viewer.regions import INNER, OUTER, STATIC
-from viewer.strip import (BACKGROUND, BOX, GAP, choose_inset, make_strip, metrics_json,
-                          metrics_markdown, metrics_rows)
+from viewer.strip import (BACKGROUND, BOX, GAP, HEAT_RGB, REGION_COLOURS, choose_inset, font_size,
+                          heat, line_height, make_strip, metrics_json, metrics_markdown,
+                          metrics_rows, region_picture)
 
-LH = 15     # label row height: bitmap default font (11 px) + 2 px padding each side
+LH = line_height(20)     # label row height beside 20 px tall images
 
 
 # --- choose_inset ------------------------------------------------------------------------
@@ -179,3 +180,47 @@ def test_table_from_image_metrics():
     assert md.count("\n") == 2 + 2 * 4
     assert "| hybrid | all | 144 | inf | 1.0000 | 0.0000 |" in md
     assert "| off | outer | 0 | - | - | - |" in md
+
+
+# --- text size, region key, heat map -------------------------------------------------------
+
+def _ink_rows(block) -> int:
+    ink = (block != BACKGROUND).any(axis=2).any(axis=1)
+    ys = np.nonzero(ink)[0]
+    return int(ys[-1] - ys[0] + 1) if len(ys) else 0
+
+
+def test_text_grows_with_the_image_so_a_scaled_down_strip_stays_readable():
+    assert font_size(20) == font_size(180) == 11 and font_size(360) >= 22
+    assert font_size(720) >= 2 * font_size(360) - 1
+    for h in (180, 360, 720):
+        img = np.full((h, 2 * h, 3), 128, np.uint8)
+        s = make_strip([("hybrid", img)])
+        lh = line_height(h)
+        assert s.shape[0] == lh + h
+        # the glyphs of "hybrid" (ascender to descender) span most of the font size
+        assert _ink_rows(s[:lh]) >= 0.8 * font_size(h)
+
+
+def test_region_picture_has_the_map_then_a_key():
+    region = np.array([[STATIC, INNER], [OUTER, INNER]], np.uint8).repeat(20, 0).repeat(40, 1)
+    pic = region_picture(region)
+    h, w = region.shape
+    assert pic.shape[1] == w and pic.shape[0] == h + GAP + 3 * line_height(h)
+    for code, colour in REGION_COLOURS.items():
+        assert (pic[:h][region == code] == colour).all()
+    key = pic[h + GAP:]
+    for row, code in enumerate((INNER, OUTER, STATIC)):       # one row each: swatch, text
+        band = key[row * line_height(h):(row + 1) * line_height(h)]
+        assert (band == REGION_COLOURS[code]).all(-1).sum() >= 50
+        assert (band == 0).all(-1).sum() > 20
+
+
+def test_heat_colours_follow_the_ramp():
+    e = np.array([[0.0, 0.25, 0.5, 1.0, 2.0, -1.0, np.nan]])
+    got = heat(e)
+    assert np.array_equal(got[0, :4], HEAT_RGB[[0, 1, 2, 4]].astype(np.uint8))
+    assert np.array_equal(got[0, 4], HEAT_RGB[4]) and np.array_equal(got[0, 5], HEAT_RGB[0])
+    assert np.array_equal(got[0, 6], HEAT_RGB[0])
+    mid = heat(np.array([[0.125]]))[0, 0]
+    assert np.array_equal(mid, np.floor((HEAT_RGB[0] + HEAT_RGB[1]) / 2 + 0.5))

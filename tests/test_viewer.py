@@ -169,8 +169,19 @@ def test_script_text_and_json_agree(tmp_path):
     ("x mode off\n", "s.txt:1", "frame number"),
     ('[{"frame": -1, "mode": "off"}]', "s.txt[0]", "frame number"),
     ('[{"frame": 1, "mode": "off", "key": "P"}]', "s.txt[0]", "expected {"),
+    ("2 mode hybird\n", "s.txt:1", "mode: expected one of off, reference"),
+    ("2 set blur.max_radius=9\n", "s.txt:1", "set blur.max_radius: expected at most 0.25"),
+    ("2 key NOPE\n", "s.txt:1", "key: expected a GLFW key name"),
+    ("2 resize 0x3\n", "s.txt:1", "resize: expected WxH"),
+    ("2 orbit 1 x\n", "s.txt:1", "orbit: expected a number, got 'x'"),
+    ("2 shutter -1\n", "s.txt:1", "shutter: expected seconds >= 0"),
+    ("2 visual fancy\n", "s.txt:1", "visual: expected auto or one of"),
+    ("2 overlay maybe\n", "s.txt:1", "overlay: expected full, compact or off"),
+    ("2 seed 1.5\n", "s.txt:1", "seed: expected an integer >= 0"),
+    ("2 open no_such_scene\n", "s.txt:1", "open: expected a scene file or built-in name"),
 ])
 def test_script_errors_name_the_place(tmp_path, text, where, words):
+    # Every argument is checked on load: a bad one is an error before the window opens.
     p = tmp_path / "s.txt"
     p.write_text(text)
     with pytest.raises(UserError) as e:
@@ -327,7 +338,7 @@ def display():
     x.stop()
 
 
-def view(display, tmp_path, *args, script=None, frames=6, size=f"{W}x{H}", name="win"):
+def view(display, tmp_path, *args, script=None, frames=6, size=f"{W}x{H}", name="win", rc=0):
     shot, stats = tmp_path / f"{name}.png", tmp_path / f"{name}.json"
     cmd = [sys.executable, "-m", "viewer", "view", SCENE, "--size", size, "--frames", str(frames),
            "--screenshot", str(shot), "--stats-json", str(stats), "--shot-dir", str(tmp_path), *args]
@@ -337,7 +348,10 @@ def view(display, tmp_path, *args, script=None, frames=6, size=f"{W}x{H}", name=
         cmd += ["--script", str(path)]
     p = subprocess.run(cmd, cwd=ROOT, env=display.env(), capture_output=True, text=True,
                        timeout=TIMEOUT)
-    assert p.returncode == 0, p.stderr
+    assert p.returncode == rc, p.stderr
+    if rc:                              # a failed scripted run: one line, after its outputs
+        lines = p.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("hmblur: error: --script "), p.stderr
     return np.asarray(Image.open(shot).convert("RGB")), json.loads(stats.read_text())
 
 
@@ -363,12 +377,22 @@ def scene_mask(stats, shape):
     return free
 
 
+def inside(rect, w, h):
+    x, y, rw, rh = rect
+    return 0 <= x and 0 <= y and x + rw <= w and y + rh <= h
+
+
 def test_window_shows_the_scene_and_the_panel(display, tmp_path, ctx):
     img, stats = view(display, tmp_path)
     assert img.shape == (H, W, 3) and stats["errors"] == [] and stats["timing"] in ("cpu", "gpu")
     ref = headless(ctx)
     free = scene_mask(stats, img.shape)
-    assert free.sum() > 0.2 * W * H
+    # At 640x360 the panel takes under a third of the window and the overlay starts
+    # compact, inside the window beside the panel: most of the image stays uncovered.
+    px, py, pw, ph = stats["panel_rect"]
+    assert pw * ph <= 0.3 * W * H and stats["overlay"] == "compact"
+    assert inside(stats["overlay_rect"], W, H) and stats["overlay_rect"][0] >= px + pw
+    assert free.sum() > 0.55 * W * H
     diff = np.abs(img.astype(int) - ref.astype(int))[free]
     assert diff.mean() < 0.5 and np.percentile(diff, 99.9) <= 2, (diff.mean(), diff.max())
     x, y, w, h = (int(v) for v in stats["panel_rect"])
@@ -392,8 +416,12 @@ def test_mode_switch_changes_the_window_to_that_mode(display, tmp_path, ctx):
 
 
 def test_buffer_view_shows_a_pool_texture(display, tmp_path, ctx):
-    img, stats = view(display, tmp_path, script="2 view depth\n", name="depth")
+    # (O hides the compact overlay: nothing is drawn right of the panel.)
+    img, stats = view(display, tmp_path, script="0 key O\n2 view depth\n", name="depth")
     assert stats["shown"] == {"buffer": "depth", "visual": "depth"}
+    assert stats["overlay"] == "off" and stats["overlay_rect"] is None
+    x, y, w, h = (int(v) for v in stats["panel_rect"])
+    assert scene_mask(stats, img.shape)[:, x + w + 4:].all()
     _, bufs = headless(ctx, buffers=True)
     expect = depth_grey(bufs["depth"])
     free = scene_mask(stats, img.shape)
@@ -421,11 +449,15 @@ def test_screenshot_key_reproduces_headless_byte_for_byte(display, tmp_path):
 
 
 def test_errors_show_in_the_panel_and_panel_drags_miss_the_camera(display, tmp_path):
+    # A scene file that does not load: the panel shows why, the window stays open, and the
+    # scripted run exits 2 with that line at the end.
+    bad = tmp_path / "broken.toml"
+    bad.write_text("[camera\n")
     script = ("2 drag left 100 250 180 200\n"       # over the panel
-              "8 open no_such_scene\n")
-    img, stats = view(display, tmp_path, script=script, frames=12, name="err")
+              f"8 open {bad}\n")
+    img, stats = view(display, tmp_path, script=script, frames=12, name="err", rc=2)
     assert stats["frames"] == 12 and stats["scene"] == SCENE
-    assert len(stats["errors"]) == 1 and "no_such_scene" in stats["errors"][0]
+    assert len(stats["errors"]) == 1 and "broken.toml" in stats["errors"][0]
     assert stats["camera"]["position"] == [0.25, 1.35, 3.2]
     x, y, w, h = (int(v) for v in stats["panel_rect"])
     panel = img[y:y + h, x:x + w].astype(int)
@@ -481,3 +513,25 @@ def test_no_display_is_one_line_and_exit_2(tmp_path):
     lines = p.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(
         "hmblur: error: no display: install xvfb and run under xvfb-run, or set DISPLAY")
+
+
+def test_panel_width_and_overlay_levels():
+    from viewer.ui.overlay import initial_level, next_level
+    from viewer.ui.panel import MAX_WIDTH, panel_width
+    assert panel_width(640) < 640 / 3 and panel_width(960) == 240
+    assert panel_width(1920) == MAX_WIDTH and panel_width(300) < 300
+    assert initial_level(360) == "compact" and initial_level(720) == "full"
+    assert [next_level(x) for x in ("full", "compact", "off")] == ["compact", "off", "full"]
+
+
+def test_small_window_keeps_the_hybrids_full_overlay_inside_beside_the_panel(display, tmp_path):
+    # 640x360, the hybrid's full overlay (the most rows): inside the window and beside the
+    # panel, which covers under a third of it (the compact default and the image left
+    # uncovered: test_window_shows_the_scene_and_the_panel).
+    _, full = view(display, tmp_path, "--mode", "hybrid", script="0 overlay full\n",
+                   frames=3, name="full")
+    assert full["errors"] == [] and full["overlay"] == "full"
+    px, py, pw, ph = full["panel_rect"]
+    assert pw * ph <= 0.3 * W * H
+    assert inside(full["overlay_rect"], W, H) and full["overlay_rect"][0] >= px + pw
+    assert full["overlay_rect"][3] > 0.5 * H                      # many rows, yet inside

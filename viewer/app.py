@@ -27,7 +27,7 @@ from .scene_loader import load_scene
 from .ui import capture
 from .ui.camera_control import CameraControl
 from .ui.input import InputRouter
-from .ui.overlay import FrameTimes, draw_overlay
+from .ui.overlay import FrameTimes, draw_overlay, initial_level, next_level
 from .ui.panel import draw_panel
 from .ui.progressive import Progressive, accumulating_pass
 from .ui.script import Action, Timeline
@@ -45,6 +45,8 @@ class RunOptions:
     stats_json: Path | None = None
     shot_dir: Path = Path(".")
     script: list[Action] = ()
+    record: str | None = None            # record from the first frame to this video path
+    record_fps: float = 30.0
 
 
 def rss_kb() -> int:
@@ -62,13 +64,15 @@ class App:
     def __init__(self, setup: Setup, scene_arg: str, mode: str, options: RunOptions):
         self.options = options
         self.state = ViewState(scene_arg, setup.scene, mode, setup.time, setup.params, setup.seed,
-                               scene_text=scene_arg)
+                               scene_text=scene_arg, overlay=initial_level(setup.size[1]))
         self.camera = CameraControl(setup.scene.camera, lambda: self.state.time)
         self.router = InputRouter(lambda: self.camera, lambda: self.window.size[1])
         self.router.actions.update({
             glfw.KEY_F12: self.screenshot, glfw.KEY_P: self.screenshot,
             glfw.KEY_SPACE: self.toggle_play, glfw.KEY_R: self.camera_reset,
             glfw.KEY_F: self.toggle_fly, glfw.KEY_H: self.toggle_panel,
+            glfw.KEY_V: self.toggle_record,
+            glfw.KEY_O: self.cycle_overlay,
             glfw.KEY_ESCAPE: lambda: self.window.close(),
         })
         self.window = Window(setup.size, f"hmblur view - {setup.scene.name}", self.router)
@@ -85,8 +89,10 @@ class App:
         self.stats: dict = {}
         self.shown_name = self.shown_kind = ""
         self.panel_rect = self.overlay_rect = (0.0, 0.0, 0.0, 0.0)
+        self.script_failure: str | None = None      # the first scripted action that failed
         self.rss: list[tuple[int, int]] = []
         self.frame_index = 0
+        self.recorder = None
 
     # -- actions (panel, keys, script)
     def set_mode(self, mode: str):
@@ -106,6 +112,9 @@ class App:
 
     def toggle_panel(self):
         self.state.show_panel = not self.state.show_panel
+
+    def cycle_overlay(self):
+        self.state.overlay = next_level(self.state.overlay)
 
     def camera_reset(self):
         self.camera.reset()
@@ -168,6 +177,34 @@ class App:
         s.shots.append(str(path))
         print(f"{path}: {s.mode} {self.renderer.size[0]}x{self.renderer.size[1]} t={s.time:g}")
 
+    def toggle_record(self, path=None):
+        """Start recording the shown image (viewer/ui/record.py), or stop and write it."""
+        from .ui.record import Recorder, next_path
+        s = self.state
+        if self.recorder is not None:
+            rec, self.recorder = self.recorder, None
+            try:
+                written = rec.stop()
+            except Exception as exc:
+                s.report(f"recording {rec.out.video}: {exc}")
+                return
+            if written is not None:
+                s.shots.append(str(written))
+                print(f"{written}: {rec.writer.count} frames at {rec.fps:g} fps")
+            return
+        path = path or next_path(self.options.shot_dir, f"{s.scene.name}_{s.mode}")
+        try:
+            self.recorder = Recorder.open(str(path), self.options.record_fps, s,
+                                          self.window.framebuffer_size)
+        except Exception as exc:
+            s.report(f"record {path}: {exc}")
+
+    def record_frame(self):
+        grab = capture.grab_window(self.ctx, self.window.framebuffer_size)
+        if not self.recorder.add(grab, self.state.time):
+            self.state.report("recording stopped: the window changed size")
+            self.toggle_record()
+
     def perform(self, a: Action):
         """One script action (viewer/ui/script.py)."""
         s, args = self.state, a.args
@@ -227,12 +264,14 @@ class App:
                     self.router.fly_look = args[0] == "on"
                 else:
                     s.show_panel = args[0] == "on"
+            elif a.name == "overlay":
+                s.overlay = args[0]
             elif a.name == "subframes":
                 s.sub_frames = parse_int("subframes", args[0], 1)
             elif a.name == "quit":
                 self.window.close()
         except UserError as exc:
-            s.report(f"script {a.where}: {exc}")
+            s.report(f"--script {a.where}: {str(exc).removeprefix(f'--script {a.where}: ')}")
 
     def scene_centre(self) -> tuple[float, float]:
         """The middle of the part of the window the panel does not cover."""
@@ -292,14 +331,26 @@ class App:
         fixed = opts.frames is not None              # scripted runs step time by a fixed amount
         last = _time.perf_counter()
         grab = None
+        if opts.record is not None:
+            self.toggle_record(opts.record)
         while not self.window.should_close():
             if opts.frames is not None and self.frame_index >= opts.frames:
                 break
             self.window.poll()
             for item in self.timeline.due(self.frame_index):
-                item() if callable(item) else self.perform(item)
+                if callable(item):
+                    item()
+                    continue
+                errors = len(self.state.errors)
+                self.perform(item)
+                if len(self.state.errors) > errors and self.script_failure is None:
+                    err = self.state.errors[-1]
+                    self.script_failure = (err if err.startswith("--script ")
+                                           else f"--script {item.where}: {err}")
             now = _time.perf_counter()
             seconds = FIXED_STEP if fixed else now - last
+            if self.recorder is not None:       # recordings play at the scene's speed
+                seconds = self.recorder.step
             if self.frame_index:
                 self.times.add((now - last) * 1e3)
             last = now
@@ -308,11 +359,15 @@ class App:
             self.router.dispatch(io.want_capture_mouse, io.want_capture_keyboard, seconds)
             self.advance(seconds)
             self.render_scene()
+            if self.recorder is not None:
+                self.record_frame()
             if self.state.show_panel:
                 self.panel_rect = draw_panel(self)
+            left = self.panel_rect[0] + self.panel_rect[2] if self.state.show_panel else 0.0
             self.overlay_rect = draw_overlay(self.times, self.pass_ms, self.pass_cpu_ms,
                                              self.stats, self.clock.method,
-                                             self.ctx.info["GL_RENDERER"], self.window.size[0])
+                                             self.ctx.info["GL_RENDERER"], self.window.size,
+                                             left, self.state.overlay)
             self.window.end_gui()
             self.frame_index += 1
             if opts.screenshot is not None and self.frame_index == opts.frames:
@@ -321,10 +376,14 @@ class App:
                 self.rss.append((self.frame_index, rss_kb()))
             self.window.swap()
         self.rss.append((self.frame_index, rss_kb()))
+        if self.recorder is not None:
+            self.toggle_record()
         if grab is not None:
             write_png_atomic(opts.screenshot, grab)
         if opts.stats_json is not None:
             write_json_atomic(opts.stats_json, self.summary())
+        if self.script_failure is not None:     # a scripted run that went wrong: exit 2
+            raise UserError(self.script_failure)
         return 0
 
     def summary(self) -> dict:
@@ -337,7 +396,8 @@ class App:
             "pass_ms": self.pass_ms, "pass_cpu_ms": self.pass_cpu_ms, "stats": self.stats,
             "rss_kb": self.rss, "errors": s.errors, "screenshots": s.shots,
             "panel_rect": list(self.panel_rect) if s.show_panel else None,
-            "overlay_rect": list(self.overlay_rect),
+            "overlay_rect": list(self.overlay_rect) if self.overlay_rect else None,
+            "overlay": s.overlay,
             "camera": {k: list(map(float, v)) for k, v in
                        (("position", s.scene.camera.position), ("look_at", s.scene.camera.look_at))},
             "shown": {"buffer": self.shown_name, "visual": self.shown_kind},
@@ -345,5 +405,7 @@ class App:
         }
 
     def release(self):
+        if self.recorder is not None:          # an error on the way: no half-written video
+            self.recorder.abort()
         self.renderer.release()
         self.window.release()

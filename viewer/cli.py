@@ -4,23 +4,61 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from .errors import UserError
 from .progress import end_line
 
-COMMANDS = ("shot", "compare", "bench", "view")
+COMMANDS = ("shot", "compare", "bench", "view", "params", "video")
+
+EPILOG = """\
+SCENE is a scene file (.toml) or a built-in name ({builtins}); more scenes:
+tests/conformance/*.toml (basic, vase_pan), scenes/bench/*.toml (crowd, crowd_pan),
+scenes/examples/first_scene.toml (a commented first scene).
+
+examples:
+  hmblur shot living_room --mode hybrid --out out/hybrid.png
+  hmblur compare spinner --size 640x360 --out out/spinner
+  hmblur params hybrid
+  hmblur shot --params out/hybrid.json --out again.png     (the same image, byte for byte)
+
+'hmblur COMMAND --help' describes a command. A user's mistake prints one line
+'hmblur: error: ...' and exits with status 2."""
+
+
+def version() -> str:
+    """The project's version: pyproject.toml beside the package (a source checkout), else
+    the installed distribution's."""
+    pyproject = Path(__file__).resolve().parent.parent / "pyproject.toml"
+    try:
+        import tomllib
+        return tomllib.loads(pyproject.read_text())["project"]["version"]
+    except (OSError, KeyError, ValueError):
+        from importlib.metadata import PackageNotFoundError, version as dist_version
+        try:
+            return dist_version("hybrid-mblur")
+        except PackageNotFoundError:
+            return "unknown"
 
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message):              # one line, exit 2, no usage dump
-        raise UserError(f"{self.prog}: {message}")
+        command = self.prog.removeprefix("hmblur").strip()
+        raise UserError(f"{command}: {message}" if command else message)
 
 
 def build_parser() -> argparse.ArgumentParser:
     import importlib
-    parser = _Parser(prog="hmblur", description="Motion blur: post-process (McGuire, "
-                     "UE4-style), hybrid ray-traced reveal, and a ground-truth reference.")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    from .scene_loader import builtin_scene_names
+    parser = _Parser(prog="hmblur", formatter_class=argparse.RawDescriptionHelpFormatter,
+                     description="Motion blur: post-process (McGuire 2012, UE4-style), the "
+                     "hybrid ray-traced reveal, and a ground-truth reference to measure them "
+                     "against.",
+                     epilog=EPILOG.format(builtins=", ".join(builtin_scene_names())))
+    parser.add_argument("--version", action="version", version=f"hmblur {version()}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser,
+                                metavar="COMMAND", title="commands")
     for name in COMMANDS:
         try:
             module = importlib.import_module(f"viewer.cmd_{name}")
@@ -33,9 +71,14 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
     try:
         try:
-            args = build_parser().parse_args(argv)
+            parser = build_parser()
+            if not argv:                   # bare `hmblur`: what it takes, on stderr
+                parser.print_help(sys.stderr)
+                return 2
+            args = parser.parse_args(argv)
             return int(args.run(args) or 0)
         finally:
             end_line()                     # (a progress bar's line, cut short)

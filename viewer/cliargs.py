@@ -9,25 +9,101 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from .errors import UserError
+from .errors import SceneError, UserError
 from .params import ParamSet
 from .scene import Scene
-from .scene_loader import load_scene, merge_camera
+from .scene_loader import (builtin_dir, builtin_scene_names, builtin_scene_path,
+                           load_scene, merge_camera)
+
+# Scene files beside the built-in ones that are not built-in names: the bench scenes, the
+# examples and (in a source checkout) the conformance scenes.
+OTHER_SCENE_DIRS = ("bench", "examples", "../tests/conformance")
+
+
+def other_scene(name: str) -> Path | None:
+    """The file a scene name that is not built-in most likely means, if there is one."""
+    for folder in OTHER_SCENE_DIRS:
+        path = (builtin_dir() / folder / f"{name}.toml").resolve()
+        if path.is_file():
+            return path
+    return None
+
+
+def load(source: str):
+    """load_scene, with the file named when `source` is the name of a bench, example or
+    conformance scene rather than a built-in one."""
+    try:
+        return load_scene(source)
+    except SceneError as exc:
+        path = None if Path(source).exists() or source.endswith(".toml") else other_scene(source)
+        if path is None:
+            raise
+        try:
+            shown = path.relative_to(Path.cwd())
+        except ValueError:
+            shown = path
+        raise UserError(f"{exc}; {source!r} is the scene file {shown}") from None
 
 
 def add_scene_args(p, samples: bool = True):
-    p.add_argument("scene", help="scene file (.toml) or built-in scene name")
-    p.add_argument("--time", type=str, default=None, help="frame time in seconds (scene default)")
-    p.add_argument("--size", type=str, default=None, help="WxH (scene default, e.g. 1280x720)")
+    p.add_argument("scene", nargs="?", default=None, metavar="SCENE",
+                   help="scene file (.toml) or built-in scene name; may be left out with "
+                        "--params (the sidecar's scene)")
+    p.add_argument("--time", type=str, default=None, metavar="T",
+                   help="frame time in seconds (default: the scene's [render] time)")
+    p.add_argument("--size", type=str, default=None, metavar="WxH",
+                   help="image size (default: the scene's [render] size, else 1280x720)")
     if samples:
-        p.add_argument("--samples", type=str, default=None,
+        p.add_argument("--samples", type=str, default=None, metavar="N",
                        help="reference sub-frames (default 64; = --set reference.samples=N)")
-    p.add_argument("--seed", type=str, default=None,
+    p.add_argument("--seed", type=str, default=None, metavar="N",
                    help="seed of every jitter (default 0, or the --params file's)")
     p.add_argument("--set", action="append", default=[], metavar="GROUP.FIELD=VALUE",
-                   help="set a parameter (repeatable)")
-    p.add_argument("--params", type=str, default=None,
-                   help="JSON sidecar of an earlier image: reproduce its parameters, time and size")
+                   help="set a parameter (repeatable; 'hmblur params' lists them)")
+    p.add_argument("--params", type=str, default=None, metavar="FILE.json",
+                   help="JSON sidecar of an earlier output: reproduce its scene, parameters, "
+                        "time, size, seed and camera (flags given beside it win)")
+
+
+def scene_source(arg: str) -> dict:
+    """Where a scene came from, for a sidecar: the file's absolute path (so `--params`
+    finds it from any folder) and, for a built-in scene, its name."""
+    path = Path(arg)
+    if not path.is_file() and not arg.endswith(".toml") and arg in builtin_scene_names():
+        return {"scene": str(builtin_scene_path(arg)), "scene_builtin": arg}
+    return {"scene": str(path.resolve())}
+
+
+def sidecar_scene(side: dict, params_path: str) -> str:
+    """The scene an earlier output was made from (SCENE left out beside --params): its
+    built-in name, else its path (absolute; an older relative one is tried from the
+    current folder, then from the sidecar's)."""
+    src = f"--params {params_path}"
+    name = side.get("scene_builtin")
+    if isinstance(name, str) and name in builtin_scene_names():
+        return name
+    path = side.get("scene")
+    if not isinstance(path, str) or not path:
+        raise UserError(f"{src}: names no scene: give SCENE")
+    for candidate in (Path(path), Path(params_path).parent / path):
+        if candidate.is_file():
+            return str(candidate)
+    if path in builtin_scene_names():         # a sidecar that stored the name only
+        return path
+    raise UserError(f"{src}: its scene {path} is not found: give SCENE")
+
+
+def check_set_groups(assignments: list[str], modes, mode_groups: dict, flag: str = "--set"):
+    """A `--set` for a parameter group none of the rendered `modes` reads is a mistake (it
+    would change nothing): one line naming the modes that do read it."""
+    used = {g for m in modes for g in mode_groups.get(m, ())}
+    for text in assignments:
+        group = text.partition("=")[0].strip().partition(".")[0]
+        if group not in used:
+            readers = [m for m, gs in mode_groups.items() if group in gs]
+            which = f"mode {modes[0]}" if len(modes) == 1 else "modes " + ", ".join(modes)
+            raise UserError(f"{flag} {text}: {which} does not use the {group} parameters "
+                            f"(used by {', '.join(readers) or 'no mode'})")
 
 
 def parse_size(text: str, flag: str = "--size") -> tuple[int, int]:
@@ -115,7 +191,12 @@ def sidecar_size(value, source: str) -> tuple[int, int]:
 def setup(args) -> Setup:
     params = ParamSet()
     side = read_sidecar(args.params) if getattr(args, "params", None) else None
-    scene = load_scene(args.scene)
+    if args.scene is None:
+        if side is None:
+            raise UserError("SCENE: expected a scene file (.toml) or built-in name ("
+                            + ", ".join(builtin_scene_names()) + "), or --params FILE.json")
+        args.scene = sidecar_scene(side, args.params)
+    scene = load(args.scene)
     size = (scene.render.width, scene.render.height)
     t = scene.render.time
     seed = 0
@@ -158,29 +239,46 @@ def parse_modes(flag: str, text: str, available: list[str]) -> list[str]:
     return modes
 
 
-def check_output_file(path: str, flag: str = "--out") -> Path:
+def _existing_ancestor(p: Path) -> Path:
+    """The nearest folder above `p` (or `p` itself) that exists: where missing folders
+    would be made."""
+    p = p.absolute()
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    return p
+
+
+def _check_can_make(folder: Path, flag: str, path: str):
+    """`folder` exists and is writable, or can be made (with its missing parents)."""
+    base = _existing_ancestor(folder)
+    if not base.is_dir():
+        raise UserError(f"{flag} {path}: {base} is not a folder")
+    if not os.access(base, os.W_OK):
+        raise UserError(f"{flag} {path}: folder {base} is not writable")
+
+
+def check_output_file(path: str, flag: str = "--out", suffix: str | None = None) -> Path:
     """A file path that can be written: not a folder, not a device or pipe (renaming over
-    one would replace it), in a folder that exists."""
+    one would replace it), in a folder that exists or can be made (missing folders are
+    made when the outputs are written: imageio.OutputSet). `suffix`: the one extension
+    accepted (".png": only PNG is written, and `x.png` -> `x.json` then never collides)."""
     if not path:
         raise UserError(f"{flag} '': expected a file path")
     p = Path(path)
-    parent = p.parent if str(p.parent) else Path(".")
     if p.is_dir() or path.endswith(("/", os.sep)):
         raise UserError(f"{flag} {path}: is a directory, expected a file path")
+    if suffix is not None and p.suffix != suffix:
+        raise UserError(f"{flag} {path}: expected a path ending in {suffix} "
+                        f"(only {suffix[1:].upper()} is written)")
     if p.exists() and not p.is_file():
         raise UserError(f"{flag} {path}: exists and is not a regular file")
-    if parent.exists() and not parent.is_dir():
-        raise UserError(f"{flag} {path}: {parent} is not a folder")
-    if not parent.is_dir():
-        raise UserError(f"{flag} {path}: folder {parent} does not exist")
-    if not os.access(parent, os.W_OK):
-        raise UserError(f"{flag} {path}: folder {parent} is not writable")
+    _check_can_make(p.parent if str(p.parent) else Path("."), flag, path)
     return p
 
 
 def check_output_dir(path: str, flag: str, create: bool = True) -> Path:
-    """A folder to write into: an existing one, or with `create` one whose parent exists
-    (made only when the outputs are written: imageio.OutputSet)."""
+    """A folder to write into: an existing one, or with `create` one that can be made with
+    its missing parents (made only when the outputs are written: imageio.OutputSet)."""
     if not path:
         raise UserError(f"{flag} '': expected a folder path")
     p = Path(path)
@@ -189,10 +287,7 @@ def check_output_dir(path: str, flag: str, create: bool = True) -> Path:
     if not p.exists():
         if not create:
             raise UserError(f"{flag} {path}: folder does not exist")
-        if not p.parent.is_dir():
-            raise UserError(f"{flag} {path}: folder {p.parent} does not exist")
-        if not os.access(p.parent, os.W_OK):
-            raise UserError(f"{flag} {path}: folder {p.parent} is not writable")
+        _check_can_make(p, flag, path)
         return p
     if not os.access(p, os.W_OK):
         raise UserError(f"{flag} {path}: folder is not writable")

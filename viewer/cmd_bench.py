@@ -6,6 +6,7 @@ queries only see submission, and GL timer queries on a GPU driver (render/timing
 from __future__ import annotations
 
 import platform
+import textwrap
 import time
 
 import numpy as np
@@ -14,7 +15,7 @@ from . import cliargs
 from .glcontext import create_headless, device_name
 from .imageio import write_json_atomic
 from .progress import Progress
-from .render.modes import MODES
+from .render.modes import MODE_GROUPS, MODES
 from .render.renderer import Renderer
 from .render.timing import PassClock, describe, gpu_timers_truthful
 
@@ -27,11 +28,16 @@ MIN_FPS, MAX_FPS = 1e-3, 1e6
 
 
 def register(sub):
-    p = sub.add_parser("bench", help="time every real-time mode and pass")
+    p = sub.add_parser("bench", help="time every real-time mode and pass",
+                       description="Time every real-time mode and each of its passes, "
+                       "round-robin (medians and p10-p90), the ratios to McGuire, and the "
+                       "hybrid reveal's rays against bare Embree on the same rays.")
     cliargs.add_scene_args(p, samples=False)
-    p.add_argument("--frames", default="30", help="timed frames per mode (default 30)")
-    p.add_argument("--warmup", default="3", help="untimed frames first (default 3)")
-    p.add_argument("--modes", default=None, help="comma-separated subset of the real-time modes")
+    p.add_argument("--frames", default="30", metavar="N", help="timed frames per mode (default 30)")
+    p.add_argument("--warmup", default="3", metavar="N", help="untimed frames first (default 3)")
+    p.add_argument("--modes", default=None, metavar="M1,M2",
+                   help=f"comma-separated subset of the real-time modes (default: all of "
+                        f"{', '.join(REALTIME)})")
     p.add_argument("--json", default=None, metavar="PATH", help="write the results as JSON")
     p.add_argument("--animate", default=None, metavar="FPS",
                    help="time an animation: frame k at the scene time + k / FPS (each after "
@@ -208,6 +214,7 @@ def run(args) -> int:
     available = [m for m in REALTIME if m in MODES]
     modes = available if args.modes is None else cliargs.parse_modes("--modes", args.modes,
                                                                      available)
+    cliargs.check_set_groups(args.set, modes, MODE_GROUPS)
     speeds = None
     if args.speeds:
         if "hybrid" not in available:
@@ -255,9 +262,20 @@ def run(args) -> int:
     return 0
 
 
+MEDIANS_NOTE = ("Each figure is the median of its own samples. Frame times come from frames "
+                "timed whole (one ctx.finish() at the end); pass times from another frame, "
+                "timed pass by pass ({timing}). They are different samples, so a pass's "
+                "median can exceed its frame's median (on software GL the waits between "
+                "timed passes also keep passes from overlapping).")
+
+
 def format_report(rep: dict) -> str:
     w, h = rep["size"]
-    lines = [f"{rep['scene']} {w}x{h} on {rep['device']}; passes timed by "
+    fps = rep.get("animate_fps")
+    run = (f"animated at {fps:g} fps (frame k at t = {rep['time']:g} + k / {fps:g} s)" if fps
+           else f"one frame time, t = {rep['time']:g} s, over and over")
+    lines = [f"{rep['scene']} {w}x{h} on {rep['device']}",
+             f"{rep['frames']} timed frames per mode, {run}; passes timed by "
              f"{rep['pass_timing']}", "",
              "| mode | frame ms (median) | p10-p90 | host CPU ms | passes (median ms) |",
              "| --- | ---: | ---: | ---: | --- |"]
@@ -266,28 +284,34 @@ def format_report(rep: dict) -> str:
         cpu = f"{r['frame_cpu_ms']:.1f}" if "frame_cpu_ms" in r else "-"
         lines.append(f"| {m} | {r['frame_ms']:.1f} | {r['frame']['p10']:.1f}-{r['frame']['p90']:.1f}"
                      f" | {cpu} | {passes} |")
-    for k, v in rep["ratios"].items():
-        lines.append(f"\n{k}: {v:.2f}x")
+    lines += ["", *textwrap.wrap(MEDIANS_NOTE.format(timing=rep["pass_timing"]), 92)]
+    if rep["ratios"]:
+        lines += ["", "frame time ratios: " + ", ".join(f"{k} {v:.2f}x"
+                                                        for k, v in rep["ratios"].items())]
     rv = rep.get("reveal")
     if rv:
-        frac = rv["fraction_of_embree"]
-        tfrac = rv["trace_fraction_of_embree"]
-        lines.append(f"\nreveal: {rv['masked_pixels']} masked pixels, {rv['rays']} rays in "
-                     f"{rv['reveal_ms']:.1f} ms = {rv['rays_per_s'] / 1e6:.2f} M rays/s"
-                     + (f" ({100 * frac:.0f}% of bare Embree)" if frac else "")
-                     + f"; tracing alone {rv['trace_ms']:.1f} ms = "
-                     f"{rv['trace_rays_per_s'] / 1e6:.2f} M rays/s"
-                     + (f" ({100 * tfrac:.0f}%)" if tfrac else "")
-                     + f"; bare Embree on the same rays {rv['embree_rays_per_s'] / 1e6:.2f} M rays/s"
-                     + (f" (stopping at their own object: "
-                        f"{rv['embree_front_rays_per_s'] / 1e6:.2f})"
-                        if rv.get("embree_front_rays_per_s") else "")
-                     + (f"; tracing at bare Embree's speed with only the mask read-back "
-                        f"({rv['readback_ms']:.2f} ms) beside it: "
-                        f"{100 * rv['fraction_with_bare_tracing']:.0f}%"
-                        if rv.get("fraction_with_bare_tracing") else ""))
+        lines += ["", *reveal_lines(rv)]
     if rep.get("scaling"):
         lines += ["", "| speed x | masked pixels | rays | reveal ms |", "| ---: | ---: | ---: | ---: |"]
         lines += [f"| {r['speed']:g} | {r['masked_pixels']} | {r['rays']} | {r['reveal_ms']:.2f} |"
                   for r in rep["scaling"]]
     return "\n".join(lines)
+
+
+def reveal_lines(rv: dict) -> list[str]:
+    """The hybrid reveal's figures, one thing per line."""
+    def pct(x):
+        return f" ({100 * x:.0f}% of bare Embree)" if x else ""
+    out = [f"reveal (hybrid, medians): {rv['masked_pixels']} masked pixels, {rv['rays']} rays",
+           f"  whole reveal:   {rv['reveal_ms']:.1f} ms = {rv['rays_per_s'] / 1e6:.2f} M rays/s"
+           + pct(rv["fraction_of_embree"]),
+           f"  tracing alone:  {rv['trace_ms']:.1f} ms = {rv['trace_rays_per_s'] / 1e6:.2f} M rays/s"
+           + pct(rv["trace_fraction_of_embree"]),
+           f"  bare Embree on the same rays: {rv['embree_rays_per_s'] / 1e6:.2f} M rays/s"]
+    if rv.get("embree_front_rays_per_s"):
+        out.append(f"  bare Embree stopping at each ray's own object: "
+                   f"{rv['embree_front_rays_per_s'] / 1e6:.2f} M rays/s")
+    if rv.get("fraction_with_bare_tracing"):
+        out.append(f"  bound, tracing at bare Embree's speed + the mask read-back "
+                   f"({rv['readback_ms']:.2f} ms): {100 * rv['fraction_with_bare_tracing']:.0f}%")
+    return out

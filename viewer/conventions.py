@@ -11,6 +11,10 @@ Velocity: the G-buffer's velocity is the full screen-space displacement of the s
 point over the exposure, `p(t + shutter/2) - p(t - shutter/2)`, in pixels of the
 framebuffer, in GL window axes (x to the right, y UP). The filters blur from -v/2 to +v/2.
 
+Exposure: the frame at time t with shutter s integrates [t - s/2, t + s/2] (centred on
+t); N stratified times over it are t - s/2 + (k + 0.5) s/N, k = 0 .. N-1 (the reference's
+sharp sub-frames, the sub-exposure steps' centres).
+
 Depth: linear view depth (distance along the camera's forward axis, positive, metres).
 Pixels that hit nothing get BACKGROUND_DEPTH, finite so that differences stay finite.
 """
@@ -31,6 +35,16 @@ def pixel_centres_ndc(i, j, width: int, height: int) -> tuple[np.ndarray, np.nda
     x = (np.asarray(i, dtype=np.float64) + 0.5) / width * 2.0 - 1.0
     y = 1.0 - (np.asarray(j, dtype=np.float64) + 0.5) / height * 2.0
     return x, y
+
+
+def exposure(t: float, shutter: float) -> tuple[float, float]:
+    """(open, close) of the exposure of the frame at time t."""
+    return t - 0.5 * shutter, t + 0.5 * shutter
+
+
+def sample_times(t: float, shutter: float, n: int) -> np.ndarray:
+    """The n stratified times t - s/2 + (k + 0.5) s / n, k = 0 .. n-1."""
+    return t - 0.5 * shutter + (np.arange(n) + 0.5) * shutter / n
 
 
 def glsl_defines() -> dict[str, str]:

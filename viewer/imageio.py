@@ -87,7 +87,8 @@ def _atomic_write(path, write: Callable[[io.BufferedWriter], None]) -> Path:
 class OutputSet:
     """Files that appear together or not at all (an image and its sidecar, a comparison's
     images and metrics): each is written to a temp file beside its path, and only when
-    every one is written are they renamed into place, after creating their folders. A
+    every one is written are they renamed into place, after creating their folders (and
+    any missing parents). A
     failure on the way (a full disk, a directory where a file goes) leaves none of them."""
 
     def __init__(self):
@@ -116,9 +117,14 @@ class OutputSet:
         made: list[Path] = []
         try:
             for path, _ in self._files:
-                if not path.parent.exists():
-                    path.parent.mkdir()
-                    made.append(path.parent)
+                missing = []                  # the folder and its missing parents
+                folder = path.parent
+                while not folder.exists() and folder != folder.parent:
+                    missing.append(folder)
+                    folder = folder.parent
+                for folder in reversed(missing):
+                    folder.mkdir()
+                    made.append(folder)
             for path, write in self._files:
                 done.append(_write_temp(path, write))
             for tmp, (path, _) in zip(done, self._files):
@@ -126,7 +132,7 @@ class OutputSet:
         except BaseException:
             for tmp in done:
                 tmp.unlink(missing_ok=True)
-            for folder in made:
+            for folder in reversed(made):     # deepest first
                 folder.rmdir()
             raise
 

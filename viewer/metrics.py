@@ -93,7 +93,12 @@ def _summary(maps: dict[str, np.ndarray], mask: np.ndarray, interior: np.ndarray
 def image_metrics(test, ref, region=None, quantize: bool = True) -> dict[str, dict]:
     """{"all": {...}} plus "static"/"inner"/"outer" when a region map is given; each
     entry holds pixels, psnr (dB), ssim and flip (see the module docstring)."""
-    maps = metric_maps(test, ref, quantize)
+    return region_metrics(metric_maps(test, ref, quantize), region)
+
+
+def region_metrics(maps: dict[str, np.ndarray], region=None) -> dict[str, dict]:
+    """image_metrics from maps made by metric_maps (so that a caller that also shows the
+    FLIP map computes it once)."""
     h, w = maps["ssim"].shape
     interior = np.zeros((h, w), dtype=bool)
     interior[SSIM_PAD:h - SSIM_PAD, SSIM_PAD:w - SSIM_PAD] = True

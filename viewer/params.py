@@ -2,8 +2,9 @@
 panel and the JSON sidecar written beside every image.
 
 A group is a dataclass registered with `@group("name")`; each field is made with `param()`,
-whose metadata gives the range, help text and what a change costs ("uniform": nothing,
-"recompile": a shader rebuild, "realloc": new textures).
+whose metadata gives the range, the unit, help text and what a change costs ("uniform":
+nothing, "recompile": a shader rebuild, "realloc": new textures). `describe_params` lists
+them for `hmblur params`.
 """
 from __future__ import annotations
 
@@ -25,9 +26,12 @@ def group(name: str):
     return register
 
 
-def param(default, *, lo=None, hi=None, help: str = "", choices=None, effect: str = "uniform"):
+def param(default, *, lo=None, hi=None, help: str = "", choices=None, effect: str = "uniform",
+          unit: str = ""):
+    """A parameter field. `unit`: what the number counts ("px", "m", "fraction of the image
+    width", ...); empty for flags, choices and plain ratios."""
     return field(default=default, metadata=dict(lo=lo, hi=hi, help=help, choices=choices,
-                                                effect=effect))
+                                                effect=effect, unit=unit))
 
 
 def _parse(kind: type, text: str, key: str):
@@ -116,3 +120,41 @@ class ParamSet:
                 raise UserError(f"{source}: {name}: expected a table of parameters")
             for fname, value in values.items():
                 self.set(f"{name}.{fname}", value, label=source)
+
+
+def value_range(f: dataclasses.Field) -> str:
+    """The accepted values as text: choices, a closed range, a bound, or the type."""
+    meta, kind = f.metadata, type(f.default)
+    choices = meta.get("choices")
+    if choices is not None:
+        steps = {b - a for a, b in zip(choices, choices[1:])} if all(
+            isinstance(c, int) and not isinstance(c, bool) for c in choices) else set()
+        if len(choices) > 4 and len(steps) == 1:          # an arithmetic run: its ends
+            return f"{choices[0]}, {choices[1]}, ..., {choices[-1]}"
+        return "|".join(map(str, choices))
+    if kind is bool:
+        return "true|false"
+    lo, hi = meta.get("lo"), meta.get("hi")
+    if lo is not None and hi is not None:
+        return f"{lo:g} .. {hi:g}"
+    if lo is not None:
+        return f">= {lo:g}"
+    if hi is not None:
+        return f"<= {hi:g}"
+    return kind.__name__
+
+
+def describe_params(names=None) -> list[dict]:
+    """Every parameter of the groups `names` (default: all registered), in definition
+    order: key, type, default, range, unit, effect, help."""
+    rows = []
+    for name, cls in GROUPS.items():
+        if names is not None and name not in names:
+            continue
+        for f in fields(cls):
+            rows.append({"key": f"{name}.{f.name}", "type": type(f.default).__name__,
+                         "default": f.default, "range": value_range(f),
+                         "unit": f.metadata.get("unit", ""),
+                         "effect": f.metadata.get("effect", "uniform"),
+                         "help": f.metadata.get("help", "")})
+    return rows

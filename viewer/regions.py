@@ -16,6 +16,13 @@ tolerance of 1e-3 already misclassifies ~30 pixels where the floor meets the wal
 
 Id 0 (background) always counts as infinitely far, whatever depth the caller stored for
 it (inf in the conformance data, conventions.BACKGROUND_DEPTH in the G-buffer).
+
+The regions are about visibility, not about motion: STATIC means one object is seen for
+the whole exposure, whether or not that object moves. The surface of a spinning or
+sliding object seen through the whole exposure is STATIC, so the sharp `off` frame has
+a non-zero STATIC error there (its texture and shading smear in the reference); only
+where another object comes into or out of view is a pixel INNER or OUTER. This is the
+evaluation protocol's definition, and the conformance region maps follow it.
 """
 from __future__ import annotations
 
@@ -23,6 +30,16 @@ import numpy as np
 
 STATIC, INNER, OUTER = 0, 1, 2
 NAMES = {STATIC: "static", INNER: "inner", OUTER: "outer"}
+# One line each, for tables and figures (`hmblur compare` writes them beside the numbers).
+DEFINITIONS = {
+    "inner": "inner blur: the object seen at the frame time uncovers something farther "
+             "at some time of the exposure (the hidden background shows through its blur)",
+    "outer": "outer blur: something nearer passes over the pixel during the exposure "
+             "(the blur of a moving object over what lies behind it)",
+    "static": "static: the same object is seen for the whole exposure; that object may "
+              "move (the surface of a spinning object is static: its texture and shading "
+              "smear, but nothing else shows)",
+}
 
 
 def _depth(ids: np.ndarray, depth: np.ndarray) -> np.ndarray:

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import conventions
 from . import transforms as tf
 
 
@@ -350,11 +351,9 @@ class Scene:
     objects: list[SceneObject] = field(default_factory=list)
 
     def exposure(self, t: float) -> tuple[float, float]:
-        """[t - shutter/2, t + shutter/2]: the exposure is centred on the frame time."""
-        s = self.camera.shutter
-        return t - 0.5 * s, t + 0.5 * s
+        """[t - shutter/2, t + shutter/2] of the camera's shutter (conventions.exposure)."""
+        return conventions.exposure(t, self.camera.shutter)
 
     def sample_times(self, t: float, n: int) -> np.ndarray:
-        """The reference's stratified times t - s/2 + (k + 0.5) s / n, k = 0 .. n-1."""
-        s = self.camera.shutter
-        return t - 0.5 * s + (np.arange(n) + 0.5) * s / n
+        """n stratified times over the camera's exposure (conventions.sample_times)."""
+        return conventions.sample_times(t, self.camera.shutter, n)

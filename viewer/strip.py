@@ -3,7 +3,7 @@ spirit of Figure 1 of Tan et al., Hybrid MBlur) and the metrics table as Markdow
 
 Strip layout, one column per image, on a white background:
 
-    label            (Pillow's bitmap default font)
+    label            (text scaled with the image height: font_size)
     image            (sRGB; the inset box outlined just outside its pixels)
     inset            (the box, nearest-neighbour zoom by an integer factor)
     metric lines     (optional, one text line each)
@@ -19,7 +19,7 @@ import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
 from viewer.imageio import json_safe, linear_to_srgb8
-from viewer.regions import INNER, NAMES, STATIC
+from viewer.regions import INNER, NAMES, OUTER, STATIC
 
 GAP = 4                    # pixels between columns and between stacked parts
 PAD = 2                    # around text
@@ -29,17 +29,34 @@ BOX = (255, 40, 0)
 REGION_ORDER = ("all",) + tuple(NAMES[c] for c in sorted(NAMES))
 
 
-def _font():
-    # The bitmap font renders the same on every machine; load_default() would pick
-    # FreeType's anti-aliased Aileron where available, whose pixels depend on the
-    # FreeType build.
-    if hasattr(ImageFont, "load_default_imagefont"):
-        return ImageFont.load_default_imagefont()
-    return ImageFont.load_default()
+MIN_FONT = 11              # px: the smallest text, for tiny images
+FONT_FRACTION = 1 / 16     # of the image height: labels stay readable on a scaled-down strip
+
+
+def font_size(image_height: int) -> int:
+    """Text height in pixels for panels `image_height` tall."""
+    return max(MIN_FONT, round(image_height * FONT_FRACTION))
+
+
+def _font(image_height: int):
+    # Pillow's own FreeType font (Aileron, shipped with Pillow >= 10.1) at a size that
+    # follows the image, drawn without anti-aliasing (fontmode "1"): the same pixels for
+    # the same Pillow and FreeType. Without FreeType, the fixed 11 px bitmap font.
+    try:
+        return ImageFont.load_default(size=font_size(image_height))
+    except (TypeError, ImportError, OSError):
+        if hasattr(ImageFont, "load_default_imagefont"):
+            return ImageFont.load_default_imagefont()
+        return ImageFont.load_default()
 
 
 def _line_height(font) -> int:
     return font.getbbox("Ag")[3] + 2 * PAD
+
+
+def line_height(image_height: int) -> int:
+    """Height of one text row (label or metric line) beside panels `image_height` tall."""
+    return _line_height(_font(image_height))
 
 
 def _as_srgb8(image) -> np.ndarray:
@@ -98,7 +115,7 @@ def make_strip(images, inset_box=None, metrics=None, zoom: int | None = None) ->
     if len(lines) != len(panels):
         raise ValueError("make_strip: one metrics entry per image")
 
-    font = _font()
+    font = _font(h)
     lh = _line_height(font)
     box = None if inset_box is None else _check_box(inset_box, w, h)
     iw = ih = 0
@@ -155,6 +172,80 @@ def choose_inset(region, size) -> tuple[int, int, int, int]:
     k = np.argmin((ys - ys.mean()) ** 2 + (xs - xs.mean()) ** 2)
     x0, y0 = int(xs[k]), int(ys[k])
     return x0, y0, x0 + bw, y0 + bh
+
+
+# --- region map and error maps ----------------------------------------------------------
+
+REGION_COLOURS = {INNER: (230, 60, 40), OUTER: (40, 110, 230), STATIC: (40, 40, 40)}
+REGION_KEY = {INNER: "inner blur: uncovers something farther",
+              OUTER: "outer blur: something nearer passes over",
+              STATIC: "static: the same object all exposure"}
+# FLIP's error in [0, 1] as colour: a ramp through magma-like control points (dark purple
+# for no error to pale yellow for the largest), linear between them.
+HEAT_STOPS = np.array([0.0, 0.25, 0.5, 0.75, 1.0])
+HEAT_RGB = np.array([(0, 0, 4), (81, 18, 124), (183, 55, 121), (252, 137, 97),
+                     (252, 253, 191)], np.float64)
+
+
+def _key_rows(entries, width: int, font) -> np.ndarray:
+    """A colour key: one row per (colour, text), a square swatch then the text."""
+    lh = _line_height(font)
+    sw = lh - 2 * PAD
+    block = Image.new("RGB", (width, lh * len(entries)), BACKGROUND)
+    draw = ImageDraw.Draw(block)
+    draw.fontmode = "1"
+    for i, (colour, text) in enumerate(entries):
+        y = i * lh
+        draw.rectangle((PAD, y + PAD, PAD + sw - 1, y + PAD + sw - 1), fill=tuple(colour))
+        draw.text((sw + 3 * PAD, y + PAD), text, font=font, fill=TEXT)
+    return np.asarray(block)
+
+
+def region_picture(region) -> np.ndarray:
+    """The region map as colours (REGION_COLOURS), top row first, with its key drawn in
+    rows below the map (the map's pixels are the first H rows)."""
+    r = np.asarray(region)
+    h, w = r.shape
+    pic = np.zeros((h, w, 3), np.uint8)
+    for code, colour in REGION_COLOURS.items():
+        pic[r == code] = colour
+    font = _font(h)
+    key = _key_rows([(REGION_COLOURS[c], REGION_KEY[c]) for c in (INNER, OUTER, STATIC)],
+                    w, font)
+    gap = np.full((GAP, w, 3), BACKGROUND, np.uint8)
+    return np.concatenate([pic, gap, key])
+
+
+def heat(error) -> np.ndarray:
+    """(H,W) error in [0, 1] (clamped) -> uint8 (H,W,3) heat colours (HEAT_RGB)."""
+    e = np.clip(np.nan_to_num(np.asarray(error, np.float64)), 0.0, 1.0)
+    rgb = np.stack([np.interp(e, HEAT_STOPS, HEAT_RGB[:, c]) for c in range(3)], -1)
+    return np.floor(rgb + 0.5).astype(np.uint8)
+
+
+def _colour_bar(width: int, font) -> np.ndarray:
+    """A horizontal key of the heat colours from 0 to 1, with its values written below."""
+    lh = _line_height(font)
+    bar = heat(np.broadcast_to(np.linspace(0.0, 1.0, width), (lh, width)))
+    label = Image.new("RGB", (width, lh), BACKGROUND)
+    draw = ImageDraw.Draw(label)
+    draw.fontmode = "1"
+    draw.text((PAD, PAD), "0 (no error)", font=font, fill=TEXT)
+    end = "1 (FLIP error)"
+    draw.text((width - PAD - draw.textlength(end, font=font), PAD), end, font=font, fill=TEXT)
+    mid = "0.5"
+    draw.text(((width - draw.textlength(mid, font=font)) / 2, PAD), mid, font=font, fill=TEXT)
+    return np.concatenate([bar, np.asarray(label)])
+
+
+def error_strip(maps, metrics=None) -> np.ndarray:
+    """[(label, (H,W) FLIP error map)] -> the maps side by side as heat colours, labelled,
+    with optional metric lines, and a colour key from 0 to 1 along the bottom."""
+    strip = make_strip([(label, heat(m)) for label, m in maps], metrics=metrics)
+    h = np.asarray(maps[0][1]).shape[0]
+    bar = _colour_bar(strip.shape[1], _font(h))
+    gap = np.full((GAP, strip.shape[1], 3), BACKGROUND, np.uint8)
+    return np.concatenate([strip, gap, bar])
 
 
 # --- metrics table -------------------------------------------------------------------------

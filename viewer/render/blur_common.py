@@ -13,7 +13,7 @@ from ..params import group, param
 
 @group("blur")
 class BlurParams:
-    max_radius: float = param(0.08, lo=0.002, hi=0.25, effect="realloc",
+    max_radius: float = param(0.08, unit="fraction of the image width", lo=0.002, hi=0.25, effect="realloc",
                               help="largest blur per side, as a fraction of the image width "
                                    "(McGuire's tile size k, UE4's maximum); shared by all modes")
 

@@ -1,4 +1,5 @@
-"""What one frame's passes share: the context, the pool, the scene, the camera and time."""
+"""What one frame's passes share: the context, the pool, the scene, the camera, the time
+and the exposure."""
 from __future__ import annotations
 
 import time as _time
@@ -8,6 +9,7 @@ import moderngl
 import numpy as np
 
 from ..camera import Camera
+from .. import conventions
 from ..conventions import to_image
 from ..params import ParamSet
 from ..shaders import ProgramCache
@@ -36,6 +38,14 @@ class Frame:
     # GpuScene.object_matrices of this frame's objects by (id, t, t_open, t_close): the
     # camera and the objects hold still for a frame, and several passes ask.
     object_matrices: dict = field(default_factory=dict)
+    # The exposure's length (s), centred on `time`: every pass reads the exposure from here,
+    # never from the scene's camera, so that a sub-exposure step (viewer/render/steps.py)
+    # is a frame with a shorter shutter. None: the scene camera's shutter, when made.
+    shutter: float | None = None
+
+    def __post_init__(self):
+        if self.shutter is None:
+            self.shutter = float(self.scene.camera.shutter)
 
     @property
     def scene(self):
@@ -47,7 +57,16 @@ class Frame:
 
     @property
     def exposure(self) -> tuple[float, float]:
-        return self.scene.exposure(self.time)
+        """(open, close) of this frame's exposure."""
+        return self.exposure_at(self.time)
+
+    def exposure_at(self, t: float) -> tuple[float, float]:
+        """(open, close) of an exposure of this frame's shutter centred on t."""
+        return conventions.exposure(t, self.shutter)
+
+    def sample_times(self, n: int) -> np.ndarray:
+        """n stratified times over this frame's exposure (conventions.sample_times)."""
+        return conventions.sample_times(self.time, self.shutter, n)
 
     def read(self, name: str) -> np.ndarray:
         """A pool texture as numpy, image orientation (top row first), (H, W) or (H, W, C)."""

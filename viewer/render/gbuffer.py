@@ -81,7 +81,7 @@ class GBufferPass(Pass):
 
     def execute(self, frame: Frame, time: float | None = None):
         t = frame.time if time is None else time
-        t_open, t_close = frame.exposure if time is None else frame.scene.exposure(t)
+        t_open, t_close = frame.exposure_at(t)
         ctx, cam, gpu = frame.ctx, frame.camera, frame.gpu
         layout = self.layout(frame)
         segments = self.segments(frame)

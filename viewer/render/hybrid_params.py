@@ -12,24 +12,24 @@ COMPOSITES = ("bucket", "split", "time")
 @group("hybrid")
 class HybridParams:
     # ---- motion (viewer/render/gbuffer.py, glsl/path.glsl)
-    segments: int = param(2, choices=SEGMENT_CHOICES, effect="recompile",
+    segments: int = param(2, unit="segments", choices=SEGMENT_CHOICES, effect="recompile",
                           help="linear pieces of each pixel's screen path over the "
                                "exposure (its points projected at evenly spaced times): "
                                "tiles, ray mask and composite follow the path (rotation, "
                                "approach, a reversal); 1 = the chord alone (the paper); 4 "
                                "is best on keyed arcs and bounces, worse on fast spins")
     # ---- ray mask (viewer/render/raymask.py)
-    min_speed: float = param(1.0, lo=0.0, hi=64.0,
+    min_speed: float = param(1.0, unit="px", lo=0.0, hi=64.0,
                              help="displacement over the exposure (px) below which a pixel "
                                   "counts as still and is never masked")
-    depth_threshold: float = param(0.01, lo=0.0, hi=1.0,
+    depth_threshold: float = param(0.01, unit="fraction of the depth", lo=0.0, hi=1.0,
                                    help="displacement test: the displaced position must be "
                                         "farther by this fraction of the pixel's depth")
-    edge_depth: float = param(0.05, lo=0.0, hi=10.0,
+    edge_depth: float = param(0.05, unit="log-depth step", lo=0.0, hi=10.0,
                               help="Sobel threshold on log depth (a step of ~5% per pixel "
                                    "at 0.05; the kernel is normalised to step units; log "
                                    "depth is kept at half precision, steps of ~0.1%)")
-    edge_normal: float = param(0.3, lo=0.0, hi=4.0,
+    edge_normal: float = param(0.3, unit="normal step", lo=0.0, hi=4.0,
                                help="Sobel threshold on the world normal (vector step units)")
     range_check: bool = param(False,
                               help="ray mask: on, the poster's three steps (the "
@@ -41,17 +41,17 @@ class HybridParams:
                                    "background): the same mask under a still camera, "
                                    "far fewer rays under a moving one (pan: 1.7 k to 39 "
                                    "k; inner FLIP .052 to .048; docs/performance.md)")
-    relative_reach: float = param(2.0, lo=1.0, hi=8.0,
+    relative_reach: float = param(2.0, unit="half displacements", lo=1.0, hi=8.0,
                                   help="range check: search this many half displacements "
                                        "along the velocity (> 1 finds the wider band that "
                                        "opens when the background moves the other way)")
     # ---- ray reveal (viewer/render/reveal_pass.py)
     trace: bool = param(True, help="cast the masked pixels' rays; off leaves the revealed "
                                    "layer empty (the composite alone, for comparison)")
-    max_depth: int = param(8, lo=0, hi=64,
+    max_depth: int = param(8, unit="restarts", lo=0, hi=64,
                            help="restarts allowed to pass through the pixel's own static "
                                 "object (recursion depth of the reveal)")
-    threads: int = param(0, lo=0, hi=64,
+    threads: int = param(0, unit="threads", lo=0, hi=64,
                          help="ray-tracing threads for large batches (0 = CPU count)")
     # ---- composite (viewer/render/hybrid_composite.py)
     composite: str = param("bucket", choices=COMPOSITES, effect="recompile",
@@ -62,25 +62,25 @@ class HybridParams:
                                 "between the raster and revealed layers (best, 8-10x "
                                 "costlier); split: time near the ray mask, bucket elsewhere "
                                 "(docs/performance.md)")
-    samples_min: int = param(8, lo=1, hi=256,
+    samples_min: int = param(8, unit="samples", lo=1, hi=256,
                              help="time samples per pixel (bucket: taps per line) where "
                                   "anything moves, at least")
-    samples_max: int = param(16, lo=1, hi=256,
+    samples_max: int = param(16, unit="samples", lo=1, hi=256,
                              help="time samples per pixel (bucket: taps per line), at most")
-    sample_spacing: float = param(2.0, lo=0.25, hi=16.0,
+    sample_spacing: float = param(2.0, unit="px per sample", lo=0.25, hi=16.0,
                                   help="pixels of motion per time sample or tap: the count "
                                        "grows with the displacement")
-    jitter: float = param(1.0, lo=0.0, hi=1.0,
+    jitter: float = param(1.0, unit="fraction of a step", lo=0.0, hi=1.0,
                           help="per-pixel jitter of the stratified times or taps: 0 = "
                                "fixed (banding), 1 = one offset per pixel (noise: "
                                "random for the time composite, interleaved gradient "
                                "noise for the bucketed one)")
-    seeds: int = param(2, lo=1, hi=9, effect="recompile",
+    seeds: int = param(2, unit="tile maxima", lo=1, hi=9, effect="recompile",
                        help="distinct tile maxima around a pixel whose surfaces are looked "
                             "for at each time sample (what may pass over it)")
-    iterations: int = param(3, lo=0, hi=8,
+    iterations: int = param(3, unit="iterations", lo=0, hi=8,
                             help="fixed-point refinements mapping a pixel back to the "
                                  "frame time along a surface's own velocity")
-    tolerance: float = param(0.65, lo=0.5, hi=2.0,
+    tolerance: float = param(0.65, unit="px", lo=0.5, hi=2.0,
                              help="a surface covers the pixel at a time sample when it "
                                   "lands within this many pixels (Chebyshev) of its centre")

@@ -27,13 +27,13 @@ JITTER_STREAM = 1
 
 @group("mcguire")
 class McGuireParams:
-    samples: int = param(15, choices=tuple(range(3, 64, 2)),
+    samples: int = param(15, unit="taps", choices=tuple(range(3, 64, 2)),
                          help="taps S along the neighbourhood velocity (odd; the middle "
                               "one is the centre pixel)")
-    soft_z_extent: float = param(0.1, lo=1e-4, hi=10.0,
+    soft_z_extent: float = param(0.1, unit="m", lo=1e-4, hi=10.0,
                                  help="SOFT_Z_EXTENT in metres: the depth over which a tap "
                                       "goes from 'in front' to 'behind'")
-    jitter: float = param(1.0, lo=0.0, hi=1.0,
+    jitter: float = param(1.0, unit="fraction of a step", lo=0.0, hi=1.0,
                           help="per-pixel tap jitter: 0 = fixed taps (banding), "
                                "1 = the paper's j in [-0.5, 0.5) (noise)")
     centre_kappa: float = param(0.0, lo=0.0, hi=200.0,

@@ -5,21 +5,26 @@ from __future__ import annotations
 from typing import Callable
 
 from .gbuffer import GBufferPass
+from .motion_params import MotionParams  # noqa: F401  (registers the "motion" group)
 from .passes import Pipeline
 
 MODES: dict[str, Callable[[], Pipeline]] = {}
 MODE_GROUPS: dict[str, tuple[str, ...]] = {}   # parameter groups each mode uses
 
 
-def mode(name: str, groups: tuple[str, ...] = ()):
+def mode(name: str, groups: tuple[str, ...] = (), steps: bool = True):
+    """Register a mode's pipeline builder with its parameter groups. `steps`: the mode takes
+    sub-exposure steps (the "motion" group, viewer/render/steps.py, run by the renderer
+    around any pipeline): every real-time blur does; a sharp frame or a mode with its own
+    samples over the exposure does not."""
     def register(builder):
         MODES[name] = builder
-        MODE_GROUPS[name] = groups
+        MODE_GROUPS[name] = tuple(groups) + (("motion",) if steps else ())
         return builder
     return register
 
 
-@mode("off")
+@mode("off", steps=False)
 def _off() -> Pipeline:
     return Pipeline("off", [GBufferPass()], output="color")
 

@@ -14,7 +14,7 @@ from .pool import TexSpec
 
 @group("reference")
 class ReferenceParams:
-    samples: int = param(64, lo=1, hi=4096, help="sharp sub-frames averaged over the exposure")
+    samples: int = param(64, unit="sub-frames", lo=1, hi=4096, help="sharp sub-frames averaged over the exposure")
 
 
 class Accumulate(FullscreenPass):
@@ -36,7 +36,7 @@ class ReferencePass(Pass):
 
     def execute(self, frame: Frame):
         n = frame.params["reference"].samples
-        if frame.scene.camera.shutter == 0:
+        if frame.shutter == 0:
             n = 1    # N identical sub-frames: their mean is the frame itself, exactly
         fbo = frame.pool.framebuffer(("reference",))
         fbo.use()
@@ -48,7 +48,7 @@ class ReferencePass(Pass):
         sub = self.sub_color if regions is None else self.sub_visibility
         sub.allocate(frame)
         progress = frame.host.get("progress")
-        for k, tk in enumerate(frame.scene.sample_times(frame.time, n)):
+        for k, tk in enumerate(frame.sample_times(n)):
             if progress is not None:
                 progress(k, n)
             sub.execute(frame, time=float(tk))
@@ -79,7 +79,7 @@ class ReferencePass(Pass):
         n = self.total(frame)
         self.sub_color.allocate(frame)
         last = min(n, first + max(0, count))
-        for tk in frame.scene.sample_times(frame.time, n)[first:last]:
+        for tk in frame.sample_times(n)[first:last]:
             self.sub_color.execute(frame, time=float(tk))
             self.acc.draw(frame, ("reference",), {"u_src": "sub_color"},
                           {"u_weight": 1.0 / n}, blend=True)
@@ -87,6 +87,6 @@ class ReferencePass(Pass):
         return last
 
 
-@mode("reference", groups=("reference",))
+@mode("reference", groups=("reference",), steps=False)
 def reference_pipeline() -> Pipeline:
     return Pipeline("reference", [GBufferPass(), ReferencePass()], output="reference")

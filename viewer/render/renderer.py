@@ -13,10 +13,11 @@ from ..params import ParamSet
 from ..scene import Scene
 from ..shaders import ProgramCache
 from .allocator import keep_freed_memory
-from .frame import Frame
+from .frame import Frame, PassTimer
 from .gpu_scene import GpuScene
 from .modes import MODES
 from .pool import ResourcePool
+from .steps import MakeFrame, Measure, run_steps, step_count
 
 
 @dataclass
@@ -63,9 +64,22 @@ class Renderer:
             self._pipelines[mode] = MODES[mode]()
         return self._pipelines[mode]
 
-    def frame(self, t: float, params: ParamSet, seed: int = 0, timing: bool = False) -> Frame:
+    def frame(self, t: float, params: ParamSet, seed: int = 0, timing: bool = False,
+              shutter: float | None = None) -> Frame:
+        """A frame at t; `shutter` None: the scene camera's (read now, as the viewer may
+        change it between frames)."""
         return Frame(self.ctx, self.pool, self.programs, self.gpu, self.camera, float(t),
-                     params, seed=seed, timing=timing, host={"state": self._host_passes})
+                     params, seed=seed, timing=timing, host={"state": self._host_passes},
+                     shutter=shutter)
+
+    def run(self, mode: str, t: float, params: ParamSet, seed: int, make_frame: MakeFrame,
+            measure: Measure = PassTimer) -> Frame:
+        """The frame at t of `mode`, as its sub-exposure steps (viewer/render/steps.py):
+        `make_frame(time, shutter, seed)` makes each sub-frame, Pipeline.run runs the
+        mode's passes on it, each inside `measure(frame, name)`, and the accumulation."""
+        shutter = float(self.scene.camera.shutter)
+        n = step_count(mode, params, shutter)
+        return run_steps(make_frame, self.pipeline(mode), float(t), shutter, seed, n, measure)
 
     def render(self, mode: str, t: float, params: ParamSet | None = None, seed: int = 0,
                timing: bool = False, record_visibility: bool = False,
@@ -73,11 +87,14 @@ class Renderer:
         """`progress(k, n)` is called as long passes (the reference) advance."""
         params = params or ParamSet()
         pipe = self.pipeline(mode)
-        frame = self.frame(t, params, seed, timing)
-        frame.host["record_visibility"] = record_visibility
-        if progress is not None:
-            frame.host["progress"] = progress
-        pipe.run(frame)
+
+        def make_frame(tk, shutter, seed_k):
+            f = self.frame(tk, params, seed_k, timing, shutter=shutter)
+            f.host["record_visibility"] = record_visibility
+            if progress is not None:
+                f.host["progress"] = progress
+            return f
+        frame = self.run(mode, t, params, seed, make_frame)
         image = frame.read(pipe.output)[..., :3].copy() if read_image else None
         frame.host.pop("state", None)
         return RenderResult(mode, image, frame.stats, frame.pass_ms, frame.host)

@@ -56,13 +56,14 @@ class PassClock:
         frame.pass_ms[name] = frame.pass_ms.get(name, 0.0) + q.elapsed / 1e6
 
     def render(self, renderer: Renderer, mode: str, t: float, params: ParamSet, seed: int) -> Frame:
-        """Run every pass of `mode` (the image stays on the GPU, in the pool)."""
-        frame = self.frame(renderer, t, params, seed)
-        frame.host["record_visibility"] = False
-        try:
-            renderer.pipeline(mode).run(frame, measure=self.measure)
-        finally:
-            frame.host.pop("state", None)
+        """Run every pass of `mode`, as its sub-exposure steps where set (the image stays
+        on the GPU, in the pool)."""
+        def make_frame(tk, shutter, seed_k):
+            f = renderer.frame(tk, params, seed_k, timing=self.method == "cpu", shutter=shutter)
+            f.host["record_visibility"] = False
+            return f
+        frame = renderer.run(mode, t, params, seed, make_frame, measure=self.measure)
+        frame.host.pop("state", None)
         return frame
 
     # Queries are kept, one per pass name, for the context's lifetime: moderngl 5 has no

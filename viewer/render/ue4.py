@@ -28,21 +28,21 @@ from .pool import TexSpec
 
 @group("ue4")
 class UE4Params:
-    tile: int = param(16, lo=2, hi=64, effect="realloc",
+    tile: int = param(16, unit="px", lo=2, hi=64, effect="realloc",
                       help="tile size in pixels for the min/max velocity tiles")
-    taps: int = param(8, lo=1, hi=32,
+    taps: int = param(8, unit="taps per side", lo=1, hi=32,
                       help="gather taps per side (2 x taps in all; UE's quality 4 = 8)")
-    depth_scale: float = param(100.0, lo=0.01, hi=1.0e6,
+    depth_scale: float = param(100.0, unit="1/m", lo=0.01, hi=1.0e6,
                                help="depth compare slope per metre: a tap within 0.5/depth_scale m "
                                     "of the centre counts half as fore-, half as background "
                                     "(UE: 1 per cm)")
-    tile_jitter: float = param(0.25, lo=0.0, hi=0.5,
+    tile_jitter: float = param(0.25, unit="tiles", lo=0.0, hi=0.5,
                                help="largest tile-lookup jitter per axis, in tiles")
-    tap_jitter: float = param(1.0, lo=0.0, hi=1.0,
+    tap_jitter: float = param(1.0, unit="fraction of a step", lo=0.0, hi=1.0,
                               help="per-pixel jitter of the tap pattern, as a fraction of one step "
                                    "(1 = UE; 0 = taps at step centres, banding instead of noise)")
     fast_path: bool = param(True, help="plain average where the neighbourhood moves uniformly")
-    fast_ratio: float = param(0.4, lo=0.0, hi=1.0,
+    fast_ratio: float = param(0.4, unit="ratio of squared lengths", lo=0.0, hi=1.0,
                               help="fast path when |vmin|^2 > fast_ratio * |vmax|^2")
     mirror: bool = param(True, help="exchange weights within a tap pair (ALGORITHMS.md 3.4)")
     bilinear: bool = param(True, help="bilinear colour taps (UE); off: the colour of the texel "

@@ -15,22 +15,35 @@ from .param_widgets import group_widgets
 if TYPE_CHECKING:
     from ..app import App
 
-WIDTH = 320
+MAX_WIDTH = 320              # px, at window widths from 1280
+MIN_WIDTH = 190              # px: narrower and the widgets lose their labels
+WIDTH_FRACTION = 0.25        # of the window width in between
+KEYS_HELP = ("left drag: orbit (fly look: turn); right/middle drag: pan; wheel: zoom; "
+             "WASD QE: fly; space: play/pause; R: reset view; F: fly look; H: panel; "
+             "O: overlay full/compact/off; P or F12: screenshot; V: record; Esc: quit")
 ERROR_COLOUR = imgui.ImVec4(1.0, 0.45, 0.4, 1.0)
 SHUTTER_MAX = 0.25
 VISUALS = ("auto",) + KINDS
 
 
+def panel_width(window_width: int) -> int:
+    """A quarter of the window, within MIN_WIDTH .. MAX_WIDTH (never over a third of a
+    window 570 px or wider)."""
+    return int(min(MAX_WIDTH, max(MIN_WIDTH, round(WIDTH_FRACTION * window_width))))
+
+
 def draw_panel(app: "App") -> tuple[float, float, float, float]:
-    """Draw the panel along the window's left edge; returns its rectangle (x, y, w, h)."""
+    """Draw the panel along the window's left edge (collapsible by its title bar's arrow,
+    hidden by H); returns its rectangle (x, y, w, h)."""
     s = app.state
-    _, height = app.window.size
+    window_width, height = app.window.size
+    width = panel_width(window_width)
     imgui.set_next_window_pos(imgui.ImVec2(0, 0), imgui.Cond_.always)
-    imgui.set_next_window_size(imgui.ImVec2(WIDTH, height), imgui.Cond_.always)
+    imgui.set_next_window_size(imgui.ImVec2(width, height), imgui.Cond_.always)
     imgui.set_next_window_bg_alpha(0.85)
     flags = imgui.WindowFlags_.no_move | imgui.WindowFlags_.no_resize | imgui.WindowFlags_.no_saved_settings
     imgui.begin("hmblur view", None, flags)
-    imgui.push_item_width(-120)
+    imgui.push_item_width(-round(0.375 * width))      # the rest for the labels
     _errors(app)
     _scene(app)
     _mode(app)
@@ -51,6 +64,8 @@ def draw_panel(app: "App") -> tuple[float, float, float, float]:
     imgui.separator()
     if imgui.button("Screenshot (F12 / P)"):
         app.screenshot()
+    if imgui.button("Stop recording (V)" if app.recorder else "Record (V)"):
+        app.toggle_record()
     if s.shots:
         imgui.text_wrapped(f"saved {s.shots[-1]}")
     imgui.pop_item_width()
@@ -169,5 +184,4 @@ def _camera(app):
     else:
         imgui.text_disabled("eye  " + " ".join(f"{x:.2f}" for x in cam.position))
         imgui.text_disabled("look " + " ".join(f"{x:.2f}" for x in cam.look_at))
-    imgui.text_wrapped("left drag: orbit (fly look: turn); right/middle drag: pan; wheel: "
-                       "zoom; WASD QE: fly; space: play; H: panel; Esc: quit")
+    imgui.text_wrapped(KEYS_HELP)

@@ -34,8 +34,11 @@ def widget_kind(f: dataclasses.Field) -> str:
 def tooltip(f: dataclasses.Field) -> str:
     meta = f.metadata
     parts = [meta.get("help") or f.name]
+    unit = f" ({meta['unit']})" if meta.get("unit") else ""
     if meta.get("lo") is not None or meta.get("hi") is not None:
-        parts.append(f"range {meta.get('lo', '-inf')} .. {meta.get('hi', 'inf')}")
+        parts.append(f"range {meta.get('lo', '-inf')} .. {meta.get('hi', 'inf')}{unit}")
+    elif unit:
+        parts.append(f"unit: {meta['unit']}")
     if meta.get("effect", "uniform") != "uniform":
         parts.append(f"a change costs a {meta['effect']}")
     parts.append(f"default {f.default!r}")

@@ -8,13 +8,17 @@ Two spellings of the same thing. Text, one action per line, `#` starts a comment
     40 resize 400x300
     50 orbit 40 -10          # left drag by (dx, dy) pixels from the scene's centre
     60 view depth
+    70 overlay compact
 
 JSON, a list of objects with the frame and one action:
 
     [{"frame": 10, "mode": "reference"}, {"frame": 40, "resize": [400, 300]}]
 
 Actions run at the start of their frame, before input is dispatched. Mouse and key actions
-become input events that go through imgui first, like a person's would.
+become input events that go through imgui first, like a person's would. Every argument is
+checked when the script is read (a bad one is a one-line error, exit 2, before the window
+opens); an action that fails while running (a scene file that does not load) shows in the
+panel, and the run then exits 2 with that line.
 """
 from __future__ import annotations
 
@@ -48,6 +52,7 @@ ACTIONS = {
     "reset": (0, "nothing"),
     "fly": (1, "on or off"),
     "panel": (1, "on or off"),
+    "overlay": (1, "full, compact or off"),
     "subframes": (1, "sub-frames per displayed frame (progressive modes)"),
     "quit": (0, "nothing"),
 }
@@ -64,6 +69,78 @@ class Action:
         raise UserError(f"--script {self.where}: {self.name}: expected {expected}")
 
 
+def _number(a: Action, text: str, what: str = "a number", lo: float | None = None) -> float:
+    from ..cliargs import parse_float
+    try:
+        v = parse_float(a.name, text)
+    except UserError:
+        a.fail(f"{what}, got {text!r}")
+    if lo is not None and v < lo:
+        a.fail(f"{what} >= {lo:g}, got {text!r}")
+    return v
+
+
+def _integer(a: Action, text: str, lo: int) -> int:
+    if not re.fullmatch(r"[+-]?\d+", text) or int(text) < lo:
+        a.fail(f"an integer >= {lo}, got {text!r}")
+    return int(text)
+
+
+def _check_args(a: Action):
+    """The action's arguments, checked as far as they can be before the window opens."""
+    name, args = a.name, a.args
+    if name == "mode":
+        from ..render.modes import MODES
+        if args[0] not in MODES:
+            a.fail(f"one of {', '.join(MODES)}, got {args[0]!r}")
+    elif name == "set":
+        from ..params import ParamSet
+        from ..render import modes  # noqa: F401  (registers every mode's parameter groups)
+        try:
+            ParamSet().apply([args[0]])
+        except UserError as exc:
+            raise UserError(f"--script {a.where}: set {str(exc).removeprefix('--set ')}") from None
+    elif name == "key":
+        import glfw
+        if not isinstance(getattr(glfw, f"KEY_{args[0].upper()}", None), int):
+            a.fail(f"a GLFW key name (P, F12, SPACE, W, ...), got {args[0]!r}")
+    elif name == "resize":
+        from ..cliargs import parse_size
+        try:
+            parse_size(args[0], "resize")
+        except UserError:
+            a.fail(f"WxH with positive integers, got {args[0]!r}")
+    elif name in ("orbit", "pan", "zoom", "time", "speed"):
+        for v in args:
+            _number(a, v)
+    elif name == "shutter":
+        _number(a, args[0], "seconds", lo=0.0)
+    elif name == "drag":
+        if args[0] not in ("left", "right", "middle"):
+            a.fail(f"button left, right or middle, got {args[0]!r}")
+        for v in args[1:]:
+            _number(a, v, "window pixels")
+    elif name == "visual":
+        from ..render.debug_view import KINDS
+        if args[0] not in ("auto",) + KINDS:
+            a.fail(f"auto or one of {', '.join(KINDS)}, got {args[0]!r}")
+    elif name in ("fly", "panel"):
+        if args[0] not in ("on", "off"):
+            a.fail(f"on or off, got {args[0]!r}")
+    elif name == "overlay":
+        if args[0] not in ("full", "compact", "off"):
+            a.fail(f"full, compact or off, got {args[0]!r}")
+    elif name == "seed":
+        _integer(a, args[0], 0)
+    elif name == "subframes":
+        _integer(a, args[0], 1)
+    elif name == "open":
+        from ..scene_loader import builtin_scene_names
+        if not Path(args[0]).is_file() and args[0] not in builtin_scene_names():
+            a.fail(f"a scene file or built-in name ({', '.join(builtin_scene_names())}), "
+                   f"got {args[0]!r}")
+
+
 def _check(action: Action) -> Action:
     if action.name not in ACTIONS:
         raise UserError(f"--script {action.where}: unknown action {action.name!r} "
@@ -71,7 +148,19 @@ def _check(action: Action) -> Action:
     n, what = ACTIONS[action.name]
     if len(action.args) != n:
         action.fail(f"{n} argument(s): {what}")
+    _check_args(action)
     return action
+
+
+def format_help() -> str:
+    """The script format, for `hmblur view --help`."""
+    width = max(len(n) for n in ACTIONS)
+    rows = "\n".join(f"  {n:<{width}}  {what if k else '(no arguments)'}"
+                     for n, (k, what) in ACTIONS.items())
+    return ("--script FILE: one action per line, 'FRAME ACTION [ARGS]' ('#' starts a "
+            "comment), run at the start of frame FRAME (from 0); or a JSON list such as "
+            "[{\"frame\": 10, \"mode\": \"hybrid\"}, {\"frame\": 20, \"resize\": "
+            "[400, 300]}]. Actions and their arguments:\n" + rows)
 
 
 def _frame(value, where: str) -> int:

@@ -28,6 +28,7 @@ class ViewState:
     view: ViewSettings = field(default_factory=ViewSettings)
     sub_frames: int = 2            # progressive sub-frames per displayed frame
     show_panel: bool = True
+    overlay: str = "full"          # overlay level: full, compact or off (ui/overlay.py)
     scene_text: str = ""           # the panel's "open scene" field
     error: str = ""                # shown in the panel until dismissed
     errors: list = field(default_factory=list)   # every distinct error, for --stats-json

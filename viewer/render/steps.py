@@ -1,0 +1,128 @@
+"""Sub-exposure steps (`--set motion.steps=N`), around any real-time mode's pipeline.
+
+The frame at time t with shutter s is rendered as N sub-frames, sub-frame k at the centre
+t_k = t - s/2 + (k + 0.5) s/N of the k-th of N equal parts of the exposure
+(conventions.sample_times), each a whole run of the mode's pipeline on a Frame whose
+shutter is s/N, so that the mode blurs over its part only; the N images are averaged in
+linear light, unclamped (an f4 sum of image_k * (1/N), added in k order by the GPU's
+blending), and the mean is written back into the pipeline's output texture, where every
+reader (the CLI, the viewer, `--buffers`) finds the image as usual. Each linear blur then
+follows one N-th of the path, so motion that bends, turns or speeds up within the
+exposure is followed by N chords instead of one.
+
+N = 1 is the plain frame (no sub-frame, no copy: the image is today's to the bit); a zero
+shutter is too (N sub-frames at one time show the same image). A mode takes steps when it
+lists the "motion" group (viewer/render/modes.py: every mode but `off`, a sharp frame, and
+`reference`, which has its own samples).
+
+Seeds: sub-frame k of a frame with seed S is jittered with seed S * N + k, so the N
+sub-frames' noise differs (glsl/noise.glsl keys every jitter by the seed) and is the same
+on every run; two seeds' sub-frames never share one (S * N .. S * N + N - 1 are disjoint);
+N = 1 keeps S.
+
+What the returned Frame reports: the image's time, shutter and seed; `stats` summed over
+the sub-frames where numeric (masked pixels, rays, tiles drawn, the reveal's ms: the whole
+frame's work), else the last sub-frame's, and `steps` = N; `pass_ms` / `pass_cpu_ms`
+summed per pass over the sub-frames, with the accumulation as pass `motion_steps`; `host`
+the last sub-frame's (its tile lists, masked pixels, ...). The G-buffer and every other
+intermediate texture in the pool hold the last sub-frame's.
+
+State kept across frames (the hybrid's Embree poses, static layer, tile records) is keyed
+by what it was made from (matrices, views, written tiles), never by the frame's time, so
+sub-frames at other times and shutters find it correct: a sub-frame is a frame.
+"""
+from __future__ import annotations
+
+import dataclasses
+import numbers
+from contextlib import AbstractContextManager
+from typing import Callable
+
+from .. import conventions
+from ..params import ParamSet
+from .frame import Frame, PassTimer
+from .modes import MODE_GROUPS
+from .motion_params import MotionParams  # noqa: F401  (registers the "motion" group)
+from .passes import FullscreenPass, Pipeline
+from .pool import TexSpec
+
+GROUP = "motion"
+SUM = "motion_steps_sum"           # the running sum of the sub-frames (f4, unclamped)
+PASS_NAME = "motion_steps"         # the accumulation's entry in pass_ms
+
+
+class Accumulate(FullscreenPass):
+    name = PASS_NAME
+    fragment = "accumulate.frag"       # target += weight * source (with additive blending)
+
+
+_ACC = Accumulate()
+
+
+def step_count(mode: str, params: ParamSet, shutter: float) -> int:
+    """How many sub-frames `mode` renders under `params` for an exposure of `shutter`."""
+    if GROUP not in MODE_GROUPS.get(mode, ()) or shutter == 0:
+        return 1
+    return int(params[GROUP].steps)
+
+
+def step_seed(seed: int, n: int, k: int) -> int:
+    return seed * n + k
+
+
+def sub_exposures(t: float, shutter: float, seed: int, n: int
+                  ) -> list[tuple[float, float, int]]:
+    """(time, shutter, seed) of each of the n sub-frames, in order."""
+    if n == 1:
+        return [(t, shutter, seed)]
+    times = conventions.sample_times(t, shutter, n)
+    return [(float(tk), shutter / n, step_seed(seed, n, k)) for k, tk in enumerate(times)]
+
+
+MakeFrame = Callable[[float, float, int], Frame]      # (time, shutter, seed) -> a new Frame
+Measure = Callable[[Frame, str], AbstractContextManager]
+
+
+def run_steps(make_frame: MakeFrame, pipeline: Pipeline, t: float, shutter: float,
+              seed: int, n: int, measure: Measure = PassTimer) -> Frame:
+    """Render the frame at t as n sub-frames (module doc): `make_frame` makes each
+    sub-frame's Frame, the pipeline runs on it with every pass and the accumulation inside
+    `measure(frame, name)`. Returns the whole frame's Frame."""
+    subs = sub_exposures(t, shutter, seed, n)
+    output = pipeline.output
+    if n == 1:
+        frame = make_frame(*subs[0])
+        frame.pool.discard(SUM)        # (a stepped frame's: not this one's, kept from view)
+        pipeline.run(frame, measure=measure)
+        return frame
+    stats: dict = {}
+    pass_ms: dict = {}
+    pass_cpu_ms: dict = {}
+    weight = 1.0 / n
+    for k, (tk, sk, seed_k) in enumerate(subs):
+        frame = make_frame(tk, sk, seed_k)
+        pipeline.run(frame, measure=measure)
+        with measure(frame, PASS_NAME):
+            if k == 0:
+                frame.pool.texture(SUM, TexSpec(4, "f4"))
+            # The first sub-frame written (0 + x w is x w), the others added by blending.
+            _ACC.draw(frame, (SUM,), {"u_src": output}, {"u_weight": weight}, blend=k > 0)
+            if k == n - 1:
+                _ACC.draw(frame, (output,), {"u_src": SUM}, {"u_weight": 1.0})
+        _add(stats, frame.stats)
+        _add(pass_ms, frame.pass_ms)
+        _add(pass_cpu_ms, frame.pass_cpu_ms)
+    stats["steps"] = n
+    return dataclasses.replace(frame, time=t, shutter=shutter, seed=seed, stats=stats,
+                               pass_ms=pass_ms, pass_cpu_ms=pass_cpu_ms)
+
+
+def _add(total: dict, one: dict):
+    """Numbers summed into `total`; anything else (a label) replaced by the latest."""
+    for key, value in one.items():
+        have = total.get(key)
+        total[key] = have + value if _number(value) and _number(have) else value
+
+
+def _number(x) -> bool:
+    return isinstance(x, numbers.Real) and not isinstance(x, bool)
