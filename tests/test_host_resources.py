@@ -19,6 +19,8 @@ from viewer.scene_loader import load_scene
 
 from conftest import CONFORMANCE
 
+GBUFFER = ("hybrid_front", "normal", "hybrid_path", "hybrid_path2")   # what they read of it
+
 # What each host resource of the hybrid is made by and read by, written from the passes'
 # roles (module docs of tile_lists, hybrid_composite, raymask, reveal_pass).
 HYBRID_HOST = {
@@ -28,7 +30,7 @@ HYBRID_HOST = {
     "edge_probe_tiles": ("ndarray | None", "mask_displacement", "mask_edge_near"),
     "survivor_tiles": ("ndarray | None", "mask_displacement", "ray_mask"),
     "masked_pixels": ("ndarray", "reveal", "hybrid_composite"),
-    "reveal_hits": ("list", "reveal", "reveal_shade"),
+    "reveal_hits": ("LayerHits | None", "reveal", "reveal_shade"),
     "reveal_batch": ("dict", "reveal", "the caller"),
 }
 
@@ -60,13 +62,13 @@ def test_pipeline_rejects_a_host_resource_not_produced_before_its_reader():
     with pytest.raises(ValueError, match=r"pass mask_displacement needs host resources "
                                          r"\['tile_lists'\]"):
         Pipeline("x", [MotionTiles(), SurfaceTests()], output="ray_mask",
-                 produced=("hybrid_front", "normal"))
+                 produced=GBUFFER)
     # Made after its reader is not made before it.
     with pytest.raises(ValueError, match="needs host resources"):
         Pipeline("x", [MotionTiles(), SurfaceTests(), SelectTiles()], output="ray_mask",
-                 produced=("hybrid_front", "normal"))
+                 produced=GBUFFER)
     Pipeline("x", [MotionTiles(), SelectTiles(), SurfaceTests()], output="ray_mask",
-             produced=("hybrid_front", "normal"))
+             produced=GBUFFER)
 
 
 LIST = HostResource("numbers", list, "a test resource")

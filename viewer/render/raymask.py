@@ -39,7 +39,8 @@ from .host import HostResource
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass
 from .pool import TexSpec
-from .tile_lists import FINE, TILE_LISTS, tile_coords, tile_list, tile_strips, within_reach
+from .tile_lists import (FINE, TILE_LISTS, path_textures, segments, tile_coords, tile_list,
+                         tile_strips, within_reach)
 from .tiles import StripSpec
 
 MASK = TexSpec(1, "u1")
@@ -65,7 +66,7 @@ class SurfaceTests(FullscreenPass):
     (the Sobel kernel) on those alone."""
     name = "mask_displacement"
     fragment = "raymask_displacement.frag"
-    inputs = ("hybrid_front", "normal")
+    inputs = ("hybrid_front", "normal", "hybrid_path", "hybrid_path2")
     produces = ("mask_displacement", "mask_relative", "mask_edge", "mask_edge_probe",
                 "mask_survivors_x", "mask_survivors", "ray_mask")
     host_inputs = (TILE_LISTS,)
@@ -73,6 +74,9 @@ class SurfaceTests(FullscreenPass):
 
     def __init__(self):
         self._any = AnyTiles()
+
+    def defines(self, frame: Frame):
+        return {"SEGMENTS": segments(frame)}
 
     def outputs(self, frame: Frame):
         return {"mask_displacement": MASK, "mask_relative": RELATIVE, "mask_edge": MASK,
@@ -95,7 +99,8 @@ class SurfaceTests(FullscreenPass):
             frame.host.put(PROBE_TILES, None)
             frame.host.put(SURVIVOR_TILES, None)
             clear_unwritten(frame, self.produces[:-1] + EdgeIdTiles.produces)
-            return self.draw(frame, ("ray_mask",), {"u_front": "hybrid_front"}, first,
+            return self.draw(frame, ("ray_mask",),
+                             {"u_front": "hybrid_front", **path_textures(frame)}, first,
                              tiles=tiles, defines={"STEP": 3})
         if not reach_test(frame):
             # Where the edge outputs were written (EdgeIdTiles).
@@ -103,10 +108,12 @@ class SurfaceTests(FullscreenPass):
                            else frame.host[TILE_LISTS].surface_tiles)
             frame.host.put(SURVIVOR_TILES, None)
             return self.draw(frame, self.produces[:4],
-                             {"u_front": "hybrid_front", "u_normal": "normal"},
+                             {"u_front": "hybrid_front", "u_normal": "normal",
+                              **path_textures(frame)},
                              {**first, **second}, tiles=tiles, defines={"STEP": 0})
-        self.draw(frame, ("mask_displacement", "mask_relative"), {"u_front": "hybrid_front"},
-                  first, tiles=tiles, defines={"STEP": 1})
+        self.draw(frame, ("mask_displacement", "mask_relative"),
+                  {"u_front": "hybrid_front", **path_textures(frame)}, first, tiles=tiles,
+                  defines={"STEP": 1})
         survivors = self._any.tiles(frame, "mask_displacement", "mask_survivors")
         lists = frame.host[TILE_LISTS]
         tl = lists.extra("survivors")

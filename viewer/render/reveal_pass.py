@@ -13,9 +13,9 @@ shade what they reveal on the GPU exactly as the raster layer is shaded.
       GpuScene uniforms and image): it interpolates the face's
       corners (a texture of every mesh's faces, uploaded once) and shades with the same
       glsl/shading.glsl and glsl/motion.glsl as the G-buffer, into the composite's packed
-      layers hybrid_back (D, depth, 1 + id) and hybrid_back_color (colour, 1), hybrid_back2*
-      for a second layer (a fragment pass, because llvmpipe draws one point per pixel at
-      ~1.5 us; two packed targets, because each target written costs on llvmpipe).
+      layer hybrid_back (D, depth, 1 + id) and hybrid_back_color (colour, 1) (a fragment
+      pass, because llvmpipe draws one point per pixel at ~1.5 us; two packed targets,
+      because each target written costs on llvmpipe).
       Under a still camera, a ray whose hit is the first static surface along its
       primary ray (RayScene.intersect's view) reveals what a raster of the static objects
       alone shows at its pixel: that layer is rendered once per view (static_layer) and
@@ -32,6 +32,7 @@ import numpy as np
 from raytrace import RayScene, kernels
 from raytrace.reveal import primary_view
 
+from ..conventions import flip_row
 from .frame import Frame
 from .gbuffer import GBufferPass
 from .gpu_scene import TEX_KINDS, set_uniform
@@ -43,7 +44,6 @@ from .pool import TexSpec
 from .tile_lists import TileList, clear_outside
 
 PACKED = TexSpec(4, "f4")
-MAX_LAYERS = 2
 STATIC_PREFIX = "static_"     # the static objects' raster: static_color, static_hybrid_front
 
 
@@ -71,9 +71,19 @@ class ObjectTable:
     shininess), (texture kind, size, axis, 0) as glsl/reveal_shade.frag's OBJECT_TABLE
     reads them; OBJECTS_PER_ROW records a texture row (a power of two: the shader finds
     its record with a shift), so any number of objects fits. Image-textured objects have
-    no record (a draw samples one image): they keep their own draw."""
+    no record (a draw samples one image): they keep their own draw. The texel offsets
+    reach the shader as defines (glsl_defines)."""
+    MODEL, OPEN, CLOSE, NORMAL = 0, 4, 8, 12      # first texel of each matrix's columns
+    MATERIAL = 15                                 # three texels of material
     TEXELS = 18
     OBJECTS_PER_ROW = 256
+
+    @classmethod
+    def glsl_defines(cls) -> dict:
+        return {"OBJECT_TEXELS": cls.TEXELS, "OBJECTS_PER_ROW": cls.OBJECTS_PER_ROW,
+                "OBJECT_MODEL": cls.MODEL, "OBJECT_OPEN": cls.OPEN,
+                "OBJECT_CLOSE": cls.CLOSE, "OBJECT_NORMAL": cls.NORMAL,
+                "OBJECT_MATERIAL": cls.MATERIAL}
 
     def __init__(self, ctx: moderngl.Context, scene):
         self.objects = {o.id: o for o in scene.objects}
@@ -82,12 +92,13 @@ class ObjectTable:
         self.data = np.zeros((rows * per_row, self.TEXELS, 4), np.float32)
         for o in scene.objects:
             m, tex = o.material, o.material.texture
-            self.data[o.id, 15] = (*m.albedo, m.specular)
-            self.data[o.id, 16, 3] = m.shininess
-            self.data[o.id, 17, 0] = TEX_KINDS[tex.kind if tex else None]
+            mat = self.MATERIAL
+            self.data[o.id, mat] = (*m.albedo, m.specular)
+            self.data[o.id, mat + 1, 3] = m.shininess
+            self.data[o.id, mat + 2, 0] = TEX_KINDS[tex.kind if tex else None]
             if tex is not None and tex.kind != "image":
-                self.data[o.id, 16, :3] = tex.albedo2
-                self.data[o.id, 17, 1:3] = tex.size, tex.axis
+                self.data[o.id, mat + 1, :3] = tex.albedo2
+                self.data[o.id, mat + 2, 1:3] = tex.size, tex.axis
         self.texture = ctx.texture((self.TEXELS * per_row, rows), 4, dtype="f4")
         self.texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
 
@@ -106,9 +117,10 @@ class ObjectTable:
         mats = [frame.gpu.object_matrices(self.objects[i], frame.camera, frame.time, t_open,
                                           t_close, frame.object_matrices) for i in ids]
         ids = np.asarray(ids, np.int64)
-        for k, m in enumerate(zip(*mats)):     # columns: (model, open, close, normal)
+        starts = (self.MODEL, self.OPEN, self.CLOSE, self.NORMAL)
+        for at, m in zip(starts, zip(*mats)):     # (model, open, close, normal)
             cols = np.asarray(m, np.float32).transpose(0, 2, 1)      # (objects, column, row)
-            self.data[ids, 4 * k:4 * k + cols.shape[1], :cols.shape[2]] = cols
+            self.data[ids, at:at + cols.shape[1], :cols.shape[2]] = cols
         self.texture.write(self.data.tobytes())
 
     def release(self):
@@ -134,14 +146,14 @@ def shade_draws(keys, has_row) -> list[tuple[list[int], int, int]]:
 
 class RevealState:
     """Per-scene host state: the Embree scene (built once), the faces' corners as a GPU
-    texture (uploaded once), the object table, the static layer, the layers' records."""
+    texture (uploaded once), the object table, the static layer, the hit records."""
 
     def __init__(self, ctx: moderngl.Context, scene):
         self.ctx, self.scene = ctx, scene
         self.rays = RayScene(scene)
         self._faces: moderngl.Texture | None = None
-        self.tiles: dict[int, TileList] = {}
-        self.records: dict[int, moderngl.Texture] = {}
+        self.tiles: dict[str, TileList] = {}
+        self.records: moderngl.Texture | None = None
         # Keys above every 1 + object id: the rays whose hit the static layer holds.
         self.static_key = max((o.id for o in scene.objects), default=0) + 2
         self._static_gbuffer = GBufferPass(prefix=STATIC_PREFIX, layout="front",
@@ -180,24 +192,24 @@ class RevealState:
             self._faces.filter = (moderngl.NEAREST, moderngl.NEAREST)
         return self._faces
 
-    def records_texture(self, k: int, shape: tuple[int, int]) -> moderngl.Texture:
-        """Layer k's hit-record texture, at least `shape` (rows, columns); grown in whole
+    def records_texture(self, shape: tuple[int, int]) -> moderngl.Texture:
+        """The hit-record texture, at least `shape` (rows, columns); grown in whole
         powers of two of rows so that it is seldom reallocated."""
-        tex = self.records.get(k)
+        tex = self.records
         h, w = shape
         if tex is None or tex.size[0] < w or tex.size[1] < h:
             if tex is not None:
                 tex.release()
             rows = 1 << max(4, (h - 1).bit_length())
-            tex = self.records[k] = self.ctx.texture((w, rows), 4, dtype="f4")
+            tex = self.records = self.ctx.texture((w, rows), 4, dtype="f4")
             tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
         return tex
 
-    def tile_list(self, k) -> TileList:
-        """Layer k's tile list (or another kept list, by name)."""
-        if k not in self.tiles:
-            self.tiles[k] = TileList(self.ctx)
-        return self.tiles[k]
+    def tile_list(self, name: str = "shade") -> TileList:
+        """The revealed pixels' tile list (or another kept list, by name)."""
+        if name not in self.tiles:
+            self.tiles[name] = TileList(self.ctx)
+        return self.tiles[name]
 
     def release(self):
         if self._faces is not None:
@@ -208,9 +220,10 @@ class RevealState:
             self._table = None
         for tl in self.tiles.values():
             tl.release()
-        for tex in self.records.values():
-            tex.release()
-        self.tiles.clear(), self.records.clear()
+        if self.records is not None:
+            self.records.release()
+            self.records = None
+        self.tiles.clear()
 
 
 @dataclass
@@ -222,12 +235,13 @@ class LayerHits:
     tiles: np.ndarray            # (n, 2) SHADE_TILE tiles (GL orientation) of each key's pixels
 
 
-KEPT_REVEAL = KeptSlot("hybrid_reveal", RevealState, "the reveal's Embree scene, tables, layers")
-# This frame's reveal: the pixels traced (image (i, j)), each layer's hits (LayerHits, or
-# None where nothing was traced), and what `hmblur bench` needs to time bare Embree on the
-# same primary rays (raytrace.bench: rayscene, camera, pixels, own, t).
+KEPT_REVEAL = KeptSlot("hybrid_reveal", RevealState, "the reveal's Embree scene and tables")
+# This frame's reveal: the pixels traced (image (i, j)), their hits (None: nothing traced),
+# and what `hmblur bench` needs to time bare Embree on the same primary rays
+# (raytrace.bench: rayscene, camera, pixels, own, t).
 MASKED_PIXELS = HostResource("masked_pixels", np.ndarray, "(n, 2) image (i, j) traced")
-REVEAL_HITS = HostResource("reveal_hits", list, "per layer: LayerHits or None")
+REVEAL_HITS = HostResource("reveal_hits", LayerHits, "the traced pixels' hit records",
+                           optional=True)
 REVEAL_BATCH = HostResource("reveal_batch", dict, "the primary rays, for hmblur bench")
 
 
@@ -250,7 +264,7 @@ def read_masked_pixels(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
     fbo = frame.pool.framebuffer(("ray_mask",))
     data = fbo.read(viewport=(i0, y0, i1 - i0, y1 - y0), components=1, dtype="u4")
     gl_rows = np.frombuffer(data, np.uint32).reshape(y1 - y0, i1 - i0)
-    return kernels.nonzero_pixels(gl_rows, i0, h - y1)
+    return kernels.nonzero_pixels(gl_rows, i0, flip_row(y1 - 1, h))   # the top row's image row
 
 
 def frame_models(frame: Frame, moving) -> list | None:
@@ -289,7 +303,7 @@ def layer_hits(pixels: np.ndarray, layer, height: int, static_key: int | None = 
 
 
 class RevealTrace(Pass):
-    """Host side: mask read-back, ray casting, and the hit records of every layer."""
+    """Host side: mask read-back, ray casting, and the hits' records."""
     name = "reveal"
     runs_on = "cpu"
     inputs = ("ray_mask",)
@@ -303,12 +317,12 @@ class RevealTrace(Pass):
         t1 = time.perf_counter()
         result = None
         if len(pixels) and p.trace:
-            result = st.rays.reveal(frame.camera, frame.time, pixels, own, layers=p.layers,
+            result = st.rays.reveal(frame.camera, frame.time, pixels, own, layers=1,
                                     max_depth=p.max_depth, threads=p.threads or None,
                                     matrices=frame_models(frame, st.rays.moving))
         t2 = time.perf_counter()
-        hits = [layer_hits(pixels, result.layers[k], frame.size[1], st.static_key)
-                if result else None for k in range(p.layers)]
+        hits = (layer_hits(pixels, result.layers[0], frame.size[1], st.static_key)
+                if result else None)
         t3 = time.perf_counter()
         s = frame.stats
         s["masked_pixels"] = int(len(pixels))
@@ -328,27 +342,21 @@ class RevealTrace(Pass):
                                       "pixels": pixels, "own": own, "t": frame.time})
 
 
-def packed_names(k: int) -> tuple[str, str]:
-    """The composite's packed motion and colour textures of revealed layer k
-    (glsl/hybrid_layers.glsl): hybrid_back, hybrid_back_color; hybrid_back2, ..."""
-    tag = "hybrid_back" if k == 0 else f"hybrid_back{k + 1}"
-    return tag, tag + "_color"
+BACK = ("hybrid_back", "hybrid_back_color")    # glsl/hybrid_layers.glsl's back layer
 
 
 class RevealShade(FullscreenPass):
-    """GPU side: the revealed layers' displacement, depth, id and colour at the masked
-    pixels, packed for the composite (packed_names), everything else cleared to 0,
-    'nothing revealed'. Every layer up to MAX_LAYERS is produced (the deeper ones stay
-    cleared when fewer are traced), so the pipeline's textures do not depend on the
-    `hybrid.layers` setting."""
+    """GPU side: the revealed layer's displacement, depth, id and colour at the masked
+    pixels, packed for the composite (BACK), everything else cleared to 0, 'nothing
+    revealed'."""
     name = "reveal_shade"
     fragment = "reveal_shade.frag"
     host_inputs = (REVEAL_HITS,)
-    produces = tuple(n for k in range(MAX_LAYERS) for n in packed_names(k))
+    produces = BACK
 
     def defines(self, frame: Frame):
-        return {**frame.gpu.light_defines(), "FACES_PER_ROW": FACES_PER_ROW,
-                "OBJECTS_PER_ROW": ObjectTable.OBJECTS_PER_ROW}
+        return {**frame.gpu.light_defines(), **ObjectTable.glsl_defines(),
+                "FACES_PER_ROW": FACES_PER_ROW, "TEXELS_PER_FACE": TEXELS_PER_FACE}
 
     def outputs(self, frame: Frame):
         return {n: PACKED for n in self.produces}
@@ -356,59 +364,57 @@ class RevealShade(FullscreenPass):
     def execute(self, frame: Frame):
         cam, gpu = frame.camera, frame.gpu
         st = reveal_state(frame)
-        layers = frame.host.get(REVEAL_HITS, [])
         t = frame.time
         t_open, t_close = frame.exposure
-        for k in range(MAX_LAYERS):
-            names = packed_names(k)
-            tl = st.tile_list(k)
-            hits = layers[k] if k < len(layers) else None
-            if hits is None:
-                tl.set(np.zeros((0, 2), np.int64), SHADE_TILE, frame.size, BLOCKS_PER_ROW)
-                clear_outside(frame, names, tl)     # last frame's tiles
-                frame.pool.mark_tiles(names, tl)
-                continue
-            # The tiles holding this layer's pixels; each key's draw keeps its own run.
-            # Its draws together write every pixel of them (records: the key's own, 0 "no
-            # ray", -1 another key's), so only last frame's other tiles are cleared.
-            tl.set(hits.tiles, SHADE_TILE, frame.size, BLOCKS_PER_ROW,
-                   cuts=[first for _, first, _ in hits.keys])
-            clear_outside(frame, names, tl)
-            records = st.records_texture(k, hits.records.shape[:2])
-            h, w = hits.records.shape[:2]
-            records.write(hits.records.tobytes(), viewport=(0, 0, w, h))
-            st.face_texture().use(FACE_UNIT)      # draw() binds its textures from unit 0
-            records.use(RECORD_UNIT)
-            objects = {o.id: o for o in frame.scene.objects}
-            if any(key == st.static_key for key, _, _ in hits.keys):
-                colour, front = st.static_layer(frame)
-            table = st.object_table()
-            draws = shade_draws(hits.keys, table.has_row)
-            ids = [k - 1 for k, _, _ in hits.keys if k > 1 and table.has_row(k)]
-            if ids:
-                table.write(frame, ids)
-            table.texture.use(OBJECT_UNIT)
-            for keys, first, count in draws:
-                key = keys[0]
-                static, from_table = key == st.static_key, table.has_row(key)
-                variant = {"STATIC_LAYER": int(static), "OBJECT_TABLE": int(from_table)}
-                textures = {"u_static_front": front, "u_static_color": colour} if static else {}
-                prog = self.program(frame, tl.vertex_shader, variant)   # the draw's, cached
-                set_uniform(prog, "u_hits", RECORD_UNIT)
-                if not static:
-                    gpu.bind_camera(prog, cam, t, frame.size)
-                    set_uniform(prog, "u_background", frame.scene.background)
-                    gpu.bind_lights(prog)
-                    set_uniform(prog, "u_faces", FACE_UNIT)
-                if from_table:
-                    set_uniform(prog, "u_objects", OBJECT_UNIT)
-                elif not static:          # an image-textured object
-                    gpu.bind_object(prog, objects[key - 1], cam, t, t_open, t_close,
-                                    frame.object_matrices)
-                self.draw(frame, names, textures, tiles=tl.part(first, count), clear=False,
-                          defines=variant)
-            frame.stats[f"shade_draws{k}"] = len(draws)
+        names = BACK
+        tl = st.tile_list()
+        hits = frame.host.get(REVEAL_HITS)
+        if hits is None:
+            tl.set(np.zeros((0, 2), np.int64), SHADE_TILE, frame.size, BLOCKS_PER_ROW)
+            clear_outside(frame, names, tl)     # last frame's tiles
             frame.pool.mark_tiles(names, tl)
+            return
+        # The tiles holding the traced pixels; each key's draw keeps its own run. Its
+        # draws together write every pixel of them (records: the key's own, 0 "no ray",
+        # -1 another key's), so only last frame's other tiles are cleared.
+        tl.set(hits.tiles, SHADE_TILE, frame.size, BLOCKS_PER_ROW,
+               cuts=[first for _, first, _ in hits.keys])
+        clear_outside(frame, names, tl)
+        records = st.records_texture(hits.records.shape[:2])
+        h, w = hits.records.shape[:2]
+        records.write(hits.records.tobytes(), viewport=(0, 0, w, h))
+        st.face_texture().use(FACE_UNIT)      # draw() binds its textures from unit 0
+        records.use(RECORD_UNIT)
+        objects = {o.id: o for o in frame.scene.objects}
+        if any(key == st.static_key for key, _, _ in hits.keys):
+            colour, front = st.static_layer(frame)
+        table = st.object_table()
+        draws = shade_draws(hits.keys, table.has_row)
+        ids = [k - 1 for k, _, _ in hits.keys if k > 1 and table.has_row(k)]
+        if ids:
+            table.write(frame, ids)
+        table.texture.use(OBJECT_UNIT)
+        for keys, first, count in draws:
+            key = keys[0]
+            static, from_table = key == st.static_key, table.has_row(key)
+            variant = {"STATIC_LAYER": int(static), "OBJECT_TABLE": int(from_table)}
+            textures = {"u_static_front": front, "u_static_color": colour} if static else {}
+            prog = self.program(frame, tl.vertex_shader, variant)   # the draw's, cached
+            set_uniform(prog, "u_hits", RECORD_UNIT)
+            if not static:
+                gpu.bind_camera(prog, cam, t, frame.size)
+                set_uniform(prog, "u_background", frame.scene.background)
+                gpu.bind_lights(prog)
+                set_uniform(prog, "u_faces", FACE_UNIT)
+            if from_table:
+                set_uniform(prog, "u_objects", OBJECT_UNIT)
+            elif not static:          # an image-textured object
+                gpu.bind_object(prog, objects[key - 1], cam, t, t_open, t_close,
+                                frame.object_matrices)
+            self.draw(frame, names, textures, tiles=tl.part(first, count), clear=False,
+                      defines=variant)
+        frame.stats["shade_draws"] = len(draws)
+        frame.pool.mark_tiles(names, tl)
 
 
 def reveal_passes() -> list:

@@ -32,6 +32,7 @@ import numpy as np
 
 from .blur_common import max_radius_px
 from .frame import Frame
+from .gbuffer import path_targets
 from .host import HostResource
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
@@ -237,13 +238,21 @@ def near_boundary(longest: np.ndarray, boundary: np.ndarray, tile: int) -> np.nd
     return within_reach(boundary, 0.5 * longest.astype(np.float64) + 2.0, tile)
 
 
+# glsl/zero_tiles.frag's target kinds (OUTk; 0: no target at location k).
+OUT_FLOAT, OUT_INT = 1, 2
+
+
 class ZeroTiles(FullscreenPass):
     """Every target of a framebuffer back to 0 over a tile list (glsl/zero_tiles.frag)."""
     fragment = "zero_tiles.frag"
 
+    def defines(self, frame: Frame):
+        return {"OUT_FLOAT": OUT_FLOAT, "OUT_INT": OUT_INT}
+
     def zero(self, frame: Frame, outputs: tuple[str, ...], tiles: TileList):
-        # OUTk: 1 a float target, 2 an integer one (moderngl's u* and i* formats), 0 none.
-        kinds = [2 if frame.pool.spec(n).dtype[0] in "ui" else 1 for n in outputs]
+        # moderngl's u* and i* formats are integer targets; OUTk 0: no target k.
+        kinds = [OUT_INT if frame.pool.spec(n).dtype[0] in "ui" else OUT_FLOAT
+                 for n in outputs]
         self.draw(frame, outputs, {}, {"u_viewport": tuple(float(x) for x in tiles.size)},
                   tiles=tiles, clear=False,            # (a strip's size, not the frame's)
                   defines={f"OUT{k}": kinds[k] if k < len(kinds) else 0 for k in range(4)})
@@ -274,11 +283,31 @@ def tile_coords(selected: np.ndarray) -> np.ndarray:
     return tile_kernels.true_coords(np.ascontiguousarray(selected, np.bool_))
 
 
+def segments(frame: Frame) -> int:
+    """The hybrid's path segments this frame (glsl/path.glsl): hybrid.segments where the
+    G-buffer wrote the path targets (it discards them when it writes none), else 1, the
+    chord alone (passes run on buffers without a path)."""
+    k = int(frame.params["hybrid"].segments)
+    names = frame.pool.names()
+    return k if all(n in names for n in path_targets(k)) else 1
+
+
+PATH_TEXTURES = {"u_path0": "hybrid_path", "u_path1": "hybrid_path2"}
+
+
+def path_textures(frame: Frame, names=PATH_TEXTURES) -> dict[str, str]:
+    """The sampler bindings of the path targets this frame has (none for one segment)."""
+    return dict(list(names.items())[:segments(frame) // 2])
+
+
 class MotionTiles(FullscreenPass):
     name = "motion_tiles"
     fragment = "motion_tiles.frag"
-    inputs = ("hybrid_front",)          # .xy: the displacement D
+    inputs = ("hybrid_front", "hybrid_path", "hybrid_path2")   # D, id; the path
     produces = ("motion_tiles_x", "motion_tiles")
+
+    def defines(self, frame: Frame):
+        return {"SEGMENTS": segments(frame)}
 
     def outputs(self, frame: Frame):
         return {"motion_tiles_x": StripSpec(2, "f4", tile=FINE),
@@ -287,7 +316,8 @@ class MotionTiles(FullscreenPass):
     def execute(self, frame: Frame):
         for stage, src, dst in ((0, "hybrid_front", "motion_tiles_x"),
                                 (1, "motion_tiles_x", "motion_tiles")):
-            self.draw(frame, (dst,), {"u_source": src}, {"u_tile": FINE},
+            paths = path_textures(frame) if stage == 0 else {}
+            self.draw(frame, (dst,), {"u_source": src, **paths}, {"u_tile": FINE},
                       defines={"STAGE": stage})
 
 
