@@ -14,7 +14,7 @@ from viewer.render.raymask import SurfaceTests
 from viewer.render.reference import REGIONS
 from viewer.render.renderer import Renderer
 from viewer.render.reveal_pass import MASKED_PIXELS
-from viewer.render.tile_lists import MotionTiles, SelectTiles
+from viewer.render.tile_lists import MotionTiles, SelectTiles, kept_tile_list
 from viewer.scene_loader import load_scene
 
 from conftest import CONFORMANCE
@@ -155,6 +155,10 @@ def test_renderer_owns_the_kept_state_and_frames_carry_only_declared_results(ctx
         assert calls == [(0, 2), (1, 2)]
         frame = r.frame(0.0, p, record_visibility=True)
         assert frame.kept is r.kept and frame.record_visibility and frame.progress is None
+        # A named list kept across frames is the same list in the next frame.
+        first = kept_tile_list(frame, "test_list")
+        assert kept_tile_list(r.frame(0.1, p), "test_list") is first
+        assert "test_list" in r.kept.names()
     finally:
         r.release()
     assert r.kept.names() == []

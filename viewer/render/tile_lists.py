@@ -189,8 +189,16 @@ class TileLists:
 KEPT_LISTS = KeptSlot("tile_lists", TileLists, "the hybrid's tile lists, reused")
 TILE_LISTS = HostResource("tile_lists", TileLists,
                           "this frame's moving, surface and active tiles (select_tiles)")
-# clear_outside's tiles to zero, kept so that their vertex buffer is reused.
-ZERO_TILES = KeptSlot("zero_tiles", TileList, "the tiles clear_outside zeroes")
+
+
+def kept_tile_list(frame: Frame, name: str) -> TileList:
+    """A TileList kept across frames under `name` (its vertex buffer reused), made the
+    first time (e.g. clear_outside's "zero_tiles")."""
+    slot = KeptSlot(name, TileList)
+    tl = frame.kept.get(slot)
+    if tl is None or tl.ctx is not frame.ctx:
+        tl = frame.kept.put(slot, TileList(frame.ctx))
+    return tl
 
 
 def moving_tiles(longest: np.ndarray, min_speed: float) -> np.ndarray:
@@ -271,9 +279,7 @@ def clear_outside(frame: Frame, outputs: tuple[str, ...], tiles: TileList):
         frame.pool.clear(outputs)
         return
     if stale.any():
-        tl = frame.kept.get(ZERO_TILES)
-        if tl is None or tl.ctx is not frame.ctx:
-            tl = frame.kept.put(ZERO_TILES, TileList(frame.ctx))
+        tl = kept_tile_list(frame, "zero_tiles")
         tl.set(tile_coords(stale), tiles.tile, tiles.size, tile_h=tiles.tile_h)
         _ZERO.zero(frame, outputs, tl)
 
