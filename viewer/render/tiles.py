@@ -56,13 +56,20 @@ class TileMaxPass(FullscreenPass):
 
 
 class NeighborMaxPass(FullscreenPass):
-    """The largest of the 3x3 tile vectors around each tile (centre wins ties)."""
+    """The largest of the 3x3 tile vectors around each tile (centre wins ties);
+    diagonal_toward: a diagonal neighbour only where its vector points toward the tile
+    (Guertin et al. 2014)."""
     fragment = "neighbormax.frag"
 
-    def __init__(self, source: str, output: str, tile=max_radius_px):
+    def __init__(self, source: str, output: str, tile=max_radius_px,
+                 diagonal_toward: bool = False):
         self.name = output
         self.inputs, self.produces = (source,), (output,)
         self.source, self.output, self.tile = source, output, tile
+        self.diagonal_toward = diagonal_toward
+
+    def defines(self, frame: Frame):
+        return {"DIAGONAL_TOWARD": int(self.diagonal_toward)}
 
     def outputs(self, frame: Frame):
         return {self.output: TexSpec(2, "f4", tile=self.tile(frame))}
@@ -71,9 +78,11 @@ class NeighborMaxPass(FullscreenPass):
         self.draw(frame, (self.output,), {"u_tiles": self.source})
 
 
-def tile_passes(source: str, prefix: str, tile=max_radius_px, select_x=None) -> list[Pass]:
+def tile_passes(source: str, prefix: str, tile=max_radius_px, select_x=None,
+                diagonal_toward: bool = False) -> list[Pass]:
     """TileMax x, TileMax y and NeighborMax of `source`, producing PREFIX_tilemax_x,
-    PREFIX_tilemax and PREFIX_neighbormax; select_x: TileMaxPass's `select` for the first."""
+    PREFIX_tilemax and PREFIX_neighbormax; select_x: TileMaxPass's `select` for the first;
+    diagonal_toward: NeighborMaxPass's."""
     return [TileMaxPass(source, f"{prefix}_tilemax_x", "x", tile, select_x),
             TileMaxPass(f"{prefix}_tilemax_x", f"{prefix}_tilemax", "y", tile),
-            NeighborMaxPass(f"{prefix}_tilemax", f"{prefix}_neighbormax", tile)]
+            NeighborMaxPass(f"{prefix}_tilemax", f"{prefix}_neighbormax", tile, diagonal_toward)]
