@@ -292,7 +292,7 @@ def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys):
                            set=[]))
     assert back.params["hybrid"].range_check is True and back.size == (96, 54)
     assert rep["pass_timing"] == "CPU clock + ctx.finish()"      # llvmpipe: not its queries
-    assert set(rep["modes"]) == {"off", "mcguire", "ue4", "hybrid"}
+    assert set(rep["modes"]) == {"off", "mcguire", "ue4", "guertin", "hybrid"}
     for mode, r in rep["modes"].items():
         assert r["frame_ms"] > 0 and r["frame"]["n"] == 2
         assert r["passes"]["gbuffer"] > 0
