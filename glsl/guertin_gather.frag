@@ -67,8 +67,11 @@ void main() {
     for (int i = 0; i < u_samples; ++i) {
         float t = -1.0 + 2.0 * (float(i) + 1.0 + u_eta * j) / float(u_samples + 1);
         vec2 d = (i % 2 == 0) ? wc : wn;
-        float dist = abs(t) * ln;
         ivec2 s = clamp(ivec2(floor(vec2(x) + 0.5 + (t * ln) * d)), ivec2(0), size - 1);
+        // The distance of the pixel read, as in McGuire 2012, not the unrounded |t| |vN|:
+        // a tap 0.5 px out that rounds onto a neighbour would take the cylinder's soft
+        // edge at r = 0.5 and smear still detail.
+        float dist = length(vec2(s - x));
         vec2 vs = texelFetch(u_velocity, s, 0).xy;
         float rs = radius(vs);
         float zs = texelFetch(u_depth, s, 0).x;

@@ -112,7 +112,7 @@ def gather(color, depth, v, nmax, k: int, samples=15, gamma=1.5, kappa=40.0, eta
             ambiguous |= (np.minimum(frac, 1.0 - frac) < 1e-3) & ~still
         sx = np.clip(np.floor(px).astype(int), 0, w - 1)
         sy = np.clip(np.floor(py).astype(int), 0, h - 1)
-        dist = np.abs(t.astype(np.float64)) * ln32
+        dist = np.hypot(sx - xs, sy - ys)        # of the pixel read (see the shader)
         rs = rc[sy, sx]
         zs = zc[sy, sx]
         wa = np.abs((wc * d).sum(-1))

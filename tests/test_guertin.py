@@ -76,25 +76,25 @@ def test_reference_by_hand():
 
 def test_reference_gather_by_hand():
     # 5x1, v = (2, 0) everywhere, N = 2, no jitter: taps t = -1/3, +1/3 along wC = wN =
-    # (1, 0) land on x -+ 1 at distance 2/3; same depth: cone(2/3, 2) = 2/3 twice, and
-    # 2 cyl = 2, all direction weights 1: a = 10/3. Centre weight N / (kappa |vC|) = 1/40.
+    # (1, 0) read x -+ 1, 1 px away; same depth: cone(1, 2) = 1/2 twice, and 2 cyl = 2,
+    # all direction weights 1: a = 3. Centre weight N / (kappa |vC|) = 1/40.
     c = (np.arange(15, dtype=float) ** 2).reshape(1, 5, 3)
     v = np.tile(np.float32([2.0, 0.0]), (1, 5, 1))
     out, amb = ng.gather(c, np.ones((1, 5)), v, v[:, :1], k=5, samples=2, eta=0.0,
                          tile_jitter=0.0)
-    expect = (c[0, 2] / 40 + 10 / 3 * (c[0, 1] + c[0, 3])) / (1 / 40 + 20 / 3)
+    expect = (c[0, 2] / 40 + 3 * (c[0, 1] + c[0, 3])) / (1 / 40 + 6)
     np.testing.assert_allclose(out[0, 2], expect, rtol=1e-6)    # (t in float32)
     assert not amb[0, 2]
     # a still pixel X = 2 under vN = (2, 0): wC = (0, 1), the perpendicular; its centre
-    # weight is 2 / (40 * 0.5) = 1/10. Tap 0 (along wC) clamps back onto X (one row):
-    # both radii are 0.5 < 2/3, so every case is 0. Tap 1 (along wN) lands on x = 3:
-    # in front (same depth), cone(2/3, 2) = 2/3 aligned with wN, X's own terms weigh 0
-    # (wA = 0, cyl(2/3, 0.5) = 0): a = 2/3.
+    # weight is 2 / (40 * 0.5) = 1/10. Tap 0 (along wC) clamps back onto X (one row),
+    # 0 px away: "behind" cone(0, 0.5) = 1 along wC, and 2 cyl(0, 0.5) = 2 (its own
+    # direction weight 0, X's 1): a = 3. Tap 1 (along wN) reads x = 3, 1 px away: in
+    # front (same depth) with cone(1, 2) = 1/2 aligned with wN; X's terms weigh 0
+    # (wA = 0, cyl(1, 0.5) = 0): a = 1/2.
     v[0, 2] = 0.0
     out, _ = ng.gather(c, np.ones((1, 5)), v, np.float32([[[2.0, 0.0]]]), k=5, samples=2,
                        eta=0.0, tile_jitter=0.0)
-    np.testing.assert_allclose(out[0, 2], (c[0, 2] / 10 + 2 / 3 * c[0, 3]) / (1 / 10 + 2 / 3),
-                               rtol=1e-6)
+    np.testing.assert_allclose(out[0, 2], (3.1 * c[0, 2] + 0.5 * c[0, 3]) / 3.6, rtol=1e-6)
 
 
 # ---- the passes against the reference ---------------------------------------------------------
@@ -172,6 +172,23 @@ def test_moving_bar_smears_over_static_background(synthetic_frame):
     assert np.all(bar[9:12] > 0.05) and np.all(bar[20:23] > 0.05)        # outer blur
     np.testing.assert_allclose(out[:, :3], color[:, :3], atol=1e-6)      # out of reach
     assert np.all(out[8, 12:20, 0] > 0.4)                                # still mostly bar
+
+
+def test_still_detail_beside_motion_stays_sharp(synthetic_frame):
+    """Near stripes that do not move, in front of a far plane moving across them: the
+    stripes' taps run along the perpendicular and across the motion, none is in front,
+    and a neighbour pixel is 1 px away, past a still pixel's 0.5 px spread: the stripes
+    keep their exact colour (a tap weighed at its unrounded 0.5 px distance would not)."""
+    w, h = SIZE
+    frame = synthetic_frame(SIZE, params(max_radius=0.25), seed=4)
+    color = np.tile(BACK, (h, w, 1))
+    depth = np.full((h, w), 10.0)
+    disp = np.tile([0.0, 12.0], (h, w, 1))
+    stripes = np.where(np.arange(w) % 2 == 0, 0.9, 0.1)[None, :, None] * np.ones((h, 1, 3))
+    color[:, 8:24], depth[:, 8:24], disp[:, 8:24] = stripes[:, 8:24], 2.0, 0.0
+    upload(frame, color, depth, disp)
+    out = run(frame)
+    np.testing.assert_allclose(out[:, 8:24], color[:, 8:24], atol=1e-6)
 
 
 def test_static_scene_is_unchanged_and_seeds_differ(synthetic_frame):
