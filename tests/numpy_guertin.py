@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 import numpy_mcguire as nm
-from numpy_mcguire import F32, clamp_velocity, cone, cylinder, hash01, radius, tilemax  # noqa: F401
+from numpy_mcguire import F32, cone, cylinder, hash01, radius
 
 
 # ---- NeighborMax with the diagonal rule --------------------------------------------------------
@@ -127,6 +127,4 @@ def gather(color, depth, v, nmax, k: int, samples=15, gamma=1.5, kappa=40.0, eta
 
 
 def guertin(color, depth, displacement, k: int, **kw):
-    """The whole filter from G-buffer colour, depth and full displacement (GL orientation)."""
-    v = clamp_velocity(displacement, k)
-    return gather(color, depth, v, neighbormax(tilemax(v, k)), k, **kw)
+    return nm.whole_filter(gather, neighbormax, color, depth, displacement, k, **kw)

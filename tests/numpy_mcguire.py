@@ -166,7 +166,12 @@ def gather(color, depth, v, nmax, k: int, samples: int = 15, soft_z: float = 0.1
     return out, ambiguous
 
 
-def mcguire(color, depth, displacement, k: int, **kw):
-    """The whole filter from G-buffer colour, depth and full displacement (GL orientation)."""
+def whole_filter(gather, neighbormax, color, depth, displacement, k: int, **kw):
+    """A filter of this family from G-buffer colour, depth and full displacement (GL
+    orientation): the clamped half vector, TileMax, `neighbormax`, then `gather`."""
     v = clamp_velocity(displacement, k)
     return gather(color, depth, v, neighbormax(tilemax(v, k)), k, **kw)
+
+
+def mcguire(color, depth, displacement, k: int, **kw):
+    return whole_filter(gather, neighbormax, color, depth, displacement, k, **kw)

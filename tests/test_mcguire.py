@@ -369,21 +369,28 @@ def test_deterministic_per_seed(synthetic_frame):
 
 # ---- the whole mode --------------------------------------------------------------------------
 
-def test_mode_beats_off_in_outer_blur_on_basic(ctx):
-    from viewer.regions import OUTER
+def render_basic(ctx, modes, size=(160, 90)):
+    """The conformance scene `basic` at its time: the reference (with regions), each of
+    `modes` at seed 1 (linear images) and the description of each mode's pipeline."""
     from viewer.render.renderer import Renderer
     from viewer.scene_loader import load_scene
-    from viewer.metrics import image_metrics
     scene = load_scene(CONFORMANCE / "basic.toml")
-    r = Renderer(ctx, scene, (160, 90))
+    r = Renderer(ctx, scene, size)
     try:
         t = scene.render.time
         ref = r.render("reference", t, record_visibility=True)
-        off = r.render("off", t).image
-        mc = r.render("mcguire", t, seed=1).image
-        names = r.pipeline("mcguire").describe()
+        images = {m: r.render(m, t, seed=1).image for m in modes}
+        names = {m: r.pipeline(m).describe() for m in modes}
     finally:
         r.release()
+    return ref, images, names
+
+
+def test_mode_beats_off_in_outer_blur_on_basic(ctx):
+    from viewer.regions import OUTER
+    from viewer.metrics import image_metrics
+    ref, images, names = render_basic(ctx, ("off", "mcguire"))
+    off, mc = images["off"], images["mcguire"]
     region = ref.host["regions"]
     outer = region == OUTER
     assert outer.sum() > 50
@@ -397,4 +404,4 @@ def test_mode_beats_off_in_outer_blur_on_basic(ctx):
     assert np.abs(mc - off)[static].mean() < 0.003         # static pixels are left alone
     for tex in ("mcguire_velocity", "mcguire_tilemax_x", "mcguire_tilemax",
                 "mcguire_neighbormax", "mcguire"):
-        assert tex in names
+        assert tex in names["mcguire"]
