@@ -213,6 +213,26 @@ MODES = {"guertin": (guertin_passes, "guertin"), "mcguire": (mcguire_passes, "mc
          "ue4": (ue4_passes, "ue4")}
 
 
+@pytest.mark.parametrize("size,tile,reach", [((50, 37), 7, 3), ((64, 32), 16, 5), ((33, 20), 3, 0)])
+def test_within_reach_is_the_pixelwise_rule(size, tile, reach):
+    """A FINE tile is listed exactly when one of its pixels has a moving lookup tile
+    within reach px (the pixel offset on each axis, clamped to the screen)."""
+    from viewer.render.gather_tiles import within_reach
+    w, h = size
+    rng = np.random.default_rng(9)
+    moving = rng.uniform(size=(-(-h // tile), -(-w // tile))) < 0.08
+    fine = 4
+    got = within_reach(moving, tile, size, reach, fine)
+    want = np.zeros(got.shape, bool)
+    for y in range(h):
+        for x in range(w):
+            qy = np.clip(np.arange(y - reach, y + reach + 1), 0, h - 1) // tile
+            qx = np.clip(np.arange(x - reach, x + reach + 1), 0, w - 1) // tile
+            if moving[np.ix_(np.unique(qy), np.unique(qx))].any():
+                want[y // fine, x // fine] = True
+    np.testing.assert_array_equal(got, want)
+
+
 @pytest.mark.parametrize("mode", list(MODES))
 def test_tiled_gather_is_the_full_screen_one(synthetic_frame, mode):
     """Three frames in one pool (state kept: last frame's tiles), a small object moving
@@ -237,11 +257,9 @@ def test_tiled_gather_is_the_full_screen_one(synthetic_frame, mode):
             run(frame, make(tiled=tiled), out)
             got[tiled] = frame.pool.get(out).read()
         assert got[True] == got[False], (mode, x0)
-        stats = frames[True].stats
-        n = next(v for k, v in stats.items() if k.endswith("_gather_tiles"))
-        tiles = np.prod([-(-s // (8 if mode == "ue4" else max_radius_px(frames[True])))
-                         for s in (w, h)])
-        assert (0 < n < tiles) if moving else n == 0
+        tl = next(v for k, v in frames[True].host["state"].items()
+                  if k.startswith("gather_tiles:"))
+        assert (0 < tl.count < -(-w // tl.tile) * -(-h // tl.tile)) if moving else tl.count == 0
 
 
 # ---- the whole mode --------------------------------------------------------------------------

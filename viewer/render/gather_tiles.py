@@ -4,42 +4,65 @@ McGuire 2012, UE4-style and Guertin 2014 each end in a gather that returns the s
 colour wherever the tile it looks up (NeighborMax, or UE4's dilated max) moves by no more
 than its early-out speed. On a software rasteriser every fragment costs even when it
 returns at once, so the gather reads that tile texture back (a few hundred texels), lists
-the tiles whose lookup can pass the early out (grown by one tile where the lookup is
-jittered into a neighbour), and draws only those, as merged rectangles
+the tiles whose lookup can pass the early out (or, where the lookup is jittered, the
+FINE tiles within the jitter's reach of one), and draws only those, as merged rectangles
 (viewer/render/tile_lists.py TileList), over a copy of the sharp colour: every other
 pixel is the colour its early out would have written, so the image is the same to the
 byte as a full-screen draw.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .frame import Frame
-from .tile_kernels import square_max
-from .tile_lists import TileList, tile_coords
+from .tile_lists import FINE, TileList, tile_coords
 
 # Relative margin on the early-out speed: the host's float64 length and the shader's
 # float32 one may round apart; a tile near the threshold is drawn (that changes no pixel).
 MARGIN = 1e-4
 
 
-def moving_lookups(vectors: np.ndarray, early_out_px: float, reach: int) -> np.ndarray:
-    """Tiles (GL rows) holding a pixel whose lookup can pass the early out: the tile's own
-    vector is longer than early_out_px (within MARGIN), or that of a tile up to `reach`
-    tiles away (Chebyshev) that a jittered lookup can land on."""
+def moving_lookups(vectors: np.ndarray, early_out_px: float) -> np.ndarray:
+    """Lookup tiles (GL rows) whose vector is longer than early_out_px (within MARGIN)."""
     v = vectors.astype(np.float64)
-    moving = np.hypot(v[..., 0], v[..., 1]) > early_out_px * (1.0 - MARGIN)
-    return square_max(moving, reach) if reach else moving
+    return np.hypot(v[..., 0], v[..., 1]) > early_out_px * (1.0 - MARGIN)
+
+
+def within_reach(moving: np.ndarray, tile: int, size: tuple[int, int], reach_px: int,
+                 fine: int = FINE) -> np.ndarray:
+    """FINE x FINE tiles (GL rows) holding a pixel that can look up a `moving` tile (tile
+    x tile px) from up to reach_px px away on either axis: a FINE tile's pixels, grown by
+    reach_px and cut at the screen's edge, meet a moving tile (2-D prefix sums)."""
+    w, h = size
+
+    def spans(n_px):
+        p0 = np.arange(-(-n_px // fine)) * fine
+        lo = np.clip(p0 - reach_px, 0, n_px - 1) // tile
+        hi = np.clip(np.minimum(p0 + fine, n_px) - 1 + reach_px, 0, n_px - 1) // tile
+        return lo, hi
+
+    (x0, x1), (y0, y1) = spans(w), spans(h)
+    csum = np.zeros((moving.shape[0] + 1, moving.shape[1] + 1), np.int64)
+    csum[1:, 1:] = moving.cumsum(0).cumsum(1)
+    y0, y1, x0, x1 = y0[:, None], y1[:, None] + 1, x0[None, :], x1[None, :] + 1
+    return csum[y1, x1] - csum[y0, x1] - csum[y1, x0] + csum[y0, x0] > 0
 
 
 def gather_tiles(frame: Frame, source: str, components: slice, tile: int,
-                 early_out_px: float, reach: int) -> TileList | None:
-    """The tiles to draw of a gather that looks `source` (tile x tile px texels) up: its
-    `components` hold the vector the early out tests. None where every tile is drawn
-    (the full-screen triangle then, with no copy of the colour)."""
+                 early_out_px: float, reach_px: int) -> TileList | None:
+    """The tiles to draw of a gather that looks `source` (tile x tile px texels) up, from
+    up to reach_px px away where the lookup is jittered: its `components` hold the
+    vector the early out tests. The lookup's own tiles where reach_px is 0, FINE tiles
+    otherwise (a tile's worth of reach would draw a ring of whole k x k tiles around
+    every moving one). None where every pixel may pass the early out (the full-screen
+    triangle then, with no copy of the colour)."""
     tex = frame.pool.get(source)
     a = np.frombuffer(tex.read(), np.float32).reshape(tex.size[1], tex.size[0], tex.components)
-    moving = moving_lookups(a[..., components], early_out_px, reach)
+    moving = moving_lookups(a[..., components], early_out_px)
+    if reach_px > 0:
+        moving, tile = within_reach(moving, tile, frame.size, reach_px), FINE
     frame.stats[f"{source}_gather_tiles"] = int(moving.sum())
     if moving.all():
         return None
@@ -50,6 +73,12 @@ def gather_tiles(frame: Frame, source: str, components: slice, tile: int,
         tl = state[key] = TileList(frame.ctx)
     tl.set(tile_coords(moving), tile, frame.size)
     return tl
+
+
+def jitter_reach(tile_jitter: float, tile: int) -> int:
+    """Pixels (per axis) a lookup offset by up to tile_jitter tiles can land from its
+    pixel: the offset, rounded up, plus one for the rounding to a pixel."""
+    return int(math.ceil(tile_jitter * tile)) + 1 if tile_jitter > 0.0 else 0
 
 
 def draw_gather(pass_, frame: Frame, output: str, textures: dict, uniforms: dict,

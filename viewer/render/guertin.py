@@ -21,7 +21,7 @@ from __future__ import annotations
 from ..params import group, param
 from .blur_common import max_radius_px
 from .frame import Frame
-from .gather_tiles import draw_gather, gather_tiles
+from .gather_tiles import draw_gather, gather_tiles, jitter_reach
 from .gbuffer import GBufferPass
 from .half_velocity import EARLY_OUT_PX, VelocityPrep
 from .modes import mode
@@ -76,10 +76,8 @@ class Gather(FullscreenPass):
     def execute(self, frame: Frame):
         p = frame.params["guertin"]
         r = max_radius_px(frame)
-        # A jittered lookup lands at most one tile away (offsets up to half a tile).
-        reach = 1 if p.tile_jitter > 0.0 else 0
         tiles = (gather_tiles(frame, "guertin_neighbormax", slice(0, 2), r, EARLY_OUT_PX,
-                              reach) if self.tiled else None)
+                              jitter_reach(p.tile_jitter, r)) if self.tiled else None)
         draw_gather(self, frame, "guertin",
                     {"u_color": "color", "u_depth": "depth", "u_velocity": "guertin_velocity",
                      "u_neighbormax": "guertin_neighbormax"},

@@ -20,7 +20,7 @@ import math
 from ..params import group, param
 from .blur_common import max_radius_px
 from .frame import Frame
-from .gather_tiles import draw_gather, gather_tiles
+from .gather_tiles import draw_gather, gather_tiles, jitter_reach
 from .gbuffer import GBufferPass
 from .modes import mode
 from .passes import FullscreenPass, Pipeline
@@ -135,9 +135,8 @@ class Gather(FullscreenPass):
 
     def execute(self, frame):
         p = frame.params["ue4"]
-        # A jittered lookup lands at most one tile away (offsets up to half a tile).
         tiles = (gather_tiles(frame, "ue4_dilated", slice(2, 4), p.tile, EARLY_OUT_PX,
-                              1 if p.tile_jitter > 0.0 else 0) if self.tiled else None)
+                              jitter_reach(p.tile_jitter, p.tile)) if self.tiled else None)
         draw_gather(self, frame, "ue4",
                     {"u_color": "color", "u_flat": "ue4_flat", "u_tiles": "ue4_dilated"},
                     {"u_tile": p.tile, "u_taps": p.taps, "u_depth_scale": p.depth_scale,
