@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The benchmark set of docs/performance.md: every real-time mode on the built-in and the
-# conformance scenes at 640x360 and 1280x720, JSON into docs/perf/, then the tables.
+# conformance scenes at 640x360 and 1280x720, JSON into docs/perf/, then the tables
+# regenerated in place (scripts/perf_tables.py).
 # About 2-7 minutes on 2 cores. Run after scripts/setup.sh (or `bash scripts/test.sh`).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -27,6 +28,6 @@ for s in living_room spinner thin pan $C/basic.toml $C/vase_pan.toml $B/crowd.to
   $H bench "$s" --size 640x360 --frames 15 --modes mcguire,hybrid --animate 60 \
     --json "$out/${n}_640x360_animated.json"
 done
-.venv/bin/python scripts/perf_tables.py $out/*.json
-echo
-.venv/bin/python scripts/readme_table.py "$out"      # the README's table
+# The tables between the <!-- perf:NAME --> markers of docs/performance.md (and README.md)
+.venv/bin/python scripts/perf_tables.py
+.venv/bin/python scripts/readme_table.py "$out"      # the README's table, printed

@@ -1,38 +1,23 @@
-"""The README's performance table from docs/perf/*.json (scripts/bench_all.sh writes them):
-one row per scene and size, the animated ratio beside the 640x360 rows. Prints Markdown."""
+"""The README's performance table from docs/perf/*.json (scripts/bench_all.sh writes them),
+printed as Markdown: one row per scene and size, the animated ratio beside the 640x360
+rows. `python scripts/perf_tables.py` writes the same table into README.md's
+`<!-- perf:readme -->` block; the table itself is perf_tables.readme_table.
+
+    python scripts/readme_table.py [FOLDER]
+"""
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
-ROWS = [("living_room", "living_room"), ("thin", "thin"), ("basic", "basic (conformance)"),
-        ("spinner", "spinner"), ("vase_pan", "vase_pan (conformance, camera moves)"),
-        ("pan", "pan (camera moves)"), ("crowd", "crowd (32 movers, bench scene)"),
-        ("crowd_pan", "crowd_pan (32 movers, camera moves)")]
+from perf_tables import PERF, load, readme_table
 
 
-def main(folder: str = "docs/perf") -> None:
-    d = Path(folder)
-    print("| scene | size | McGuire ms | UE4-style ms | hybrid ms | hybrid / McGuire "
-          "| animated, 60 fps |")
-    print("|---|---|---:|---:|---:|---:|---:|")
-    for name, label in ROWS:
-        for size in ("640x360", "1280x720"):
-            f = d / f"{name}_{size}.json"
-            if not f.exists():
-                continue
-            r = json.loads(f.read_text())
-            modes = r["modes"]
-
-            def ms(m):
-                return f"{modes[m]['frame_ms']:.1f}" if m in modes else "-"
-            anim = d / f"{name}_{size}_animated.json"
-            a = (f"{json.loads(anim.read_text())['ratios']['hybrid/mcguire']:.2f}"
-                 if anim.exists() else "-")
-            print(f"| {label} | {size} | {ms('mcguire')} | {ms('ue4')} | {ms('hybrid')} "
-                  f"| {r['ratios']['hybrid/mcguire']:.2f} | {a} |")
+def main(folder: str | None = None) -> int:
+    paths = sorted(Path(folder).glob("*.json")) if folder else sorted(PERF.glob("*.json"))
+    print(readme_table(load(paths)))
+    return 0
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:])
+    sys.exit(main(*sys.argv[1:]))

@@ -96,10 +96,13 @@ class Pipeline:
         if output not in have:
             raise ValueError(f"pipeline {mode}: output {output} is not produced")
 
-    def run(self, frame: Frame):
-        for p in self.passes:
+    def run(self, frame: Frame, measure=PassTimer, start: int = 0, stop: int | None = None):
+        """The one executor: allocate each pass's outputs, then run it inside
+        `measure(frame, name)` (a context manager that times it: PassTimer by default,
+        timing.PassClock.measure for GL timer queries), passes [start, stop) only."""
+        for p in self.passes[start:stop]:
             p.allocate(frame)
-            with PassTimer(frame, p.name):
+            with measure(frame, p.name):
                 p.execute(frame)
 
     def describe(self) -> str:

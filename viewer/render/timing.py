@@ -60,10 +60,7 @@ class PassClock:
         frame = self.frame(renderer, t, params, seed)
         frame.host["record_visibility"] = False
         try:
-            for p in renderer.pipeline(mode).passes:   # Pipeline.run, with our clock
-                p.allocate(frame)
-                with self.measure(frame, p.name):
-                    p.execute(frame)
+            renderer.pipeline(mode).run(frame, measure=self.measure)
         finally:
             frame.host.pop("state", None)
         return frame

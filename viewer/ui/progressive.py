@@ -49,10 +49,7 @@ class Progressive:
         try:
             if key != self.key:
                 self.key, self.done = None, 0
-                for p in pipe.passes[:index]:        # e.g. the frame-time G-buffer, once
-                    p.allocate(frame)
-                    with clock.measure(frame, p.name):
-                        p.execute(frame)
+                pipe.run(frame, clock.measure, stop=index)   # e.g. the frame-time G-buffer, once
                 with clock.measure(frame, acc.name):
                     acc.start(frame)
                 self.key = key
@@ -60,10 +57,7 @@ class Progressive:
             if self.done < self.total:
                 with clock.measure(frame, acc.name):
                     self.done = acc.accumulate(frame, self.done, per_frame)
-            for p in pipe.passes[index + 1:]:
-                p.allocate(frame)
-                with clock.measure(frame, p.name):
-                    p.execute(frame)
+            pipe.run(frame, clock.measure, start=index + 1)
         finally:
             frame.host.pop("state", None)
         frame.stats.update(sub_frames=f"{self.done}/{self.total}")
