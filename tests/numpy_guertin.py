@@ -15,25 +15,14 @@ from numpy_mcguire import F32, cone, cylinder, hash01, radius
 
 # ---- NeighborMax with the diagonal rule --------------------------------------------------------
 
+def toward_centre(dx: int, dy: int, v: np.ndarray) -> bool:
+    """A diagonal neighbour at offset o = (dx, dy) counts only where dot(v, -o) > 0."""
+    return not (dx and dy) or -(v[0] * F32(dx) + v[1] * F32(dy)) > 0
+
+
 def neighbormax(tiles: np.ndarray) -> np.ndarray:
-    """Largest of the 3x3 tiles around each tile (the centre first: it wins ties); a
-    diagonal neighbour at offset o only where its vector v has dot(v, -o) > 0."""
-    th, tw = tiles.shape[:2]
-    out = np.zeros_like(tiles, dtype=F32)
-    for ty in range(th):
-        for tx in range(tw):
-            cand = [tiles[ty, tx]]
-            for dy in (-1, 0, 1):
-                for dx in (-1, 0, 1):
-                    y, x = ty + dy, tx + dx
-                    if not (0 <= y < th and 0 <= x < tw):
-                        continue
-                    v = tiles[y, x].astype(F32)
-                    if dx and dy and -(v[0] * F32(dx) + v[1] * F32(dy)) <= 0:
-                        continue
-                    cand.append(v)
-            out[ty, tx] = nm._longest(np.array(cand))
-    return out
+    """McGuire's NeighborMax with the diagonal rule."""
+    return nm.neighbormax(tiles, toward_centre)
 
 
 # ---- reconstruction ---------------------------------------------------------------------------
@@ -70,12 +59,8 @@ def lookup_tiles(xs, ys, w, h, k, tile_jitter, seed, streams):
     px = xs.astype(F32) + F32(0.5) + off[0].astype(F32)
     py = ys.astype(F32) + F32(0.5) + off[1].astype(F32)
     amb = np.zeros(xs.shape, bool)
-    for p in (px, py):
-        frac = p.astype(np.float64) - np.floor(p)
-        amb |= np.minimum(frac, 1.0 - frac) < 1e-4
-    qx = np.clip(np.floor(px).astype(int), 0, w - 1)
-    qy = np.clip(np.floor(py).astype(int), 0, h - 1)
-    return qx // k, qy // k, amb & (tile_jitter > 0)
+    qx, qy = nm.tap_pixel(px, py, w, h, amb, np.bool_(tile_jitter > 0), margin=1e-4)
+    return qx // k, qy // k, amb
 
 
 def gather(color, depth, v, nmax, k: int, samples=15, gamma=1.5, kappa=40.0, eta=0.95,
@@ -107,11 +92,7 @@ def gather(color, depth, v, nmax, k: int, samples=15, gamma=1.5, kappa=40.0, eta
         step = (t * ln32).astype(F32)
         px = xs.astype(F32) + F32(0.5) + step * d32[..., 0]
         py = ys.astype(F32) + F32(0.5) + step * d32[..., 1]
-        for p in (px, py):
-            frac = p.astype(np.float64) - np.floor(p)
-            ambiguous |= (np.minimum(frac, 1.0 - frac) < 1e-3) & ~still
-        sx = np.clip(np.floor(px).astype(int), 0, w - 1)
-        sy = np.clip(np.floor(py).astype(int), 0, h - 1)
+        sx, sy = nm.tap_pixel(px, py, w, h, ambiguous, ~still)
         dist = np.hypot(sx - xs, sy - ys)        # of the pixel read (see the shader)
         rs = rc[sy, sx]
         zs = zc[sy, sx]

@@ -12,8 +12,9 @@ import pytest
 
 import numpy_guertin as ng
 import numpy_mcguire as nm
-from test_mcguire import download, random_velocities, render_basic, two_layer_scene, upload
-from viewer.params import ParamSet
+from test_mcguire import (assert_still_scene_unchanged, download, images_per_seed,
+                          random_velocities, render_basic, two_layer_scene, upload)
+from test_mcguire import params as mcguire_params
 from viewer.render.blur_common import max_radius_px
 from viewer.render.guertin import EARLY_OUT_PX, TAP_STREAM, TILE_STREAM_X, TILE_STREAM_Y, \
     guertin_passes
@@ -25,12 +26,7 @@ STREAMS = (TAP_STREAM, TILE_STREAM_X, TILE_STREAM_Y)
 
 
 def params(max_radius=None, group="guertin", **kw):
-    p = ParamSet()
-    if max_radius is not None:
-        p.set("blur.max_radius", max_radius)
-    for key, value in kw.items():
-        p.set(f"{group}.{key}", value)
-    return p
+    return mcguire_params(max_radius, group, **kw)
 
 
 def run(frame, passes=None, output="guertin"):
@@ -191,19 +187,8 @@ def test_still_detail_beside_motion_stays_sharp(synthetic_frame):
 
 
 def test_static_scene_is_unchanged_and_seeds_differ(synthetic_frame):
-    rng = np.random.default_rng(6)
-    w, h = SIZE
-    frame = synthetic_frame(SIZE, params())
-    color = rng.uniform(0, 4, (h, w, 3))
-    upload(frame, color, rng.uniform(1, 20, (h, w)), np.zeros((h, w, 2)))
-    np.testing.assert_array_equal(run(frame).astype(np.float32), color.astype(np.float32))
-    color, depth, disp = two_layer_scene(rng, h, w)
-    images = []
-    for seed in (5, 5, 6):
-        frame = synthetic_frame(SIZE, params(max_radius=0.25), seed=seed)
-        upload(frame, color, depth, disp)
-        run(frame)
-        images.append(frame.pool.get("guertin").read())
+    assert_still_scene_unchanged(synthetic_frame, params(), run)
+    images = images_per_seed(synthetic_frame, params(max_radius=0.25), run, "guertin")
     assert images[0] == images[1] and images[0] != images[2]
 
 
