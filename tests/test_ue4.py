@@ -19,7 +19,7 @@ from viewer.render.gbuffer import GBUFFER
 from viewer.render.pool import TexSpec
 from viewer.render.blur_common import max_radius_px
 from viewer.render.ue4 import Dilate, Flatten, Gather, TileMinMax, dilation_reach, tile_spec
-from viewer.render.reference import REGIONS  # (after a mode module: the modes' order)
+from viewer.render.reference import REGIONS
 
 
 def make_params(**ue4) -> ParamSet:

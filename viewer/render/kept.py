@@ -41,6 +41,9 @@ class KeptState:
     def names(self) -> list[str]:
         return [s.name for s in self._values]
 
+    def items(self) -> list[tuple[str, object]]:
+        return [(s.name, v) for s, v in self._values.items()]
+
     def release(self):
         for value in self._values.values():
             if hasattr(value, "release"):

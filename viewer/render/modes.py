@@ -20,8 +20,17 @@ def mode(name: str, groups: tuple[str, ...] = (), steps: bool = True):
     def register(builder):
         MODES[name] = builder
         MODE_GROUPS[name] = tuple(groups) + (("motion",) if steps else ())
+        # Listed (CLI, panel, compare) in ORDER, whichever mode module is imported first.
+        rank = {n: k for k, n in enumerate(ORDER)}
+        for table in (MODES, MODE_GROUPS):
+            items = sorted(table.items(), key=lambda kv: rank.get(kv[0], len(rank)))
+            table.clear()
+            table.update(items)
         return builder
     return register
+
+
+ORDER = ("off", "reference", "mcguire", "ue4", "guertin", "hybrid")
 
 
 @mode("off", steps=False)
@@ -33,4 +42,6 @@ def _off() -> Pipeline:
 from . import reference  # noqa: E402,F401
 from . import mcguire  # noqa: E402,F401
 from . import ue4  # noqa: E402,F401
+from . import guertin  # noqa: E402,F401
 from . import hybrid  # noqa: E402,F401
+
