@@ -17,7 +17,7 @@ from .blur_common import max_radius_px
 from .frame import Frame
 from .gather_tiles import draw_gather, gather_tiles
 from .gbuffer import GBufferPass, segments_in, segments_param
-from .half_velocity import EARLY_OUT_PX, VelocityPrep
+from .half_velocity import EARLY_OUT_PX, GBUFFER_PATHS, VelocityPrep, path_bindings
 from .modes import mode
 from .passes import FullscreenPass, Pipeline
 from .pool import TexSpec
@@ -45,20 +45,6 @@ class McGuireParams:
 
 
 segments = segments_in("mcguire")
-# The G-buffer's path targets, and the NeighborMax winner's path as the gather reads them.
-GBUFFER_PATHS = ("hybrid_path", "hybrid_path2")
-
-
-def path_bindings(frame: Frame, tile_source: str) -> dict[str, str]:
-    """The gather's path samplers for this frame's segments (none for one): the pixel's and
-    the taps' paths, and the NeighborMax winner's (TILE_SOURCE_path, _path2)."""
-    n = segments(frame) // 2
-    names = {"u_path0": GBUFFER_PATHS[0], "u_path1": GBUFFER_PATHS[1],
-             "u_tile_path0": tile_source + "_path", "u_tile_path1": tile_source + "_path2"}
-    return {key: names[key] for key in ("u_path0", "u_tile_path0", "u_path1", "u_tile_path1")
-            [:2 * n]}
-
-
 class Gather(FullscreenPass):
     """The reconstruction; tiled: drawn only on the tiles whose NeighborMax passes the
     early out (viewer/render/gather_tiles.py), the same image."""
@@ -81,7 +67,7 @@ class Gather(FullscreenPass):
     def execute(self, frame: Frame):
         p = frame.params["mcguire"]
         k = max_radius_px(frame)
-        paths = path_bindings(frame, "mcguire_neighbormax")
+        paths = path_bindings(frame, "mcguire_neighbormax", segments)
         tile_paths = tuple(v for key, v in paths.items() if key.startswith("u_tile_"))
         tiles = (gather_tiles(frame, "mcguire_neighbormax", slice(0, 2), k, EARLY_OUT_PX, 0,
                               tile_paths) if self.tiled else None)
