@@ -17,8 +17,9 @@
 // X - oN(u), its direction the piece's, its weights from the distance |u| K |piece| and
 // the tap's and X's own pieces of that segment; the centre-direction taps of a pixel whose
 // wC is its own direction walk its own path the same way (scaled to the neighbourhood's
-// reach), those of slower pixels stay straight along wC (wN: the path's chord direction). The early out and the tap reach take the
-// path's half extent, X's centre weight the half extent of its own path.
+// reach), those of slower pixels stay straight along wC (wN: glsl/path.glsl
+// path_direction). The early out and the tap reach take the path's half extent, X's
+// centre weight the half extent of its own path.
 #include "noise.glsl"
 #if SEGMENTS > 1
 #define PATH_READ
@@ -73,10 +74,7 @@ void main() {
     ln = min(ln, limit);
     front_path_raw(x, ox);
     clamp_path(ox, 2.0 * limit);
-    // The chord's direction; a path that comes back (chord 0) takes its first piece's.
-    vec2 wn = direction(on[SEGMENTS] - on[0]);
-    if (wn == vec2(0.0)) wn = direction(on[SEGMENTS / 2 + 1] - on[SEGMENTS / 2 - 1]);
-    if (wn == vec2(0.0)) wn = vec2(1.0, 0.0);
+    vec2 wn = path_direction(on);      // (not 0: the path's extent passed the early out)
     vec2 vc = texelFetch(u_velocity, x, 0).xy;
     float rc = clamp(0.5 * path_extent(ox), 0.5, limit);
 #else

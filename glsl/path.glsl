@@ -84,6 +84,16 @@ float piece_radius(vec2 o[PATH_POINTS], int s, float limit) {
     return clamp(0.5 * float(SEGMENTS) * length(o[s + 1] - o[s]), 0.5, limit);
 }
 
+// The path's dominant direction: its chord's, or where it comes back to its start (chord
+// 0) its farthest point's; 0 for a still path.
+vec2 path_direction(vec2 o[PATH_POINTS]) {
+    vec2 c = o[SEGMENTS] - o[0];
+    if (c != vec2(0.0)) return normalize(c);
+    vec2 far = vec2(0.0);
+    for (int k = 0; k < PATH_POINTS; ++k) if (dot(o[k], o[k]) > dot(far, far)) far = o[k];
+    return far != vec2(0.0) ? normalize(far) : vec2(0.0);
+}
+
 // The gathers' neighbourhood path: the NeighborMax winner's, in u_tile_path0/1.
 #ifdef PATH_TILES_READ
 uniform sampler2D u_tile_path0;

@@ -172,7 +172,7 @@ def render(ctx, scene, mode, settings, size=(64, 36), seed=0):
         r.release()
 
 
-@pytest.mark.parametrize("mode", ["mcguire", "guertin"])
+@pytest.mark.parametrize("mode", ["mcguire", "guertin", "ue4"])
 def test_one_segment_is_the_default_and_writes_no_path(ctx, mode):
     scene = load_scene(CONFORMANCE / "keys_arc.toml")
     assert ParamSet()[mode].segments == 1
@@ -182,11 +182,15 @@ def test_one_segment_is_the_default_and_writes_no_path(ctx, mode):
                               render(ctx, scene, mode, {f"{mode}.segments": 2}))
 
 
-@pytest.mark.parametrize("mode", ["mcguire", "guertin"])
+# K = 2 against K = 1, bounds over what was measured: mcguire 0.54x, guertin 0.58x, ue4 0.85x.
+BOUND = {"mcguire": 0.7, "guertin": 0.7, "ue4": 0.92}
+
+
+@pytest.mark.parametrize("mode", ["mcguire", "guertin", "ue4"])
 def test_rotation_is_closer_to_the_reference_with_two_segments(ctx, mode):
     """The rolling wheel (its rim turns through a bent path) at 64x36."""
     scene = load_scene(Path(__file__).resolve().parents[1] / "scenes" / "wheel.toml")
     ref = render(ctx, scene, "reference", {"reference.samples": 32})
     err = {k: ((render(ctx, scene, mode, {f"{mode}.segments": k}) - ref) ** 2).mean()
            for k in (1, 2)}
-    assert err[2] < 0.8 * err[1], err        # measured: mcguire 0.54x, guertin 0.58x
+    assert err[2] < BOUND[mode] * err[1], err
