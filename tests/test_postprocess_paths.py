@@ -194,3 +194,36 @@ def test_rotation_is_closer_to_the_reference_with_two_segments(ctx, mode):
     err = {k: ((render(ctx, scene, mode, {f"{mode}.segments": k}) - ref) ** 2).mean()
            for k in (1, 2)}
     assert err[2] < BOUND[mode] * err[1], err
+
+
+def test_ue4_straight_path_is_the_linear_filter(synthetic_frame):
+    """Straight uniform paths (o_k = (k/K - 1/2) D): the UE4-style passes with two
+    segments reproduce the linear filter (taps, spreads and tiles are the same numbers)."""
+    from viewer.render.ue4 import ue4_passes
+    rng = np.random.default_rng(5)
+    w, h = SIZE
+    color = rng.uniform(0, 1, (h, w, 3))
+    depth = np.full((h, w), 8.0)
+    disp = np.tile(np.array([1.5, -0.75]), (h, w, 1))
+    depth[4:11, 9:20] = 2.0
+    disp[4:11, 9:20] = [7.25, 3.0]
+    out = {}
+    for k in (1, 2):
+        p = ParamSet()
+        p.set("ue4.segments", k)
+        p.set("ue4.tile", 8)
+        frame = synthetic_frame(SIZE, p, seed=3)
+        upload(frame, "color", np.concatenate([color, np.ones((h, w, 1))], axis=2),
+               GBUFFER["color"])
+        upload(frame, "depth", depth, GBUFFER["depth"])
+        upload(frame, "velocity", disp, GBUFFER["velocity"])
+        if k == 2:
+            upload(frame, "hybrid_path", pack(np.stack([-0.5 * disp, 0 * disp, 0.5 * disp], -2)),
+                   GBUFFER["hybrid_path"])
+        for ps in ue4_passes():
+            ps.allocate(frame)
+            ps.execute(frame)
+        out[k] = to_image(frame.read("ue4"))[..., :3].astype(np.float64)
+    assert np.abs(out[1] - color).max() > 0.05
+    close = np.isclose(out[2], out[1], rtol=1e-4, atol=1e-5).all(-1)
+    assert close.mean() > 0.98, close.mean()   # (a tap on a pixel edge may round the other way)
