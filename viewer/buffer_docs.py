@@ -28,7 +28,8 @@ BUFFERS = {
     "mcguire_tilemax": "TileMax: the largest half-velocity per k x k tile, px",
     "mcguire_neighbormax": "NeighborMax: the largest TileMax over the 3x3 tiles around, px",
     "mcguire": "McGuire 2012 output, linear RGB (A = 1)",
-    "guertin_velocity": "Guertin 2014 velocity: half of D clamped to [0.5 px, the blur limit], px",
+    "guertin_velocity": "Guertin 2014 velocity: half of D clamped to [0.5 px, the blur "
+                        "limit], px",
     "guertin_tilemax_x": "TileMax first step (k x 1 per row): largest half-velocity, px",
     "guertin_tilemax": "TileMax: the largest half-velocity per k x k tile, px",
     "guertin_neighbormax": "NeighborMax over the 3x3 tiles around, a diagonal tile only "
