@@ -12,7 +12,20 @@
 //    velocity whose spread it uses;
 //  - the centre weight is N / (kappa |vC|), so a fast thin object does not turn opaque;
 //  - the depth compare is relative to the nearer depth instead of a fixed extent.
+// With a path (SEGMENTS > 1, glsl/path.glsl), the neighbourhood taps follow the
+// NeighborMax winner's path as in glsl/mcguire_gather.frag: tap t at time u = -t/2, at
+// X - oN(u), its direction the piece's, its weights from the distance |u| K |piece| and
+// the tap's and X's own pieces of that segment; the centre-direction taps of a pixel whose
+// wC is its own direction walk its own path the same way (scaled to the neighbourhood's
+// reach), those of slower pixels stay straight along wC (wN: glsl/path.glsl
+// path_direction). The early out and the tap reach take the path's half extent, X's
+// centre weight the half extent of its own path.
 #include "noise.glsl"
+#if SEGMENTS > 1
+#define PATH_READ
+#define PATH_TILES_READ
+#include "path.glsl"
+#endif
 uniform sampler2D u_color;
 uniform sampler2D u_depth;
 uniform sampler2D u_velocity;      // half vectors, clamped to [0.5, r] px (or zero)
@@ -48,6 +61,23 @@ void main() {
     vec2 offset = u_tile_jitter * float(u_tile) *
                   (2.0 * vec2(hash01(x, TILE_STREAM_X), hash01(x, TILE_STREAM_Y)) - 1.0);
     ivec2 q = clamp(ivec2(floor(vec2(x) + 0.5 + offset)), ivec2(0), size - 1);
+#if SEGMENTS > 1
+    vec2 on[PATH_POINTS], ox[PATH_POINTS], os[PATH_POINTS];
+    tile_path(q / u_tile, on);
+    float ln = 0.5 * path_extent(on);
+    if (ln <= EARLY_OUT_PX) {
+        out_color = cx;
+        return;
+    }
+    float limit = float(u_tile);
+    clamp_path(on, 2.0 * limit);
+    ln = min(ln, limit);
+    front_path_raw(x, ox);
+    clamp_path(ox, 2.0 * limit);
+    vec2 wn = path_direction(on);      // (not 0: the path's extent passed the early out)
+    vec2 vc = texelFetch(u_velocity, x, 0).xy;
+    float rc = clamp(0.5 * path_extent(ox), 0.5, limit);
+#else
     vec2 vn = texelFetch(u_neighbormax, q / u_tile, 0).xy;
     float ln = length(vn);
     if (ln <= EARLY_OUT_PX) {          // nothing in reach moves: keep the pixel
@@ -57,10 +87,18 @@ void main() {
     vec2 wn = vn / ln;
     vec2 vc = texelFetch(u_velocity, x, 0).xy;
     float rc = radius(vc);
+#endif
     float zc = texelFetch(u_depth, x, 0).x;
     vec2 wp = vec2(-wn.y, wn.x);
     if (dot(wp, vc) < 0.0) wp = -wp;
-    vec2 wc = normalize(mix(wp, direction(vc), clamp((length(vc) - 0.5) / u_gamma, 0.0, 1.0)));
+    float own = clamp((length(vc) - 0.5) / u_gamma, 0.0, 1.0);
+    vec2 wc = normalize(mix(wp, direction(vc), own));
+#if SEGMENTS > 1
+    // A pixel fast enough that wC is its own direction walks its own path instead,
+    // scaled to the neighbourhood's reach ln (X - oX(u) ln / hX: X + t ln wC when straight).
+    float hx = 0.5 * path_extent(ox);
+    bool own_path = own >= 1.0 && hx > 0.0;
+#endif
     float total = float(u_samples) / (u_kappa * rc);
     vec3 sum = total * cx.rgb;
     float j = 2.0 * hash01(x, TAP_STREAM) - 1.0;
@@ -74,12 +112,31 @@ void main() {
         float dist = length(vec2(s - x));
         vec2 vs = texelFetch(u_velocity, s, 0).xy;
         float rs = radius(vs);
+        float rcs = rc;
+        vec2 ws = direction(vs);
+#if SEGMENTS > 1
+        if (i % 2 == 1 || own_path) {  // along the neighbourhood's or the pixel's path
+            float u = -0.5 * t;
+            int k = path_segment(u);
+            float scale = i % 2 == 1 ? 1.0 : ln / hx;
+            vec2 piece = (i % 2 == 1 ? on[k + 1] - on[k] : ox[k + 1] - ox[k]) * scale;
+            vec2 at = (i % 2 == 1 ? path_at(on, u) : path_at(ox, u)) * scale;
+            d = direction(piece);
+            s = clamp(ivec2(floor(vec2(x) + 0.5 - at)), ivec2(0), size - 1);
+            dist = abs(u) * float(SEGMENTS) * length(piece);
+            front_path_raw(s, os);
+            clamp_path(os, 2.0 * limit);
+            rs = piece_radius(os, k, limit);
+            rcs = piece_radius(ox, k, limit);
+            ws = direction(os[k + 1] - os[k]);
+        }
+#endif
         float zs = texelFetch(u_depth, s, 0).x;
         float wa = abs(dot(wc, d));
-        float wb = abs(dot(direction(vs), d));
+        float wb = abs(dot(ws, d));
         float a = front(zs, zc) * cone(dist, rs) * wb           // S in front of X
-                + front(zc, zs) * cone(dist, rc) * wa           // S behind a blurry X
-                + 2.0 * cylinder(dist, min(rs, rc)) * max(wa, wb);
+                + front(zc, zs) * cone(dist, rcs) * wa          // S behind a blurry X
+                + 2.0 * cylinder(dist, min(rs, rcs)) * max(wa, wb);
         total += a;
         sum += a * texelFetch(u_color, s, 0).rgb;
     }

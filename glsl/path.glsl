@@ -64,4 +64,42 @@ void clamp_path(inout vec2 o[PATH_POINTS], float limit) {
         for (int k = 0; k < PATH_POINTS; ++k) o[k] *= s;
     }
 }
+
+// Read a path from one or two path targets whichever SEGMENTS is (the second unnamed at 2).
+#if SEGMENTS == 2
+#define READ_PATH(t0, t1, p, o) read_path(t0, p, o)
+#else
+#define READ_PATH(t0, t1, p, o) read_path(t0, t1, p, o)
+#endif
+
+// The segment (0..K-1) holding time u in [-1/2, 1/2] of the exposure.
+int path_segment(float u) {
+    return min(int(clamp((u + 0.5) * float(SEGMENTS), 0.0, float(SEGMENTS))), SEGMENTS - 1);
+}
+
+// The half vector a linear motion at segment s's speed would have over the whole
+// exposure (K |o[s+1] - o[s]| / 2), clamped to [0.5, limit] px as the gathers clamp theirs:
+// the per-segment radius of the post-process gathers' weights.
+float piece_radius(vec2 o[PATH_POINTS], int s, float limit) {
+    return clamp(0.5 * float(SEGMENTS) * length(o[s + 1] - o[s]), 0.5, limit);
+}
+
+// The path's dominant direction: its chord's, or where it comes back to its start (chord
+// 0) its farthest point's; 0 for a still path.
+vec2 path_direction(vec2 o[PATH_POINTS]) {
+    vec2 c = o[SEGMENTS] - o[0];
+    if (c != vec2(0.0)) return normalize(c);
+    vec2 far = vec2(0.0);
+    for (int k = 0; k < PATH_POINTS; ++k) if (dot(o[k], o[k]) > dot(far, far)) far = o[k];
+    return far != vec2(0.0) ? normalize(far) : vec2(0.0);
+}
+
+// The gathers' neighbourhood path: the NeighborMax winner's, in u_tile_path0/1.
+#ifdef PATH_TILES_READ
+uniform sampler2D u_tile_path0;
+#if SEGMENTS == 4
+uniform sampler2D u_tile_path1;
+#endif
+void tile_path(ivec2 t, out vec2 o[PATH_POINTS]) { READ_PATH(u_tile_path0, u_tile_path1, t, o); }
+#endif
 #endif

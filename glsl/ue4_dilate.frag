@@ -3,12 +3,21 @@
 // when m lies in the quad swept by n's max velocity (in tiles) along its direction, with
 // half-length |v_t| + e and half-width e, e = 0.99 (|dir.x| + |dir.y|); a tile slower than
 // half a pixel covers only itself. Covered tiles merge min-of-mins and max-of-maxes.
+// With a path (SEGMENTS > 1) the path of the max's tile is carried (out_path0/1).
 uniform sampler2D u_tiles;      // (vmin.xy, vmax.xy), px
 uniform float u_tile;           // tile size, px
 uniform int u_reach;            // window half-size in tiles (covers the blur limit)
 uniform bool u_guard;           // also take the min over every tile a tap can read
 uniform float u_tile_jitter;    // the gather's tile-lookup jitter, tiles
-out vec4 out_tiles;
+layout(location = 0) out vec4 out_tiles;
+#if SEGMENTS > 1
+#define PATH_READ
+#include "path.glsl"
+layout(location = 1) out vec4 out_path0;
+#if SEGMENTS == 4
+layout(location = 2) out vec4 out_path1;
+#endif
+#endif
 
 void main() {
     ivec2 grid = textureSize(u_tiles, 0);
@@ -16,6 +25,7 @@ void main() {
     ivec2 lo = max(m - u_reach, ivec2(0)), hi = min(m + u_reach, grid - 1);
     vec2 vmin = vec2(0.0), vmax = vec2(0.0);
     float lmin = 3.0e38, lmax = 0.0;      // any velocity replaces the initial min
+    ivec2 at = m;
     for (int y = lo.y; y <= hi.y; ++y) {
         for (int x = lo.x; x <= hi.x; ++x) {
             ivec2 n = ivec2(x, y);
@@ -35,7 +45,7 @@ void main() {
             if (!covers) continue;
             float n2 = dot(t.xy, t.xy);
             if (n2 < lmin) { lmin = n2; vmin = t.xy; }
-            if (l2 > lmax) { lmax = l2; vmax = t.zw; }
+            if (l2 > lmax) { lmax = l2; vmax = t.zw; at = n; }
         }
     }
     if (u_guard) {
@@ -54,4 +64,10 @@ void main() {
         }
     }
     out_tiles = vec4(vmin, vmax);
+#if SEGMENTS > 1
+    out_path0 = texelFetch(u_path0, at, 0);
+#if SEGMENTS == 4
+    out_path1 = texelFetch(u_path1, at, 0);
+#endif
+#endif
 }

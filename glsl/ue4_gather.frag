@@ -4,7 +4,22 @@
 // compare (background taps use the centre's spread, foreground taps their own) and a box
 // spread compare with a one-step edge; the mirror rule exchanges weights within a pair; the
 // result is normalised by the tap count with the centre colour filling the rest.
+// With a path (SEGMENTS > 1, glsl/path.glsl), a tap o steps out lands at time
+// u = -+o / 2K of the looked-up tile's path, at X - oT(u) (X +- o/K vmax when straight):
+// each segment holds its share of the exposure and of the taps, and a tap's spread compare
+// takes the tap's and the centre's own pieces of its segment, at that segment's step size.
 #include "noise.glsl"
+#if SEGMENTS > 1
+#define PATH_READ
+#define PATH_TILES_READ
+#include "path.glsl"
+uniform float u_max_px;         // the blur limit per side, px
+
+// A piece's half vector length, as the flatten's |v| of a straight motion at its speed.
+float piece_half(vec2 o[PATH_POINTS], int s) {
+    return min(0.5 * float(SEGMENTS) * length(o[s + 1] - o[s]), u_max_px);
+}
+#endif
 uniform sampler2D u_color;      // linear colour
 uniform sampler2D u_flat;       // (v.x, v.y, depth, |v|), px and m
 uniform sampler2D u_tiles;      // dilated (vmin.xy, vmax.xy), px
@@ -72,12 +87,22 @@ void main() {
 
     float K = float(u_taps);
     float j = u_tap_jitter * (ign(X, 0.0) - 0.5);
+#if SEGMENTS > 1
+    vec2 on[PATH_POINTS], ox[PATH_POINTS], o0[PATH_POINTS], o1[PATH_POINTS];
+    tile_path(t, on);
+    clamp_path(on, 2.0 * u_max_px);
+#endif
     if (u_fast_path && dot(vmin, vmin) > u_fast_ratio * lmax2) {
         vec3 sum = vec3(0.0);                   // uniform motion: a plain box average
         for (int i = 0; i < u_taps; ++i) {
             float op = float(i) + 0.5 + j, om = float(i) + 0.5 - j;
+#if SEGMENTS > 1
+            sum += tap_color(clamp_tap(X - path_at(on, -0.5 * op / K)));
+            sum += tap_color(clamp_tap(X - path_at(on, 0.5 * om / K)));
+#else
             sum += tap_color(clamp_tap(X + (op / K) * vmax));
             sum += tap_color(clamp_tap(X - (om / K) * vmax));
+#endif
         }
         out_color = vec4(sum / (2.0 * K), 1.0);
         return;
@@ -87,14 +112,37 @@ void main() {
     float px_to_step = K / sqrt(lmax2);
     vec3 acc = vec3(0.0);
     float wsum = 0.0;
+#if SEGMENTS > 1
+    front_path_raw(xi, ox);
+    clamp_path(ox, 2.0 * u_max_px);
+#endif
     for (int i = 0; i < u_taps; ++i) {
         float op = float(i) + 0.5 + j, om = float(i) + 0.5 - j;
+#if SEGMENTS > 1
+        float u0 = -0.5 * op / K, u1 = 0.5 * om / K;
+        int s0 = path_segment(u0), s1 = path_segment(u1);
+        vec2 p0 = clamp_tap(X - path_at(on, u0));
+        vec2 p1 = clamp_tap(X - path_at(on, u1));
+        vec4 f0 = texelFetch(u_flat, ivec2(p0), 0);
+        vec4 f1 = texelFetch(u_flat, ivec2(p1), 0);
+        front_path_raw(ivec2(p0), o0);
+        front_path_raw(ivec2(p1), o1);
+        clamp_path(o0, 2.0 * u_max_px);
+        clamp_path(o1, 2.0 * u_max_px);
+        f0.w = piece_half(o0, s0);
+        f1.w = piece_half(o1, s1);
+        float w0 = tap_weight(vec4(centre.xyz, piece_half(ox, s0)), f0, op,
+                              K / max(piece_half(on, s0), 1e-6));
+        float w1 = tap_weight(vec4(centre.xyz, piece_half(ox, s1)), f1, om,
+                              K / max(piece_half(on, s1), 1e-6));
+#else
         vec2 p0 = clamp_tap(X + (op / K) * vmax);
         vec2 p1 = clamp_tap(X - (om / K) * vmax);
         vec4 f0 = texelFetch(u_flat, ivec2(p0), 0);
         vec4 f1 = texelFetch(u_flat, ivec2(p1), 0);
         float w0 = tap_weight(centre, f0, op, px_to_step);
         float w1 = tap_weight(centre, f1, om, px_to_step);
+#endif
         if (u_mirror) {
             // the farther tap takes the nearer tap's weight when the nearer one is faster
             bool far0 = f0.z > f1.z, fast1 = f1.w > f0.w;

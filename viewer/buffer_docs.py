@@ -28,6 +28,13 @@ BUFFERS = {
     "mcguire_tilemax": "TileMax: the largest half-velocity per k x k tile, px",
     "mcguire_neighbormax": "NeighborMax: the largest TileMax over the 3x3 tiles around, px",
     "mcguire": "McGuire 2012 output, linear RGB (A = 1)",
+    "guertin_velocity": "Guertin 2014 velocity: half of D clamped to [0.5 px, the blur "
+                        "limit], px",
+    "guertin_tilemax_x": "TileMax first step (k x 1 per row): largest half-velocity, px",
+    "guertin_tilemax": "TileMax: the largest half-velocity per k x k tile, px",
+    "guertin_neighbormax": "NeighborMax over the 3x3 tiles around, a diagonal tile only "
+                           "where its vector points toward the centre tile, px",
+    "guertin": "Guertin 2014 output, linear RGB (A = 1)",
     "ue4_flat": "UE4-style flattened velocity: v.x, v.y (half of D clamped, px), depth (m), |v| (px)",
     "ue4_tiles": "per tile: min velocity x, y and max velocity x, y (by length), px",
     "ue4_dilated": "ue4_tiles after the swept-quad dilation: min x, y and max x, y, px",
@@ -72,6 +79,13 @@ BUFFERS = {
     "hybrid": "hybrid output, linear RGB (A = 1)",
     "reference": "reference output: the mean of the sub-frames, linear RGB (A = 1)",
 }
+# The post-process modes' tile paths (GROUP.segments > 1): the winner's path beside its vector.
+for _tiles in ("mcguire_tilemax_x", "mcguire_tilemax", "mcguire_neighbormax",
+               "guertin_tilemax_x", "guertin_tilemax", "guertin_neighbormax",
+               "ue4_tiles", "ue4_dilated"):
+    BUFFERS[_tiles + "_path"] = (f"with a path: the path (as hybrid_path) of the texel or "
+                                 f"tile whose vector {_tiles} holds (longest extent)")
+    BUFFERS[_tiles + "_path2"] = "K = 4: the rest of that path (as hybrid_path2)"
 # Prefixes: the same buffer for another set of targets.
 PREFIXES = {
     "sub_": "the reference's last sub-frame G-buffer: ",

@@ -50,17 +50,38 @@ def within_reach(moving: np.ndarray, tile: int, size: tuple[int, int], reach_px:
     return csum[y1, x1] - csum[y0, x1] - csum[y1, x0] + csum[y0, x0] > 0
 
 
+def half_extents(frame: Frame, paths: tuple[str, ...]) -> np.ndarray:
+    """Half the path extent (glsl/path.glsl path_extent) of each texel of the path
+    targets `paths` (two points a texel each), as an (H, W, 2) vector (extent, 0), the
+    length the early out of a path gather tests."""
+    points = []
+    for name in paths:
+        tex = frame.pool.get(name)
+        points.append(np.frombuffer(tex.read(), np.float32)
+                      .reshape(tex.size[1], tex.size[0], 2, 2).astype(np.float64))
+    o = np.concatenate(points, axis=2)
+    half = np.sqrt((o * o).sum(-1).max(-1))
+    return np.stack([half, np.zeros_like(half)], axis=-1)
+
+
 def gather_tiles(frame: Frame, source: str, components: slice, tile: int,
-                 early_out_px: float, reach_px: int) -> TileList | None:
+                 early_out_px: float, reach_px: int,
+                 paths: tuple[str, ...] = ()) -> TileList | None:
     """The tiles to draw of a gather that looks `source` (tile x tile px texels) up, from
     up to reach_px px away where the lookup is jittered: its `components` hold the
     vector the early out tests. The lookup's own tiles where reach_px is 0, FINE tiles
     otherwise (a tile's worth of reach would draw a ring of whole k x k tiles around
-    every moving one). None where every pixel may pass the early out (the full-screen
+    every moving one). `paths`: `source`'s path targets, whose half extent the early out
+    tests instead where given (a gather along a path). None where every pixel may pass the early out (the full-screen
     triangle then, with no copy of the colour)."""
-    tex = frame.pool.get(source)
-    a = np.frombuffer(tex.read(), np.float32).reshape(tex.size[1], tex.size[0], tex.components)
-    moving = moving_lookups(a[..., components], early_out_px)
+    if paths:
+        vectors = half_extents(frame, paths)
+    else:
+        tex = frame.pool.get(source)
+        a = np.frombuffer(tex.read(), np.float32).reshape(tex.size[1], tex.size[0],
+                                                          tex.components)
+        vectors = a[..., components]
+    moving = moving_lookups(vectors, early_out_px)
     if reach_px > 0:
         moving, tile = within_reach(moving, tile, frame.size, reach_px), FINE
     frame.stats[f"{source}_gather_tiles"] = int(moving.sum())

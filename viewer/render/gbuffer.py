@@ -6,6 +6,7 @@ from __future__ import annotations
 import moderngl
 
 from ..conventions import glsl_defines
+from ..params import param
 from . import depth
 from .frame import Frame
 from .gpu_scene import set_uniform
@@ -31,6 +32,26 @@ SEGMENT_CHOICES = (1, 2, 4)
 def path_targets(segments: int) -> tuple[str, ...]:
     """The path targets written for `segments` pieces: K stored points, two a target."""
     return ("hybrid_path", "hybrid_path2")[:segments // 2]
+
+
+def segments_in(group: str):
+    """segments(frame) for passes reading GROUP.segments: that count where the G-buffer
+    wrote its path targets this frame, else 1, the chord alone (a pass run on buffers
+    without a path)."""
+    def segments(frame: Frame) -> int:
+        k = int(frame.params[group].segments)
+        names = frame.pool.names()
+        return k if all(n in names for n in path_targets(k)) else 1
+    return segments
+
+
+def segments_param(default: int = 1):
+    """The `segments` field of a mode's parameters (the same choices and meaning in every
+    real-time mode)."""
+    return param(default, unit="segments", choices=SEGMENT_CHOICES, effect="recompile",
+                 help="linear pieces of each pixel's screen path over the exposure (its "
+                      "points projected at evenly spaced times); the gather splits its "
+                      "taps over them; 1 = the chord alone (the paper)")
 
 
 def path_times(t_open: float, t_close: float, segments: int) -> list[float]:
@@ -60,14 +81,17 @@ def layout_defines(layout: str) -> dict:
 class GBufferPass(Pass):
     name = "gbuffer"
 
-    def __init__(self, prefix: str = "", layout: str = "full", static_only: bool = False):
+    def __init__(self, prefix: str = "", layout: str = "full", static_only: bool = False,
+                 segments_group: str | None = None):
         """`prefix` names a second set of targets (the reference's sub-frames use "sub_");
         `layout` writes fewer targets where the rest would be thrown away; `static_only`
-        draws the objects that never move alone."""
+        draws the objects that never move alone; `segments_group`: the parameter group
+        whose `segments` field says how many path pieces to write (None: the chord only)."""
         self.prefix = prefix
         self.static_only = static_only
         self.layout_name = layout
-        self.produces = self.targets(layout)
+        self.segments_group = segments_group
+        self.produces = self.targets(layout, max(SEGMENT_CHOICES) if segments_group else 1)
 
     def targets(self, layout: str, segments: int = 1) -> tuple[str, ...]:
         return tuple(self.prefix + n for n in LAYOUTS[layout][1] + path_targets(segments))
@@ -75,7 +99,9 @@ class GBufferPass(Pass):
     def segments(self, frame: Frame) -> int:
         """Path segments this frame writes (1: the chord D alone; a subclass may choose
         by the frame's parameters)."""
-        return 1
+        if self.segments_group is None:
+            return 1
+        return int(frame.params[self.segments_group].segments)
 
     def layout(self, frame: Frame) -> str:
         """The layout this frame writes (a subclass may choose by the frame's parameters,

@@ -12,6 +12,8 @@ Motion Blur Filter" (HPG 2014), as fragment passes:
              (viewer/render/gather_tiles.py)
 
 r is the shared `blur.max_radius` in pixels (tile size and blur limit, as for McGuire).
+With `guertin.segments` K > 1 the G-buffer writes each pixel's path and the neighbourhood
+taps follow the NeighborMax winner's path, as McGuire's do (viewer/render/mcguire.py).
 The taps always alternate between the two directions, as the paper's Appendix A does; its
 per-tile direction variance, which only decides how the taps are shared between them in
 some later implementations, is not computed.
@@ -22,8 +24,8 @@ from ..params import group, param
 from .blur_common import max_radius_px
 from .frame import Frame
 from .gather_tiles import draw_gather, gather_tiles, jitter_reach
-from .gbuffer import GBufferPass
-from .half_velocity import EARLY_OUT_PX, VelocityPrep
+from .gbuffer import GBufferPass, segments_in, segments_param
+from .half_velocity import EARLY_OUT_PX, GBUFFER_PATHS, VelocityPrep, path_bindings
 from .modes import mode
 from .passes import FullscreenPass, Pipeline
 from .pool import TexSpec
@@ -55,12 +57,17 @@ class GuertinParams:
     z_scale: float = param(1.0, lo=0.01, hi=10.0,
                            help="depth compare extent as a fraction of the nearer depth: "
                                 "a tap that far behind counts as wholly behind")
+    segments: int = segments_param()
+
+
+segments = segments_in("guertin")
 
 
 class Gather(FullscreenPass):
     name = "guertin_gather"
     fragment = "guertin_gather.frag"
-    inputs = ("color", "depth", "guertin_velocity", "guertin_neighbormax")
+    inputs = ("color", "depth", "guertin_velocity", "guertin_neighbormax", *GBUFFER_PATHS,
+              "guertin_neighbormax_path", "guertin_neighbormax_path2")
     produces = ("guertin",)
 
     def __init__(self, tiled: bool = True):
@@ -68,7 +75,8 @@ class Gather(FullscreenPass):
 
     def defines(self, frame: Frame):
         return {"EARLY_OUT_PX": EARLY_OUT_PX, "TAP_STREAM": f"{TAP_STREAM}u",
-                "TILE_STREAM_X": f"{TILE_STREAM_X}u", "TILE_STREAM_Y": f"{TILE_STREAM_Y}u"}
+                "TILE_STREAM_X": f"{TILE_STREAM_X}u", "TILE_STREAM_Y": f"{TILE_STREAM_Y}u",
+                "SEGMENTS": segments(frame)}
 
     def outputs(self, frame: Frame):
         return {"guertin": TexSpec(4, "f4")}
@@ -76,11 +84,14 @@ class Gather(FullscreenPass):
     def execute(self, frame: Frame):
         p = frame.params["guertin"]
         r = max_radius_px(frame)
+        paths = path_bindings(frame, "guertin_neighbormax", segments)
+        tile_paths = tuple(v for key, v in paths.items() if key.startswith("u_tile_"))
         tiles = (gather_tiles(frame, "guertin_neighbormax", slice(0, 2), r, EARLY_OUT_PX,
-                              jitter_reach(p.tile_jitter, r)) if self.tiled else None)
+                              jitter_reach(p.tile_jitter, r), tile_paths)
+                 if self.tiled else None)
         draw_gather(self, frame, "guertin",
                     {"u_color": "color", "u_depth": "depth", "u_velocity": "guertin_velocity",
-                     "u_neighbormax": "guertin_neighbormax"},
+                     "u_neighbormax": "guertin_neighbormax", **paths},
                     {"u_tile": r, "u_samples": int(p.samples), "u_gamma": float(p.gamma),
                      "u_kappa": float(p.kappa), "u_eta": float(p.eta),
                      "u_tile_jitter": float(p.tile_jitter), "u_z_scale": float(p.z_scale)},
@@ -90,10 +101,12 @@ class Gather(FullscreenPass):
 def guertin_passes(tiled: bool = True) -> list:
     """The filter's passes after a G-buffer (colour, depth, velocity) exists."""
     return [VelocityPrep("guertin_velocity"),
-            *tile_passes("guertin_velocity", "guertin", diagonal_toward=True), Gather(tiled)]
+            *tile_passes("guertin_velocity", "guertin", segments=segments,
+                         paths=GBUFFER_PATHS, diagonal_toward=True), Gather(tiled)]
 
 
 @mode("guertin", groups=("blur", "guertin"))
 def guertin_pipeline() -> Pipeline:
-    return Pipeline("guertin", [GBufferPass(layout="motion"), *guertin_passes()],
+    return Pipeline("guertin", [GBufferPass(layout="motion", segments_group="guertin"),
+                                *guertin_passes()],
                     output="guertin")

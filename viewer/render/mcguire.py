@@ -6,6 +6,9 @@ Plausible Motion Blur" (ALGORITHMS.md section 1), as fragment passes:
           -> mcguire (the reconstruction gather, linear colour)
 
 k is the shared `blur.max_radius` in pixels; it is both the tile size and the blur limit.
+With `mcguire.segments` K > 1 the G-buffer also writes each pixel's path (glsl/path.glsl),
+the tile passes carry the NeighborMax winner's path, and the gather splits its taps over
+the K segments (glsl/mcguire_gather.frag); K = 1 is the paper's filter.
 """
 from __future__ import annotations
 
@@ -13,8 +16,8 @@ from ..params import group, param
 from .blur_common import max_radius_px
 from .frame import Frame
 from .gather_tiles import draw_gather, gather_tiles
-from .gbuffer import GBufferPass
-from .half_velocity import EARLY_OUT_PX, VelocityPrep
+from .gbuffer import GBufferPass, segments_in, segments_param
+from .half_velocity import EARLY_OUT_PX, GBUFFER_PATHS, VelocityPrep, path_bindings
 from .modes import mode
 from .passes import FullscreenPass, Pipeline
 from .pool import TexSpec
@@ -38,21 +41,25 @@ class McGuireParams:
     centre_kappa: float = param(0.0, lo=0.0, hi=200.0,
                                 help="0: the paper's centre weight 1/|V|; > 0: the authors' "
                                      "later S/(kappa |V|) (40 in G3D)")
+    segments: int = segments_param()
 
 
+segments = segments_in("mcguire")
 class Gather(FullscreenPass):
     """The reconstruction; tiled: drawn only on the tiles whose NeighborMax passes the
     early out (viewer/render/gather_tiles.py), the same image."""
     name = "mcguire_gather"
     fragment = "mcguire_gather.frag"
-    inputs = ("color", "depth", "mcguire_velocity", "mcguire_neighbormax")
+    inputs = ("color", "depth", "mcguire_velocity", "mcguire_neighbormax", *GBUFFER_PATHS,
+              "mcguire_neighbormax_path", "mcguire_neighbormax_path2")
     produces = ("mcguire",)
 
     def __init__(self, tiled: bool = True):
         self.tiled = tiled
 
     def defines(self, frame: Frame):
-        return {"EARLY_OUT_PX": EARLY_OUT_PX, "JITTER_STREAM": f"{JITTER_STREAM}u"}
+        return {"EARLY_OUT_PX": EARLY_OUT_PX, "JITTER_STREAM": f"{JITTER_STREAM}u",
+                "SEGMENTS": segments(frame)}
 
     def outputs(self, frame: Frame):
         return {"mcguire": TexSpec(4, "f4")}
@@ -60,11 +67,13 @@ class Gather(FullscreenPass):
     def execute(self, frame: Frame):
         p = frame.params["mcguire"]
         k = max_radius_px(frame)
-        tiles = (gather_tiles(frame, "mcguire_neighbormax", slice(0, 2), k, EARLY_OUT_PX, 0)
-                 if self.tiled else None)
+        paths = path_bindings(frame, "mcguire_neighbormax", segments)
+        tile_paths = tuple(v for key, v in paths.items() if key.startswith("u_tile_"))
+        tiles = (gather_tiles(frame, "mcguire_neighbormax", slice(0, 2), k, EARLY_OUT_PX, 0,
+                              tile_paths) if self.tiled else None)
         draw_gather(self, frame, "mcguire",
                     {"u_color": "color", "u_depth": "depth", "u_velocity": "mcguire_velocity",
-                     "u_neighbormax": "mcguire_neighbormax"},
+                     "u_neighbormax": "mcguire_neighbormax", **paths},
                     {"u_tile": k, "u_samples": int(p.samples),
                      "u_soft_z": float(p.soft_z_extent), "u_jitter": float(p.jitter),
                      "u_kappa": float(p.centre_kappa)}, tiles)
@@ -72,9 +81,11 @@ class Gather(FullscreenPass):
 
 def mcguire_passes(tiled: bool = True) -> list:
     """The filter's passes after a G-buffer (colour, depth, velocity) exists."""
-    return [VelocityPrep(), *tile_passes("mcguire_velocity", "mcguire"), Gather(tiled)]
+    return [VelocityPrep(), *tile_passes("mcguire_velocity", "mcguire", segments=segments,
+                                         paths=GBUFFER_PATHS), Gather(tiled)]
 
 
 @mode("mcguire", groups=("blur", "mcguire"))
 def mcguire_pipeline() -> Pipeline:
-    return Pipeline("mcguire", [GBufferPass(layout="motion"), *mcguire_passes()], output="mcguire")
+    return Pipeline("mcguire", [GBufferPass(layout="motion", segments_group="mcguire"),
+                                *mcguire_passes()], output="mcguire")

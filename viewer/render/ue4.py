@@ -12,6 +12,10 @@ every driver (a hardware sampler may quantise its weights), which the tests comp
 numpy. Velocity and depth at a tap come from the texel that contains it (UE's point
 sampling), so a tap within half a pixel of a silhouette mixes in the colour of the other
 side under the weight of its own; `ue4.bilinear=false` takes that texel's colour instead.
+
+With `ue4.segments` K > 1 the G-buffer also writes each pixel's path (glsl/path.glsl): the
+flatten's |v| is the path's half extent, the tile max and the dilation carry the max
+texel's path, and the gather's taps walk the looked-up tile's path (glsl/ue4_gather.frag).
 """
 from __future__ import annotations
 
@@ -21,7 +25,8 @@ from ..params import group, param
 from .blur_common import max_radius_px
 from .frame import Frame
 from .gather_tiles import draw_gather, gather_tiles, jitter_reach
-from .gbuffer import GBufferPass
+from .gbuffer import GBufferPass, segments_in, segments_param
+from .half_velocity import GBUFFER_PATHS, path_bindings
 from .modes import mode
 from .passes import FullscreenPass, Pipeline
 from .pool import TexSpec
@@ -52,6 +57,20 @@ class UE4Params:
                                   help="the dilated min also covers every tile the taps can "
                                        "read, so a moving neighbourhood beside a screen-static "
                                        "object takes the full path (UE: covering tiles only)")
+    segments: int = segments_param()
+
+
+segments = segments_in("ue4")
+PATH_SUFFIXES = ("_path", "_path2")
+
+
+def paths_of(frame, base: str) -> tuple[str, ...]:
+    """BASE's path targets this frame (none for one segment)."""
+    return tuple(base + x for x in PATH_SUFFIXES[:segments(frame) // 2])
+
+
+def samplers(names: tuple[str, ...]) -> dict[str, str]:
+    return {f"u_path{j}": name for j, name in enumerate(names)}
 
 
 FLAT = TexSpec(4, "f4")           # (v.x, v.y, depth, |v|), v the clamped half vector in px
@@ -71,43 +90,56 @@ def dilation_reach(max_px: float, tile: int) -> int:
 class Flatten(FullscreenPass):
     name = "ue4_flatten"
     fragment = "ue4_flatten.frag"
-    inputs = ("velocity", "depth")
+    inputs = ("velocity", "depth", *GBUFFER_PATHS)
     produces = ("ue4_flat",)
+
+    def defines(self, frame):
+        return {"SEGMENTS": segments(frame)}
 
     def outputs(self, frame):
         return {"ue4_flat": FLAT}
 
     def execute(self, frame):
-        self.draw(frame, self.produces, {"u_velocity": "velocity", "u_depth": "depth"},
+        self.draw(frame, self.produces, {"u_velocity": "velocity", "u_depth": "depth",
+                                         **samplers(GBUFFER_PATHS[:segments(frame) // 2])},
                   {"u_max_px": float(max_radius_px(frame))})
 
 
 class TileMinMax(FullscreenPass):
     name = "ue4_tiles"
     fragment = "ue4_tiles.frag"
-    inputs = ("ue4_flat",)
-    produces = ("ue4_tiles",)
+    inputs = ("ue4_flat", *GBUFFER_PATHS)
+    produces = ("ue4_tiles", "ue4_tiles_path", "ue4_tiles_path2")
+
+    def defines(self, frame):
+        return {"SEGMENTS": segments(frame)}
 
     def outputs(self, frame):
-        return {"ue4_tiles": tile_spec(frame)}
+        return {name: tile_spec(frame) for name in ("ue4_tiles", *paths_of(frame, "ue4_tiles"))}
 
     def execute(self, frame):
-        self.draw(frame, self.produces, {"u_flat": "ue4_flat"},
+        self.draw(frame, ("ue4_tiles", *paths_of(frame, "ue4_tiles")),
+                  {"u_flat": "ue4_flat", **samplers(GBUFFER_PATHS[:segments(frame) // 2])},
                   {"u_tile": frame.params["ue4"].tile})
 
 
 class Dilate(FullscreenPass):
     name = "ue4_dilate"
     fragment = "ue4_dilate.frag"
-    inputs = ("ue4_tiles",)
-    produces = ("ue4_dilated",)
+    inputs = ("ue4_tiles", "ue4_tiles_path", "ue4_tiles_path2")
+    produces = ("ue4_dilated", "ue4_dilated_path", "ue4_dilated_path2")
+
+    def defines(self, frame):
+        return {"SEGMENTS": segments(frame)}
 
     def outputs(self, frame):
-        return {"ue4_dilated": tile_spec(frame)}
+        return {name: tile_spec(frame)
+                for name in ("ue4_dilated", *paths_of(frame, "ue4_dilated"))}
 
     def execute(self, frame):
         p = frame.params["ue4"]
-        self.draw(frame, self.produces, {"u_tiles": "ue4_tiles"},
+        self.draw(frame, ("ue4_dilated", *paths_of(frame, "ue4_dilated")),
+                  {"u_tiles": "ue4_tiles", **samplers(paths_of(frame, "ue4_tiles"))},
                   {"u_tile": float(p.tile), "u_reach": dilation_reach(max_radius_px(frame), p.tile),
                    "u_guard": bool(p.fast_path_guard), "u_tile_jitter": p.tile_jitter})
 
@@ -121,14 +153,15 @@ class Gather(FullscreenPass):
     (viewer/render/gather_tiles.py), the same image."""
     name = "ue4_gather"
     fragment = "ue4_gather.frag"
-    inputs = ("color", "ue4_flat", "ue4_dilated")
+    inputs = ("color", "ue4_flat", "ue4_dilated", *GBUFFER_PATHS, "ue4_dilated_path",
+              "ue4_dilated_path2")
     produces = ("ue4",)
 
     def __init__(self, tiled: bool = True):
         self.tiled = tiled
 
     def defines(self, frame):
-        return {"EARLY_OUT_PX": EARLY_OUT_PX}
+        return {"EARLY_OUT_PX": EARLY_OUT_PX, "SEGMENTS": segments(frame)}
 
     def outputs(self, frame):
         return {"ue4": TexSpec(4, "f4")}
@@ -138,8 +171,9 @@ class Gather(FullscreenPass):
         tiles = (gather_tiles(frame, "ue4_dilated", slice(2, 4), p.tile, EARLY_OUT_PX,
                               jitter_reach(p.tile_jitter, p.tile)) if self.tiled else None)
         draw_gather(self, frame, "ue4",
-                    {"u_color": "color", "u_flat": "ue4_flat", "u_tiles": "ue4_dilated"},
-                    {"u_tile": p.tile, "u_taps": p.taps, "u_depth_scale": p.depth_scale,
+                    {"u_color": "color", "u_flat": "ue4_flat", "u_tiles": "ue4_dilated",
+                     **path_bindings(frame, "ue4_dilated", segments)},
+                    {"u_tile": p.tile, "u_max_px": float(max_radius_px(frame)), "u_taps": p.taps, "u_depth_scale": p.depth_scale,
                      "u_tile_jitter": p.tile_jitter, "u_tap_jitter": p.tap_jitter,
                      "u_fast_path": bool(p.fast_path), "u_fast_ratio": p.fast_ratio,
                      "u_mirror": bool(p.mirror), "u_bilinear": bool(p.bilinear)}, tiles)
@@ -152,4 +186,5 @@ def ue4_passes(tiled: bool = True) -> list:
 
 @mode("ue4", groups=("blur", "ue4"))
 def ue4_pipeline() -> Pipeline:
-    return Pipeline("ue4", [GBufferPass(layout="motion"), *ue4_passes()], output="ue4")
+    return Pipeline("ue4", [GBufferPass(layout="motion", segments_group="ue4"), *ue4_passes()],
+                    output="ue4")
