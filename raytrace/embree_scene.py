@@ -29,7 +29,7 @@ from embreex import rtcore as rtc
 from embreex import rtcore_scene as rtcs
 from embreex.mesh_construction import TriangleMesh
 
-from viewer.scene import Scene, SceneObject
+from world.scene import Scene, SceneObject
 
 from . import kernels
 from .attributes import SurfaceTable

@@ -3,7 +3,7 @@ viewer/render/hybrid_composite.py), the oracle for the GLSL.
 
 Arrays are in GL orientation: row 0 is the BOTTOM row, index [y, x], displacements in GL
 window axes (x right, y up), as the fragment shaders see them. Tests flip with
-viewer.conventions.to_image when reading or writing frames. Depth is positive linear view
+world.conventions.to_image when reading or writing frames. Depth is positive linear view
 depth; ids are uint (0 = background). Displacements are the full motion over the exposure.
 
 Positions that decide a discrete outcome (which pixel a probe reads) are computed in

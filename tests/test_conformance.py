@@ -11,7 +11,7 @@ from PIL import Image
 
 from viewer.imageio import linear_to_srgb8
 from viewer.render.renderer import Renderer
-from viewer.scene_loader import load_scene
+from world.loader import load_scene
 
 from conftest import CONFORMANCE
 

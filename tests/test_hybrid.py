@@ -14,7 +14,7 @@ import pytest
 import numpy_hybrid as nh
 import numpy_mcguire as nm
 from conftest import CONFORMANCE
-from viewer.conventions import to_image
+from world.conventions import to_image
 from viewer.metrics import image_metrics
 from viewer.params import ParamSet
 from viewer.render.blur_common import max_radius_px
@@ -24,7 +24,7 @@ from viewer.render.modes import MODES
 from viewer.render.pool import TexSpec
 from viewer.render.renderer import Renderer
 from viewer.render.reveal_pass import PACKED, packed_names, shade_draws
-from viewer.scene_loader import load_scene
+from world.loader import load_scene
 
 SMALL = (160, 90)
 
@@ -144,7 +144,7 @@ def test_reveal_shades_image_textured_surfaces_like_the_raster(ctx, tmp_path):
     """A moving camera: every revealed surface is shaded (no static layer), here an
     image-textured wall behind two movers; the image and the faces' table are bound to
     texture units of their own, whichever object's draw comes first."""
-    from viewer.scene_loader import builtin_dir
+    from world.loader import builtin_dir
     path = tmp_path / "image_wall.toml"
     path.write_text(textwrap.dedent(IMAGE_WALL.format(assets=builtin_dir() / "assets")))
     scene = load_scene(path)
@@ -179,7 +179,7 @@ def test_many_revealed_objects_are_shaded_by_few_draws_like_the_raster(ctx, monk
     object table, each the raster without the pixel's own object; with 4 objects to a
     row of the table too (its records over 9 rows, as past 256 objects)."""
     from viewer.render.reveal_pass import ObjectTable
-    from viewer.scene_loader import builtin_dir
+    from world.loader import builtin_dir
     monkeypatch.setattr(ObjectTable, "OBJECTS_PER_ROW", per_row)
     scene = load_scene(builtin_dir() / "bench" / "crowd_pan.toml")
     res, bufs = render(ctx, scene, "hybrid", 0.0, size=(320, 180))
@@ -198,8 +198,8 @@ def test_the_reveal_takes_the_movers_matrices_from_the_frame(ctx, monkeypatch):
     (asking 32 objects again cost ~0.2 ms in the frame), equal to SceneObject.matrix(t);
     its hits are those of asking each object."""
     from viewer.render.reveal_pass import frame_models, reveal_state
-    from viewer.scene import SceneObject
-    from viewer.scene_loader import builtin_dir
+    from world.scene import SceneObject
+    from world.loader import builtin_dir
     scene = load_scene(builtin_dir() / "bench" / "crowd_pan.toml")
     r = Renderer(ctx, scene, (160, 90))
     try:

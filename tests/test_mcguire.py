@@ -13,7 +13,7 @@ import pytest
 import numpy_mcguire as nm
 from conftest import CONFORMANCE
 from glsl import DIR as GLSL_DIR
-from viewer.conventions import to_image
+from world.conventions import to_image
 from viewer.params import ParamSet
 from viewer.render.blur_common import max_radius_px
 from viewer.render.gbuffer import GBUFFER
@@ -372,7 +372,7 @@ def test_deterministic_per_seed(synthetic_frame):
 def test_mode_beats_off_in_outer_blur_on_basic(ctx):
     from viewer.regions import OUTER
     from viewer.render.renderer import Renderer
-    from viewer.scene_loader import load_scene
+    from world.loader import load_scene
     from viewer.metrics import image_metrics
     scene = load_scene(CONFORMANCE / "basic.toml")
     r = Renderer(ctx, scene, (160, 90))

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import numpy_hybrid as nh
-from viewer.conventions import BACKGROUND_DEPTH, to_image
+from world.conventions import BACKGROUND_DEPTH, to_image
 from viewer.params import ParamSet
 from viewer.render.blur_common import max_radius_px
 from viewer.render.gbuffer import GBUFFER
@@ -366,7 +366,7 @@ def test_hybrid_gbuffer_stores_log_depth_for_the_edge_test(ctx):
     # (what upload() writes).
     from conftest import CONFORMANCE
     from viewer.render.renderer import Renderer
-    from viewer.scene_loader import load_scene
+    from world.loader import load_scene
     r = Renderer(ctx, load_scene(str(CONFORMANCE / "basic.toml")), (96, 54))
     p = ParamSet()
     p.set("hybrid.range_check", True)

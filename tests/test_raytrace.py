@@ -14,9 +14,9 @@ from raytrace import embree_scene
 from raytrace.embree_scene import transform_points
 from raytrace.workers import run_all
 from raytrace.reveal import primary_view
-from viewer.camera import Camera
-from viewer.conventions import BACKGROUND_DEPTH
-from viewer.scene import CameraSpec, Material, Mesh, Scene, SceneObject
+from world.camera import Camera
+from world.conventions import BACKGROUND_DEPTH
+from world.scene import CameraSpec, Material, Mesh, Scene, SceneObject
 
 CONFORMANCE = Path(__file__).parent / "conformance"
 A = np.array
@@ -598,7 +598,7 @@ def test_conformance_basic_ids_and_depths():
 
 
 def loaded(name: str) -> Scene:
-    from viewer.scene_loader import load_scene
+    from world.loader import load_scene
     return load_scene(CONFORMANCE / f"{name}.toml")
 
 

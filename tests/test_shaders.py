@@ -42,7 +42,7 @@ def test_missing_include_is_reported(glsl_dir):
 
 
 def test_shipped_shaders_compile(ctx):
-    from viewer.conventions import glsl_defines
+    from world.conventions import glsl_defines
     for layout in (0, 1, 2):
         for in_texture in (0, 1):
             lights = {"MAX_LIGHTS": 16, "LIGHTS_TEXTURE": in_texture, "LIGHTS_PER_ROW": 1024}

@@ -9,7 +9,7 @@ from conftest import CONFORMANCE
 from viewer.params import ParamSet
 from viewer.render import hybrid_composite, tile_kernels, tile_lists
 from viewer.render.renderer import Renderer
-from viewer.scene_loader import load_scene
+from world.loader import load_scene
 
 SIZE = (200, 112)
 
@@ -308,7 +308,7 @@ def true_boundary_tiles(ids: np.ndarray, tile: int) -> np.ndarray:
 
 def run_motion_tiles(frame, ids, disp):
     """motion_tiles (GL rows: (longest |D|, boundary flag)) of ids and D given in GL rows."""
-    from viewer.conventions import to_image
+    from world.conventions import to_image
     from viewer.render.gbuffer import GBUFFER
     h, w = ids.shape
     front = np.dstack([disp, np.full((h, w), 5.0, np.float32), ids]).astype(np.float32)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import moderngl
 
-from ..conventions import glsl_defines
+from world.conventions import glsl_defines
 from . import depth
 from .frame import Frame
 from .gpu_scene import set_uniform

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import moderngl
 
-from ..conventions import glsl_defines
+from world.conventions import glsl_defines
 from .frame import Frame, PassTimer
 from .gpu_scene import set_uniform
 from .pool import TexSpec

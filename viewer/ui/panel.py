@@ -9,7 +9,7 @@ from imgui_bundle import imgui
 
 from ..render.debug_view import KINDS
 from ..render.modes import MODE_GROUPS, MODES
-from ..scene_loader import builtin_scene_names
+from world.loader import builtin_scene_names
 from .param_widgets import group_widgets
 
 if TYPE_CHECKING:

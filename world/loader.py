@@ -1,4 +1,4 @@
-"""Scene files (docs/scene-format.md) -> `viewer.scene.Scene`, with every mistake a SceneError.
+"""Scene files (docs/scene-format.md) -> `world.scene.Scene`, with every mistake a SceneError.
 
 `load_scene` takes a path to a TOML file or the name of a built-in scene in `scenes/`.
 Validation is strict and happens here, once: the renderers may trust a loaded Scene.
