@@ -254,12 +254,6 @@ class RayScene:
             self._pose_cache = (key, Poses(lo, hi, inv, kernels.turns_or_scales(inv)))
         return self._pose_cache[1]
 
-    def reveal(self, camera, t: float, pixels_ij, own_ids, layers: int = 1, max_depth: int = 8,
-               threads: int | None = None, **kw):
-        """`raytrace.reveal.reveal` on this scene."""
-        from .reveal import reveal   # reveal builds on this module: import it late
-        return reveal(self, camera, t, pixels_ij, own_ids, layers, max_depth, threads, **kw)
-
     def static_view(self, view: tuple) -> "StaticHits":
         """The static scene's hits kept for `view` = (key, number of pixels), fresh when the
         key changes (the static geometry never does)."""

@@ -197,6 +197,7 @@ def test_the_reveal_takes_the_movers_matrices_from_the_frame(ctx, monkeypatch):
     """The G-buffer made every object's M(t): the reveal's poses take them from the frame
     (asking 32 objects again cost ~0.2 ms in the frame), equal to SceneObject.matrix(t);
     its hits are those of asking each object."""
+    from raytrace import reveal
     from viewer.render.reveal_pass import frame_models, reveal_state
     from world.scene import SceneObject
     from world.loader import builtin_dir
@@ -215,9 +216,9 @@ def test_the_reveal_takes_the_movers_matrices_from_the_frame(ctx, monkeypatch):
         asked = []
         real = SceneObject.matrix
         monkeypatch.setattr(SceneObject, "matrix", lambda o, tt: asked.append(o.id) or real(o, tt))
-        given = rs.reveal(batch["camera"], t, batch["pixels"], batch["own"], matrices=models)
+        given = reveal(rs, batch["camera"], t, batch["pixels"], batch["own"], matrices=models)
         assert not asked
-        own = rs.reveal(batch["camera"], t, batch["pixels"], batch["own"])
+        own = reveal(rs, batch["camera"], t, batch["pixels"], batch["own"])
         assert len(asked) == 32
         assert len(batch["pixels"]) > 100
         for name in ("object_id", "prim_id", "barycentrics", "distance"):

@@ -256,7 +256,7 @@ def test_masked_pixels_read_in_image_order_from_gl_rows():
     # The reveal's read-back: the nonzero pixels of a GL-orientation window in image order
     # (top row first) with the window's top-left image pixel added, and their values.
     # Widths below, at and past its runs of 8 pixels; dense, banded and empty windows.
-    from raytrace.kernels import nonzero_pixels
+    from viewer.render.reveal_kernels import nonzero_pixels
     rng = np.random.default_rng(5)
     for h, w, density in ((7, 9, 0.5), (5, 8, 0.9), (12, 31, 0.05), (40, 64, 0.01),
                           (3, 7, 1.0), (6, 17, 0.0), (1, 1, 1.0)):

@@ -221,7 +221,7 @@ def test_record_blocks_match_a_brute_force_packing(seed, tile_bits):
     # reveal_shade's hit records: one tile x tile block per (key, screen tile) in order of
     # (key, tile row, tile column), 4 blocks a row here, each pixel's record at its
     # offset within its tile, -1 there in the tile's other keys' blocks; else zero.
-    from raytrace.kernels import pack_blocks
+    from viewer.render.reveal_kernels import pack_blocks
     rng = np.random.default_rng(seed)
     n, tile, per_row = 500, 1 << tile_bits, 4
     flat = rng.choice(70 * 50, n, replace=False)

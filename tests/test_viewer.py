@@ -215,7 +215,8 @@ def test_every_parameter_gets_a_widget_that_fits_its_type():
 
 def draw_view(ctx, array, dtype, settings=None, tile=1, name="buf"):
     from viewer.render.debug_view import DebugView
-    from viewer.render.pool import ResourcePool, TexSpec, park_framebuffer
+    from viewer.render.framebuffers import park_framebuffer
+    from viewer.render.pool import ResourcePool, TexSpec
     from viewer.shaders import ProgramCache
     a = np.asarray(array)
     comps = 1 if a.ndim == 2 else a.shape[2]

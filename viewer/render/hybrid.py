@@ -24,7 +24,7 @@ from __future__ import annotations
 from .gbuffer import GBufferPass
 from .hybrid_composite import Composite, composite_tile_passes
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
-from .modes import mode
+from .registry import mode
 from .passes import Pipeline
 from .raymask import raymask_passes
 from .reveal_pass import reveal_passes

@@ -7,7 +7,7 @@ from ..params import group, param
 from ..regions import RegionAccumulator
 from .frame import Frame
 from .gbuffer import GBufferPass
-from .modes import mode
+from .registry import mode
 from .passes import FullscreenPass, Pass, Pipeline
 from .pool import TexSpec
 

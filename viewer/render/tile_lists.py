@@ -135,6 +135,11 @@ class TileList:
     def release(self):
         self._release_buffer()
 
+    def clear_outside(self, frame: Frame, outputs: tuple[str, ...]):
+        """clear_outside for these tiles: what FullscreenPass.draw calls before it draws
+        them (the pass framework sits below this module and takes the tiles as an object)."""
+        clear_outside(frame, outputs, self)
+
 
 class TileRange:
     """A run of a TileList's tiles (what FullscreenPass.draw needs: render and box)."""

@@ -21,7 +21,7 @@ from ..params import group, param
 from .blur_common import max_radius_px
 from .frame import Frame
 from .gbuffer import GBufferPass
-from .modes import mode
+from .registry import mode
 from .passes import FullscreenPass, Pipeline
 from .pool import TexSpec
 
