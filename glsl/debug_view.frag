@@ -1,16 +1,17 @@
 #version 330 core
 // Draws one pool texture into a destination rectangle with a visualisation chosen at run
 // time (viewer/render/debug_view.py). The same rules as viewer/visualize.py, on the GPU.
-// SOURCE_TYPE (define): 0 float/normalised texture, 1 unsigned integer, 2 signed integer.
-#if SOURCE_TYPE == 1
+// SOURCE_TYPE (define): 0 float/normalised texture, SOURCE_UINT unsigned integer, SOURCE_INT
+// signed integer; u_kind one of KIND_<NAME> (viewer/render/debug_view.py view_defines).
+#if SOURCE_TYPE == SOURCE_UINT
 uniform usampler2D u_src;
-#elif SOURCE_TYPE == 2
+#elif SOURCE_TYPE == SOURCE_INT
 uniform isampler2D u_src;
 #else
 uniform sampler2D u_src;
 #endif
 
-uniform int u_kind;        // 0 colour, 1 depth, 2 normal, 3 id, 4 velocity, 5 tiles, 6 scalar
+uniform int u_kind;        // KIND_COLOUR, KIND_DEPTH, ...
 uniform vec4 u_dest;       // destination rectangle in window pixels: x0, y0, width, height
 uniform int u_channel;     // first component shown (velocity in .zw of a 4-channel tile)
 uniform float u_gain;      // colour: multiplier; velocity, tiles, scalar: 1 / full-scale value
@@ -51,22 +52,22 @@ void main() {
     ivec2 p = clamp(ivec2(floor(uv * vec2(size))), ivec2(0), size - 1);
     vec4 t = fetch(p);
     vec3 rgb;
-    if (u_kind == 0) {
+    if (u_kind == KIND_COLOUR) {
         vec3 c = t.rgb * u_gain;
         rgb = vec3(srgb(c.r), srgb(c.g), srgb(c.b));
-    } else if (u_kind == 1) {
+    } else if (u_kind == KIND_DEPTH) {
         float d = t.r;
         float span = max(u_log_range.y - u_log_range.x, 1e-6);
         float g = 1.0 - (log(max(d, 1e-6)) - u_log_range.x) / span;
         rgb = vec3(d < BACKGROUND_DEPTH * 0.5 ? clamp(g * 220.0 + 35.0, 0.0, 255.0) / 255.0 : 0.0);
-    } else if (u_kind == 2) {
+    } else if (u_kind == KIND_NORMAL) {
         rgb = clamp(t.xyz * 0.5 + 0.5, 0.0, 1.0);
-    } else if (u_kind == 3) {
+    } else if (u_kind == KIND_ID) {
         rgb = id_colour(uint(t.r));
-    } else if (u_kind == 4 || u_kind == 5) {
+    } else if (u_kind == KIND_VELOCITY || u_kind == KIND_TILES) {
         vec2 v = u_channel >= 2 ? t.zw : t.xy;
         rgb = wheel(v);
-        if (u_kind == 5 && u_tile > 1) {
+        if (u_kind == KIND_TILES && u_tile > 1) {
             // A dark line on each tile's left and bottom border, so tiles can be counted.
             vec2 texel = uv * vec2(size);
             vec2 px = u_dest.zw / vec2(size);            // window pixels per source texel

@@ -25,17 +25,17 @@
 
 noperspective in vec2 v_record; // this pixel's hit record (glsl/reveal_tiles.vert)
 uniform sampler2D u_hits;       // (face row, u, v, 1 + object id); 0 where no ray
-uniform sampler2D u_faces;      // 6 texels per face, FACES_PER_ROW faces a row: corner c at
-                                // 2c: (position, normal.x), at 2c + 1: (normal.yz, uv)
+uniform sampler2D u_faces;      // TEXELS_PER_FACE per face, FACES_PER_ROW faces a row: corner
+                                // c at 2c: (position, normal.x), at 2c + 1: (normal.yz, uv)
 uniform mat4 u_view;
 uniform vec3 u_background;
 #if OBJECT_TABLE
-uniform sampler2D u_objects;    // 18 texels per object id (reveal_pass.ObjectTable):
+uniform sampler2D u_objects;    // OBJECT_TEXELS per object id (reveal_pass.ObjectTable):
                                 // T(-eye) M(t), the modelviews at shutter open and close,
-                                // the normal matrix,
-                                // the material
+                                // the normal matrix, the material (OBJECT_<PART>: the
+                                // first texel of each)
 vec4 object_texel(int id, int k) {          // (OBJECTS_PER_ROW: a power of two)
-    ivec2 at = ivec2((id % OBJECTS_PER_ROW) * 18 + k, id / OBJECTS_PER_ROW);
+    ivec2 at = ivec2((id % OBJECTS_PER_ROW) * OBJECT_TEXELS + k, id / OBJECTS_PER_ROW);
     return texelFetch(u_objects, at, 0);
 }
 mat4 object_mat4(int id, int k) {
@@ -81,7 +81,7 @@ void main() {
     float weight[3] = float[3](1.0 - hit.y - hit.z, hit.y, hit.z);
     int face = int(hit.x);
     int row = face / FACES_PER_ROW;
-    ivec2 base = ivec2((face - row * FACES_PER_ROW) * 6, row);
+    ivec2 base = ivec2((face - row * FACES_PER_ROW) * TEXELS_PER_FACE, row);
     vec3 local = vec3(0.0), normal_local = vec3(0.0);
     vec2 uv = vec2(0.0);
     for (int c = 0; c < 3; ++c) {
@@ -92,11 +92,14 @@ void main() {
         uv += weight[c] * b.zw;
     }
 #if OBJECT_TABLE
-    mat4 model = object_mat4(id, 0);
-    mat4 modelview_open = object_mat4(id, 4), modelview_close = object_mat4(id, 8);
-    mat3 normal_matrix = mat3(object_texel(id, 12).xyz, object_texel(id, 13).xyz,
-                              object_texel(id, 14).xyz);
-    vec4 m0 = object_texel(id, 15), m1 = object_texel(id, 16), m2 = object_texel(id, 17);
+    mat4 model = object_mat4(id, OBJECT_MODEL);
+    mat4 modelview_open = object_mat4(id, OBJECT_OPEN);
+    mat4 modelview_close = object_mat4(id, OBJECT_CLOSE);
+    mat3 normal_matrix = mat3(object_texel(id, OBJECT_NORMAL).xyz,
+                              object_texel(id, OBJECT_NORMAL + 1).xyz,
+                              object_texel(id, OBJECT_NORMAL + 2).xyz);
+    vec4 m0 = object_texel(id, OBJECT_MATERIAL), m1 = object_texel(id, OBJECT_MATERIAL + 1);
+    vec4 m2 = object_texel(id, OBJECT_MATERIAL + 2);
     m_albedo = m0.rgb;
     m_specular = m0.a;
     m_albedo2 = m1.rgb;

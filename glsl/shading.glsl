@@ -1,6 +1,7 @@
 // Surface shading of SCENE_FORMAT.md, shared by the raster G-buffer pass and the shading of
 // ray-revealed surfaces, so both layers are lit identically.
-// Needs MAX_LIGHTS, LIGHTS_TEXTURE and LIGHTS_PER_ROW defined (GpuScene.light_defines).
+// Needs MAX_LIGHTS, LIGHTS_TEXTURE, LIGHTS_PER_ROW and the texture kinds TEX_CHECKER,
+// TEX_STRIPES, TEX_IMAGE defined (GpuScene.light_defines).
 
 uniform vec3 u_ambient;
 uniform int u_num_lights;
@@ -40,7 +41,7 @@ vec3 m_albedo2;
 uniform vec3 u_albedo;
 uniform float u_specular;
 uniform float u_shininess;
-uniform int u_tex_kind;                    // 0 none, 1 checker, 2 stripes, 3 image
+uniform int u_tex_kind;                    // 0 none, or TEX_CHECKER, TEX_STRIPES, TEX_IMAGE
 uniform float u_tex_size;
 uniform int u_tex_axis;
 uniform vec3 u_albedo2;
@@ -55,15 +56,15 @@ uniform vec3 u_albedo2;
 uniform sampler2D u_tex_image;             // linear RGB, repeat, bilinear
 
 vec3 surface_albedo(vec3 p_local, vec2 uv) {
-    if (m_tex_kind == 1) {
+    if (m_tex_kind == TEX_CHECKER) {
         vec3 c = floor(p_local / m_tex_size);
         return mod(c.x + c.y + c.z, 2.0) == 0.0 ? m_albedo : m_albedo2;
     }
-    if (m_tex_kind == 2) {
+    if (m_tex_kind == TEX_STRIPES) {
         float c = floor(p_local[m_tex_axis] / m_tex_size);
         return mod(c, 2.0) == 0.0 ? m_albedo : m_albedo2;
     }
-    if (m_tex_kind == 3) {
+    if (m_tex_kind == TEX_IMAGE) {
         return texture(u_tex_image, uv).rgb;
     }
     return m_albedo;

@@ -22,3 +22,8 @@ if [ ! -x .venv/bin/python ]; then
 fi
 .venv/bin/python -m pip install -q --upgrade pip
 .venv/bin/python -m pip install -q -e ".[test]"
+# Compile the ray-tracing kernels into their on-disk cache now (~40 s once; seconds when
+# cached), so that the first hybrid frame does not wait for the compiler. Not fatal: without
+# it the first hybrid frame compiles them (and says so).
+.venv/bin/python -m viewer.warmup \
+  || echo "setup: the kernel warm-up failed (above); the first hybrid frame will compile them"

@@ -263,7 +263,12 @@ def test_compare_of_an_image_smaller_than_the_ssim_window(tmp_path):
                  "--out", str(tmp_path / "c")]) == 0
     m = json.loads((tmp_path / "c" / "metrics.json").read_text())
     assert m["metrics"]["hybrid"]["all"]["ssim"] is None
-    assert m["metrics"]["hybrid"]["all"]["flip"] is not None
+    # FLIP has no window: its mean over the written PNGs, from the evaluator itself.
+    import flip_evaluator
+    png = [np.asarray(Image.open(tmp_path / "c" / f"{n}.png"), np.float32) / 255
+           for n in ("reference", "hybrid")]
+    want = float(np.mean(flip_evaluator.evaluate(*png, "LDR", applyMagma=False)[0]))
+    assert m["metrics"]["hybrid"]["all"]["flip"] == pytest.approx(want, rel=1e-6, abs=1e-9)
 
 
 def test_a_write_that_fails_is_one_line_and_leaves_no_output(tmp_path, capsys, monkeypatch):
@@ -305,7 +310,7 @@ def test_no_gl_driver_names_what_to_install(tmp_path):
     assert not (tmp_path / "x.png").exists()
 
 
-def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys):
+def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys, ctx):
     out = tmp_path / "bench.json"
     assert main(["bench", BASIC, "--size", "96x54", "--frames", "2", "--warmup", "0",
                  "--json", str(out), "--speeds", "0.5,1",
@@ -320,28 +325,31 @@ def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys):
     back = setup(Namespace(params=str(out), scene=BASIC, size=None, time=None, seed="0",
                            set=[]))
     assert back.params["hybrid"].range_check is True and back.size == (96, 54)
-    assert rep["pass_timing"] == "CPU clock + ctx.finish()"      # llvmpipe: not its queries
+    # The driver's own method (CPU clock on software GL, timer queries on a GPU); times are
+    # the bench's to report, not the tests' to judge: only their bookkeeping is checked.
+    from viewer.render.modes import MODES
+    from viewer.render.timing import PassClock, describe
+    assert rep["pass_timing"] == describe(PassClock(ctx).method)
     assert set(rep["modes"]) == {"off", "mcguire", "ue4", "hybrid"}
     for mode, r in rep["modes"].items():
-        assert r["frame_ms"] > 0 and r["frame"]["n"] == 2
-        assert r["passes"]["gbuffer"] > 0
-        # Host CPU: no more than the frame (one thread), every pass timed.
-        assert 0 < r["frame_cpu_ms"] <= 1.05 * r["frame_ms"] + 0.5
-        assert set(r["passes_cpu"]) == set(r["passes"])
+        assert r["frame"]["n"] == 2 and r["frame_ms"] == r["frame"]["median"]
+        assert r["frame"]["p10"] <= r["frame"]["median"] <= r["frame"]["p90"]
+        # Every pass of the mode timed, in wall and in host CPU time.
+        assert set(r["passes"]) == {p.name for p in MODES[mode]().passes}
+        assert set(r["passes_cpu"]) == set(r["passes"]) and "frame_cpu_ms" in r
     hyb = rep["modes"]["hybrid"]
-    assert 0 < hyb["passes_cpu"]["reveal"] <= 1.05 * hyb["passes"]["reveal"] + 0.5
     assert {"select_tiles", "ray_mask", "reveal", "reveal_shade", "hybrid_composite"} <= set(hyb["passes"])
     for m in ("hybrid", "ue4"):
         assert rep["ratios"][f"{m}/mcguire"] == pytest.approx(
             rep["modes"][m]["frame_ms"] / rep["modes"]["mcguire"]["frame_ms"])
     rv = rep["reveal"]
     assert rv["rays"] >= rv["masked_pixels"] > 0
-    assert rv["rays_per_s"] > 0 and rv["embree_rays_per_s"] > 0
+    assert rv["rays_per_s"] == pytest.approx(rv["rays"] / (rv["reveal_ms"] / 1e3))
     assert rv["fraction_of_embree"] == pytest.approx(rv["rays_per_s"] / rv["embree_rays_per_s"])
     # The fraction a reveal would reach that traced at bare Embree's speed and did nothing
     # else but read the mask back.
     bare_ms = 1e3 * rv["masked_pixels"] / rv["embree_rays_per_s"]
-    assert 0 < rv["readback_ms"] < rv["reveal_ms"] and rv["records_ms"] > 0
+    assert {"readback_ms", "reveal_ms", "records_ms"} <= set(rv)
     assert rv["fraction_with_bare_tracing"] == pytest.approx(
         1e3 * rv["rays"] / (bare_ms + rv["readback_ms"]) / rv["embree_rays_per_s"])
     # Slower objects mask fewer pixels.
@@ -383,7 +391,8 @@ def test_bench_pass_times_by_gpu_timer_queries_on_request(tmp_path):
     assert rep["pass_timing"] == "GPU timer queries"
     passes = rep["modes"]["hybrid"]["passes"]
     assert {"gbuffer", "reveal", "hybrid_composite"} <= set(passes)
-    assert all(v >= 0.0 for v in passes.values())
+    from viewer.render.modes import MODES
+    assert set(passes) == {p.name for p in MODES["hybrid"]().passes}
 
 
 def test_bench_rejects_an_unknown_mode(capsys):

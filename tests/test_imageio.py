@@ -46,10 +46,13 @@ def test_srgb_float_is_unquantised_encoding():
     s = srgb_float(np.array([0.0, 0.0031308, 0.5, 1.0, 2.0]))
     assert s.dtype == np.float32
     np.testing.assert_allclose(s, [0.0, 0.04044994, 0.735357, 1.0, 1.0], atol=1e-6)
-    # quantising the float form gives exactly the 8-bit encoding
+    # Both forms against the transfer function written here from the contract (sRGB of
+    # the clamped linear value; 8 bits: floor(255 srgb + 0.5)).
     x = np.linspace(-0.1, 1.1, 5001)
-    q = np.floor(255.0 * srgb_float(x).astype(np.float64) + 0.5)
-    assert np.abs(q - linear_to_srgb8(x)).max() <= 1  # float32 rounding may tip a half
+    c = np.clip(x, 0.0, 1.0)
+    want = np.where(c <= 0.0031308, 12.92 * c, 1.055 * c ** (1 / 2.4) - 0.055)
+    np.testing.assert_allclose(srgb_float(x), want, rtol=0, atol=1e-6)
+    assert np.array_equal(linear_to_srgb8(x), np.floor(255.0 * want + 0.5).astype(np.uint8))
 
 
 def test_decode_round_trips_every_code():

@@ -93,7 +93,7 @@ def test_the_valid_document_loads(workdir):
     p = workdir / "scene.toml"
     p.write_text(toml_doc(valid_doc()))
     s = check(p)
-    assert s is not None and s.objects[-1].material.texture.image.shape == (2, 2, 3)
+    assert s.objects[-1].material.texture.image.shape == (2, 2, 3)
 
 
 @settings(**SETTINGS)

@@ -82,7 +82,7 @@ def test_velocity_is_the_exposure_displacement(ctx, tmp_path, camera_motion):
     finally:
         r.release()
     cam = Camera(sc.camera, 128, 96)
-    t0, t1 = sc.exposure(t)
+    t0, t1 = t - sc.camera.shutter / 2, t + sc.camera.shutter / 2     # the contract's exposure
     checked = 0
     for obj in sc.objects:
         jj, ii = np.nonzero(b["id"] == obj.id)
@@ -298,21 +298,39 @@ def test_camera_rays_equal_the_numpy_formula():
                                    rtol=0, atol=4e-16)
 
 
-def test_pass_timer_splits_host_cpu_from_waiting(ctx):
-    # pass_cpu_ms is the main thread's CPU time: a pass that waits (sleeps) has wall time
-    # but next to no CPU time; one that computes has both.
-    import time
+def test_pass_timer_splits_host_cpu_from_waiting(monkeypatch):
+    # pass_ms is the wall time between two ctx.finish() (the GPU's work included),
+    # pass_cpu_ms the main thread's CPU time in the pass; repeats add up. Scripted clocks
+    # and a recording context: the arithmetic and the order, no real time.
     from types import SimpleNamespace
-    from viewer.render.frame import PassTimer
-    frame = SimpleNamespace(ctx=ctx, timing=True, pass_ms={}, pass_cpu_ms={})
-    with PassTimer(frame, "waits"):
-        time.sleep(0.05)
-    with PassTimer(frame, "computes"):
-        t0 = time.perf_counter()
-        while time.perf_counter() - t0 < 0.05:
-            pass
-    assert frame.pass_ms["waits"] >= 49 and frame.pass_cpu_ms["waits"] < 10
-    assert frame.pass_ms["computes"] >= 49 and frame.pass_cpu_ms["computes"] >= 25
+    from viewer.render import frame as frame_mod
+    log, wall, cpu = [], [10.0], [3.0]
+    clock = SimpleNamespace(perf_counter=lambda: (log.append("wall"), wall[0])[1],
+                            thread_time=lambda: (log.append("cpu"), cpu[0])[1])
+    monkeypatch.setattr(frame_mod, "_time", clock)
+    gl = SimpleNamespace(finish=lambda: log.append("finish"))
+    frame = SimpleNamespace(ctx=gl, timing=True, pass_ms={}, pass_cpu_ms={})
+
+    def run(name, dwall, dcpu):
+        with frame_mod.PassTimer(frame, name):
+            wall[0] += dwall
+            cpu[0] += dcpu
+
+    run("waits", 0.050, 0.001)         # e.g. a sleep: wall time, next to no CPU
+    assert log == ["finish", "wall", "cpu", "cpu", "finish", "wall"]
+    run("computes", 0.050, 0.040)
+    run("computes", 0.010, 0.010)
+    assert frame.pass_ms == pytest.approx({"waits": 50.0, "computes": 60.0})
+    assert frame.pass_cpu_ms == pytest.approx({"waits": 1.0, "computes": 50.0})
+    log.clear()
+    frame.timing = False                # untimed frames: no finish, nothing recorded
+    run("off", 1.0, 1.0)
+    assert log == [] and "off" not in frame.pass_ms
+    frame.timing = True
+    with pytest.raises(ValueError):     # a failing pass records no time
+        with frame_mod.PassTimer(frame, "fails"):
+            raise ValueError
+    assert "fails" not in frame.pass_ms and "fails" not in frame.pass_cpu_ms
 
 
 @pytest.mark.parametrize("mode", ["off", "hybrid"])

@@ -43,8 +43,12 @@ def test_missing_include_is_reported(glsl_dir):
 
 def test_shipped_shaders_compile(ctx):
     from world.conventions import glsl_defines
-    for layout in (0, 1, 2):
+    from viewer.render.gbuffer import LAYOUTS, layout_defines
+    from viewer.render.gpu_scene import TEX_KINDS
+    kinds = {f"TEX_{k.upper()}": v for k, v in TEX_KINDS.items() if k}
+    for layout in LAYOUTS:
         for in_texture in (0, 1):
-            lights = {"MAX_LIGHTS": 16, "LIGHTS_TEXTURE": in_texture, "LIGHTS_PER_ROW": 1024}
+            lights = {"MAX_LIGHTS": 16, "LIGHTS_TEXTURE": in_texture, "LIGHTS_PER_ROW": 1024,
+                      **kinds}
             build_program(ctx, "gbuffer.vert", "gbuffer.frag",
-                          {**glsl_defines(), **lights, "GBUFFER_LAYOUT": layout}).release()
+                          {**glsl_defines(), **lights, **layout_defines(layout)}).release()

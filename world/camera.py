@@ -6,9 +6,12 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from . import jit_notice
 from . import transforms as tf
 from .conventions import pixel_centres_ndc
 from .scene import CameraSpec
+
+jit_notice.install()
 
 
 @dataclass

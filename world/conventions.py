@@ -2,7 +2,9 @@
 
 Pixel centres: pixel (i, j) of a written image (column i from the left, row j from the
 top) samples the ray through (i + 0.5, j + 0.5). GL framebuffers are bottom-up, images are
-top-down: `to_image` flips rows and is the only place that does.
+top-down: `flip_row` maps a row index between the two and `to_image` applies the same map
+to a whole array; every row flip goes through one of them (the compiled kernels inline
+flip_row).
 
 Object ids: object k of the scene file (1-based, file order) is written as k into an
 unsigned integer target cleared to 0, so 0 means "background" with no offset.
@@ -25,8 +27,15 @@ import numpy as np
 BACKGROUND_DEPTH = 1.0e9
 
 
+def flip_row(y, height):
+    """GL row y (from the bottom) of a `height`-row framebuffer -> image row (from the
+    top), and back: the flip is its own inverse. Plain arithmetic, so numba compiles it."""
+    return height - 1 - y
+
+
 def to_image(gl_rows: np.ndarray) -> np.ndarray:
-    """GL bottom-up rows -> image top-down rows (and back: the flip is its own inverse)."""
+    """GL bottom-up rows -> image top-down rows (and back): flip_row on the first axis,
+    row k of the result being row flip_row(k, height) of the input."""
     return np.ascontiguousarray(gl_rows[::-1])
 
 

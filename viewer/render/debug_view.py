@@ -21,7 +21,16 @@ from .pool import ResourcePool, TexSpec
 
 KINDS = ("colour", "depth", "normal", "id", "velocity", "tiles", "scalar")
 # moderngl's u1/u2/u4 and i1/i2/i4 are integer formats (usampler/isampler); f1, f2, f4 float.
-_SOURCE_TYPE = {"u1": 1, "u2": 1, "u4": 1, "i1": 2, "i2": 2, "i4": 2}
+SOURCE_UINT, SOURCE_INT = 1, 2      # SOURCE_TYPE codes; 0 float or normalised
+_SOURCE_TYPE = {"u1": SOURCE_UINT, "u2": SOURCE_UINT, "u4": SOURCE_UINT,
+                "i1": SOURCE_INT, "i2": SOURCE_INT, "i4": SOURCE_INT}
+
+
+def view_defines(dtype: str) -> dict:
+    """glsl/debug_view.frag's defines: the source's sampler type and the codes of
+    SOURCE_TYPE and of u_kind (KIND_<NAME>: the index in KINDS)."""
+    return {"SOURCE_TYPE": _SOURCE_TYPE.get(dtype, 0), "SOURCE_UINT": SOURCE_UINT,
+            "SOURCE_INT": SOURCE_INT, **{f"KIND_{k.upper()}": i for i, k in enumerate(KINDS)}}
 
 
 def auto_kind(name: str, spec: TexSpec, dtype: str | None = None) -> tuple[str, int]:
@@ -101,7 +110,7 @@ class DebugView:
         kind, channel = self.resolve(pool, name, settings)
         ctx = target.ctx
         prog = self.programs.get("fullscreen.vert", "debug_view.frag",
-                                 {**glsl_defines(), "SOURCE_TYPE": _SOURCE_TYPE.get(tex.dtype, 0)})
+                                 {**glsl_defines(), **view_defines(tex.dtype)})
         dest = dest or (0, 0) + tuple(target.size)
         lo, hi = 0.0, 1.0
         gain = settings.gain

@@ -33,6 +33,13 @@ LAYOUTS = {
 }
 
 
+def layout_defines(layout: str) -> dict:
+    """GBUFFER_LAYOUT, this layout's code, and every layout's code as
+    GBUFFER_LAYOUT_<NAME>, so glsl/gbuffer_outputs.glsl compares by name."""
+    return {"GBUFFER_LAYOUT": LAYOUTS[layout][0],
+            **{f"GBUFFER_LAYOUT_{name.upper()}": code for name, (code, _) in LAYOUTS.items()}}
+
+
 class GBufferPass(Pass):
     name = "gbuffer"
 
@@ -64,7 +71,7 @@ class GBufferPass(Pass):
         names = self.targets(layout)
         for stale in set(self.produces) - set(names):
             frame.pool.discard(stale)      # (written under other parameters: not this frame's)
-        defines = {**glsl_defines(), **gpu.light_defines(), "GBUFFER_LAYOUT": LAYOUTS[layout][0]}
+        defines = {**glsl_defines(), **gpu.light_defines(), **layout_defines(layout)}
         fbo = frame.pool.framebuffer(names, depth=True)
         fbo.use()
         fbo.viewport = (0, 0) + fbo.size

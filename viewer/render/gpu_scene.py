@@ -10,6 +10,7 @@ import moderngl
 import numpy as np
 
 from world import transforms as tf
+from world.conventions import to_image
 from world.errors import SceneError
 from world.scene import Scene, SceneObject
 from . import depth
@@ -130,7 +131,8 @@ class GpuScene:
                                      f"objects[{o.id}] ({o.name}).material.texture.path",
                                      f"an image of at most {limit} px a side (this GL "
                                      f"driver's limit), got {w}x{h}")
-                img = np.ascontiguousarray(tex.image[::-1], dtype=np.float32)  # UV origin: bottom-left
+                # (UV origin bottom-left: GL rows, the image's rows flipped)
+                img = to_image(tex.image).astype(np.float32, copy=False)
                 t = ctx.texture((img.shape[1], img.shape[0]), 3, img.tobytes(), dtype="f4")
                 t.filter = (moderngl.LINEAR, moderngl.LINEAR)
                 t.repeat_x = t.repeat_y = True
@@ -177,10 +179,12 @@ class GpuScene:
         set_uniform(prog, "u_near", float(cam.spec.near))
 
     def light_defines(self) -> dict:
-        """What glsl/shading.glsl needs defined for this scene's lights."""
+        """What glsl/shading.glsl needs defined: this scene's lights, and the texture kinds'
+        codes (TEX_CHECKER, ... as TEX_KINDS numbers them)."""
         return {"MAX_LIGHTS": max(self.max_lights, 1),
                 "LIGHTS_TEXTURE": int(self.light_texture is not None),
-                "LIGHTS_PER_ROW": LIGHTS_PER_ROW}
+                "LIGHTS_PER_ROW": LIGHTS_PER_ROW,
+                **{f"TEX_{kind.upper()}": code for kind, code in TEX_KINDS.items() if kind}}
 
     def bind_lights(self, prog: moderngl.Program):
         s = self.scene

@@ -11,7 +11,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from world import jit_notice
+from world.conventions import flip_row
+
 _JIT = dict(cache=True, nogil=True)
+jit_notice.install()
+_flip_row = njit(inline="always")(flip_row)     # conventions' row flip, compiled in
 
 
 @njit(**_JIT)
@@ -27,7 +32,7 @@ def record_inputs(px, height, object_id, prim_id, face_offset, static_view, stat
     face = np.empty(n, np.int64)
     for k in range(n):
         gx[k] = px[k, 0]
-        gy[k] = height - 1 - px[k, 1]
+        gy[k] = _flip_row(px[k, 1], height)
         oid = object_id[k]
         key[k] = static_key if static_key >= 0 and static_view[k] else np.int64(oid) + 1
         face[k] = face_offset[oid] + np.int64(prim_id[k]) if oid != 0 else -1
@@ -175,7 +180,7 @@ def nonzero_pixels(gl_rows, i0, j0):
     k = 0
     whole = w - w % 8
     for r in range(h):
-        y = h - 1 - r
+        y = _flip_row(r, h)
         if per_row[y] == 0:
             continue
         row = gl_rows[y]

@@ -32,6 +32,7 @@ import numpy as np
 from raytrace import RayScene
 from raytrace.reveal import primary_view, reveal
 
+from world.conventions import flip_row
 from .frame import Frame
 from .gbuffer import GBufferPass
 from .gpu_scene import TEX_KINDS, set_uniform
@@ -71,9 +72,19 @@ class ObjectTable:
     shininess), (texture kind, size, axis, 0) as glsl/reveal_shade.frag's OBJECT_TABLE
     reads them; OBJECTS_PER_ROW records a texture row (a power of two: the shader finds
     its record with a shift), so any number of objects fits. Image-textured objects have
-    no record (a draw samples one image): they keep their own draw."""
+    no record (a draw samples one image): they keep their own draw. The texel offsets
+    reach the shader as defines (glsl_defines)."""
+    MODEL, OPEN, CLOSE, NORMAL = 0, 4, 8, 12      # first texel of each matrix's columns
+    MATERIAL = 15                                 # three texels of material
     TEXELS = 18
     OBJECTS_PER_ROW = 256
+
+    @classmethod
+    def glsl_defines(cls) -> dict:
+        return {"OBJECT_TEXELS": cls.TEXELS, "OBJECTS_PER_ROW": cls.OBJECTS_PER_ROW,
+                "OBJECT_MODEL": cls.MODEL, "OBJECT_OPEN": cls.OPEN,
+                "OBJECT_CLOSE": cls.CLOSE, "OBJECT_NORMAL": cls.NORMAL,
+                "OBJECT_MATERIAL": cls.MATERIAL}
 
     def __init__(self, ctx: moderngl.Context, scene):
         self.objects = {o.id: o for o in scene.objects}
@@ -82,12 +93,13 @@ class ObjectTable:
         self.data = np.zeros((rows * per_row, self.TEXELS, 4), np.float32)
         for o in scene.objects:
             m, tex = o.material, o.material.texture
-            self.data[o.id, 15] = (*m.albedo, m.specular)
-            self.data[o.id, 16, 3] = m.shininess
-            self.data[o.id, 17, 0] = TEX_KINDS[tex.kind if tex else None]
+            mat = self.MATERIAL
+            self.data[o.id, mat] = (*m.albedo, m.specular)
+            self.data[o.id, mat + 1, 3] = m.shininess
+            self.data[o.id, mat + 2, 0] = TEX_KINDS[tex.kind if tex else None]
             if tex is not None and tex.kind != "image":
-                self.data[o.id, 16, :3] = tex.albedo2
-                self.data[o.id, 17, 1:3] = tex.size, tex.axis
+                self.data[o.id, mat + 1, :3] = tex.albedo2
+                self.data[o.id, mat + 2, 1:3] = tex.size, tex.axis
         self.texture = ctx.texture((self.TEXELS * per_row, rows), 4, dtype="f4")
         self.texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
 
@@ -106,9 +118,10 @@ class ObjectTable:
         mats = [frame.gpu.object_matrices(self.objects[i], frame.camera, frame.time, t_open,
                                           t_close, frame.object_matrices) for i in ids]
         ids = np.asarray(ids, np.int64)
-        for k, m in enumerate(zip(*mats)):     # columns: (model, open, close, normal)
+        starts = (self.MODEL, self.OPEN, self.CLOSE, self.NORMAL)
+        for at, m in zip(starts, zip(*mats)):     # (model, open, close, normal)
             cols = np.asarray(m, np.float32).transpose(0, 2, 1)      # (objects, column, row)
-            self.data[ids, 4 * k:4 * k + cols.shape[1], :cols.shape[2]] = cols
+            self.data[ids, at:at + cols.shape[1], :cols.shape[2]] = cols
         self.texture.write(self.data.tobytes())
 
     def release(self):
@@ -245,7 +258,7 @@ def read_masked_pixels(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
     fbo = frame.pool.framebuffer(("ray_mask",))
     data = fbo.read(viewport=(i0, y0, i1 - i0, y1 - y0), components=1, dtype="u4")
     gl_rows = np.frombuffer(data, np.uint32).reshape(y1 - y0, i1 - i0)
-    return kernels.nonzero_pixels(gl_rows, i0, h - y1)
+    return kernels.nonzero_pixels(gl_rows, i0, flip_row(y1 - 1, h))   # the top row's image row
 
 
 def frame_models(frame: Frame, moving) -> list | None:
@@ -344,8 +357,8 @@ class RevealShade(FullscreenPass):
         self._static = self._table = 0
 
     def defines(self, frame: Frame):
-        return {**frame.gpu.light_defines(), "FACES_PER_ROW": FACES_PER_ROW,
-                "OBJECTS_PER_ROW": ObjectTable.OBJECTS_PER_ROW,
+        return {**frame.gpu.light_defines(), **ObjectTable.glsl_defines(),
+                "FACES_PER_ROW": FACES_PER_ROW, "TEXELS_PER_FACE": TEXELS_PER_FACE,
                 "STATIC_LAYER": self._static, "OBJECT_TABLE": self._table}
 
     def outputs(self, frame: Frame):

@@ -7,7 +7,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from world import jit_notice
+from world.conventions import flip_row
+
 _JIT = dict(cache=True, nogil=True)
+jit_notice.install()
+_flip_row = njit(inline="always")(flip_row)     # conventions' row flip, compiled in
 
 # Two triangles per tile, corners as (x1?, y1?): (x0,y0) (x1,y0) (x0,y1), (x1,y0) (x1,y1) (x0,y1).
 _CORNERS = ((0, 0), (1, 0), (0, 1), (1, 0), (1, 1), (0, 1))
@@ -195,7 +200,7 @@ def pixel_tiles(ij, rows, cols, tile, height):
     (i, j) of `ij` (row j from the top of an image `height` pixels high)."""
     out = np.zeros((rows, cols), np.bool_)
     for k in range(ij.shape[0]):
-        out[(height - 1 - ij[k, 1]) // tile, ij[k, 0] // tile] = True
+        out[_flip_row(ij[k, 1], height) // tile, ij[k, 0] // tile] = True
     return out
 
 

@@ -233,16 +233,22 @@ def near_boundary(longest: np.ndarray, boundary: np.ndarray, tile: int) -> np.nd
     return within_reach(boundary, 0.5 * longest.astype(np.float64) + 2.0, tile)
 
 
+# glsl/zero_tiles.frag's target kinds (OUTk; 0: no target at location k).
+OUT_FLOAT, OUT_INT = 1, 2
+
+
 class ZeroTiles(FullscreenPass):
     """Every target of a framebuffer back to 0 over a tile list (glsl/zero_tiles.frag)."""
     fragment = "zero_tiles.frag"
 
     def defines(self, frame: Frame):
-        return {f"OUT{k}": self._kinds[k] if k < len(self._kinds) else 0 for k in range(4)}
+        return {"OUT_FLOAT": OUT_FLOAT, "OUT_INT": OUT_INT,
+                **{f"OUT{k}": self._kinds[k] if k < len(self._kinds) else 0 for k in range(4)}}
 
     def zero(self, frame: Frame, outputs: tuple[str, ...], tiles: TileList):
-        # 1: a float target, 2: an integer one (moderngl's u* and i* formats).
-        self._kinds = [2 if frame.pool.spec(n).dtype[0] in "ui" else 1 for n in outputs]
+        # moderngl's u* and i* formats are integer targets.
+        self._kinds = [OUT_INT if frame.pool.spec(n).dtype[0] in "ui" else OUT_FLOAT
+                       for n in outputs]
         self.draw(frame, outputs, {}, {"u_viewport": tuple(float(x) for x in tiles.size)},
                   tiles=tiles, clear=False)            # (a strip's size, not the frame's)
 
