@@ -4,4 +4,10 @@
 uniform vec3 u_background;
 void main() {
     write_gbuffer(u_background, BACKGROUND_DEPTH, vec3(0.0), 0u, vec2(0.0));
+#if SEGMENTS > 1
+    out_path0 = vec4(0.0);              // the sky: no motion
+#if SEGMENTS == 4
+    out_path1 = vec4(0.0);
+#endif
+#endif
 }

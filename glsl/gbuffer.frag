@@ -10,6 +10,10 @@ in vec3 v_world;
 in vec4 v_view;
 in vec4 v_view_open;
 in vec4 v_view_close;
+#if SEGMENTS > 1
+#include "path.glsl"
+in vec4 v_view_path[SEGMENTS];
+#endif
 
 uniform mat3 u_normal_matrix;   // inverse transpose of M(t)'s upper 3x3
 uniform uint u_object_id;
@@ -25,4 +29,15 @@ void main() {
     vec2 velocity = vec2(0.0);
 #endif
     write_gbuffer(color, -v_view.z, n, u_object_id, velocity);
+#if SEGMENTS > 1
+    // The path's points as offsets from this point's own window position now.
+    vec2 o[SEGMENTS];
+    for (int j = 0; j < SEGMENTS; ++j)
+        o[j] = saturate_displacement(to_window(clip_to_near(v_view_path[j], v_view))
+                                     - to_window(v_view));
+    out_path0 = vec4(o[0], o[1]);
+#if SEGMENTS == 4
+    out_path1 = vec4(o[2], o[3]);
+#endif
+#endif
 }

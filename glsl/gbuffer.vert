@@ -19,6 +19,13 @@ out vec3 v_world;               // relative to the eye
 out vec4 v_view;
 out vec4 v_view_open;           // the point's view position at shutter open / close
 out vec4 v_view_close;
+#if SEGMENTS > 1
+#include "path.glsl"
+// V(t_k) M(t_k) for k = 0..K (GpuScene.path_matrices); the points' view positions, the
+// middle one (the frame time: v_view) left out.
+uniform mat4 u_modelview_path[PATH_POINTS];
+out vec4 v_view_path[SEGMENTS];
+#endif
 
 void main() {
     v_local = in_position;
@@ -28,5 +35,9 @@ void main() {
     v_view = u_modelview * vec4(in_position, 1.0);
     v_view_open = view_open(in_position);
     v_view_close = view_close(in_position);
+#if SEGMENTS > 1
+    for (int j = 0; j < SEGMENTS; ++j)
+        v_view_path[j] = u_modelview_path[j < SEGMENTS / 2 ? j : j + 1] * vec4(in_position, 1.0);
+#endif
     gl_Position = u_proj * v_view;
 }

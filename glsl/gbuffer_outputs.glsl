@@ -34,6 +34,13 @@ layout(location = 1) out vec4 out_hybrid_front;
 layout(location = 1) out float out_depth;
 layout(location = 2) out vec2 out_velocity;
 #endif
+// The path targets (glsl/path.glsl), after the layout's own: at PATH_LOCATION(1).
+#if SEGMENTS > 1
+layout(location = PATH_LOCATION) out vec4 out_path0;
+#if SEGMENTS == 4
+layout(location = PATH_LOCATION1) out vec4 out_path1;
+#endif
+#endif
 
 void write_gbuffer(vec3 color, float depth, vec3 normal, uint id, vec2 velocity) {
     out_color = vec4(color, 1.0);

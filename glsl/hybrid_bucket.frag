@@ -36,9 +36,23 @@
 // own lines' spread off the neighbourhood's direction): every tap lands on the own object,
 // so the buckets of other objects stay empty and the unmerged neighbourhood's line adds
 // nothing. All four give the image the full variant gives.
+// With a path (SEGMENTS > 1, glsl/path.glsl) the own and the neighbourhood's lines walk
+// paths instead: what covers the pixel during segment k (a share 1/K of the exposure) is
+// what lies along that segment reversed, centred at x minus the segment's midpoint offset
+// (the pixel's own path for the own line, the NeighborMax tile's for the neighbourhood's),
+// each tap weighted by its fragment's own segment-k length and 1/K; the own line's taps,
+// in time order, give the presence bits; the lines are never merged.
 #include "noise.glsl"
 #include "hybrid_layers.glsl"
 uniform sampler2D u_neighbormax;
+#if SEGMENTS > 1
+#define PATH_READ
+#include "path.glsl"
+uniform sampler2D u_neighbormax_path0;
+#if SEGMENTS == 4
+uniform sampler2D u_neighbormax_path1;
+#endif
+#endif
 uniform int u_tile;
 uniform int u_samples_min;
 uniform int u_samples_max;
@@ -87,13 +101,16 @@ uint g_own_bits;
 int g_bits_n;
 void presence_reset(int n) { g_own_bits = 0u; g_bits_n = n; }
 void presence_add(int i, bool own) { g_own_bits |= own ? (1u << uint(i)) : 0u; }
-bool own_covers(float len, float lo) {
-    if (len < 1e-3 || lo < 1e-3) return true;
-    float u = clamp(-g_s / len, -0.5, 0.5);
+// (u: the time in [-1/2, 1/2] of the exposure; bit 0 the latest piece)
+bool own_covers_at(float u) {
     // (+1e-3: uniform motion puts u on piece boundaries exactly; rounding then decides,
     // so ties are moved off them, for every float precision alike)
     int i = min(int(floor((0.5 - u) * float(g_bits_n) + 1e-3)), g_bits_n - 1);
     return ((g_own_bits >> uint(i)) & 1u) != 0u;
+}
+bool own_covers(float len, float lo) {
+    if (len < 1e-3 || lo < 1e-3) return true;
+    return own_covers_at(clamp(-g_s / len, -0.5, 0.5));
 }
 
 int taps_for(float half_len) {
@@ -121,6 +138,78 @@ ivec2 tap_gap(ivec2 x, vec2 dir, float R, float gap, int i, int n, int m,
     return clamp(ivec2(floor(vec2(x) + 0.5 + g_s * dir)), ivec2(0), g_size - 1);
 }
 
+#if SEGMENTS > 1
+// Taps per segment of a path: as a line as long as its longest segment gets, a share
+// 1/K of the tap counts, and at most BITS in all (one presence bit a tap).
+int path_taps(vec2 o[PATH_POINTS]) {
+    float longest = 0.0;
+    for (int k = 0; k < SEGMENTS; ++k) longest = max(longest, length(o[k + 1] - o[k]));
+    int lo = max(1, (u_samples_min + SEGMENTS - 1) / SEGMENTS);
+    int hi = max(lo, u_samples_max / SEGMENTS);
+    return min(clamp(int(ceil(longest / u_spacing)), lo, hi), BITS / SEGMENTS);
+}
+
+// Segment k of a path as a sampling line: its midpoint offset, unit direction, half length.
+float segment_line(vec2 o[PATH_POINTS], int k, out vec2 mid, out vec2 dir) {
+    vec2 d = o[k + 1] - o[k];
+    float l = length(d);
+    mid = 0.5 * (o[k] + o[k + 1]);
+    dir = l > 1e-6 ? d / l : vec2(1.0, 0.0);
+    return 0.5 * l;
+}
+
+// The neighbourhood's line for segment k: from x out to the segment's farther point
+// (px offsets; its midpoint, unit direction and half length). A surface moving like the
+// NeighborMax tile's but slower passes x during segment k nearer x than the tile's own
+// segment: on the segment scaled towards the frame-time point, which the spoke covers.
+float spoke_line(vec2 o[PATH_POINTS], int k, out vec2 mid, out vec2 dir) {
+    vec2 far = dot(o[k], o[k]) > dot(o[k + 1], o[k + 1]) ? o[k] : o[k + 1];
+    float l = length(far);
+    mid = 0.5 * far;
+    dir = l > 1e-6 ? far / l : vec2(1.0, 0.0);
+    return 0.5 * l;
+}
+
+// Taps per spoke: as path_taps, by the longest spoke, twice the share (spokes overlap).
+int spoke_taps(vec2 o[PATH_POINTS]) {
+    float longest = 0.0;
+    for (int k = 0; k < PATH_POINTS; ++k) longest = max(longest, length(o[k]));
+    int lo = max(1, (u_samples_min + SEGMENTS - 1) / SEGMENTS);
+    int hi = max(lo, 2 * u_samples_max / SEGMENTS);
+    return clamp(int(ceil(longest / u_spacing)), lo, hi);
+}
+
+// Tap i of n on the line c + s dir, s in [-R, R] (tap()'s pieces and jitter), c in px.
+ivec2 tap_at(vec2 c, vec2 dir, float R, int i, int n, out float a, out float b) {
+    float h = R / float(n);
+    a = -R + 2.0 * h * float(i);
+    b = a + 2.0 * h;
+    g_s = a + 2.0 * h * g_jitter;
+    return clamp(ivec2(floor(c + g_s * dir)), ivec2(0), g_size - 1);
+}
+
+// The share of the exposure during which the fragment at tap y (piece [a, b], at g_s, of
+// the line along segment k centred at x - mid) covers the pixel in segment k, from its
+// own path: measured along its own segment k (its direction; the line's where it is
+// still), x lies g_s' from that segment's midpoint, and the piece moves by g_s' - g_s
+// (what lies beside x is not tested: as on a straight line, a surface filling the line
+// then sums to 1). 1/K of coverage(); g_s becomes g_s', len the segment's length.
+float path_coverage(ivec2 y, int k, vec2 mid, vec2 dir, float a, float b, out float len) {
+    vec2 oy[PATH_POINTS];
+    front_path_raw(y, oy);
+    clamp_path(oy, u_max_disp);
+    vec2 d = oy[k + 1] - oy[k];
+    len = length(d);
+    vec2 dy = len >= 1e-3 ? d / len : dir;
+    // x minus the fragment's segment midpoint (the tap's point is x - mid + g_s dir)
+    vec2 e = mid - g_s * dir - 0.5 * (oy[k] + oy[k + 1]);
+    float s = -dot(e, dy);
+    float shift = s - g_s;
+    g_s = s;
+    return coverage(a + shift, b + shift, len) / float(SEGMENTS);
+}
+#endif
+
 void add(int bucket, vec3 c, float w) {
     g_sum[bucket] += w * c;
     g_weight[bucket] += w;
@@ -143,7 +232,21 @@ void main() {
     vec4 bx = vec4(fx.xyz, 0.0);        // nothing revealed in this tile
 #endif
     vec2 vn = clamp_length(texelFetch(u_neighbormax, x / u_tile, 0).xy);
-    if (max(length(vn), max(length(fx.xy), length(bx.xy))) <= 1.0) {
+#if SEGMENTS > 1
+    vec2 po[PATH_POINTS], pn[PATH_POINTS];
+    front_path_raw(x, po);
+    clamp_path(po, u_max_disp);
+#if SEGMENTS == 2
+    read_path(u_neighbormax_path0, x / u_tile, pn);
+#else
+    read_path(u_neighbormax_path0, u_neighbormax_path1, x / u_tile, pn);
+#endif
+    clamp_path(pn, u_max_disp);
+    float reach = max(path_extent(pn), max(path_extent(po), length(bx.xy)));
+#else
+    float reach = max(length(vn), max(length(fx.xy), length(bx.xy)));
+#endif
+    if (reach <= 1.0) {
         out_color = vec4(own_colour, 1.0);
         return;
     }
@@ -160,15 +263,71 @@ void main() {
 #if OWN_STILL
     const bool own_moves = false;
 #else
+#if SEGMENTS > 1
+    bool own_moves = path_extent(po) >= 1e-3;
+#else
     bool own_moves = dot(fx.xy, fx.xy) >= 1e-6;
+#endif
 #endif
     float back_depth = revealed ? bx.z : 3.0e38;
     float back_id = revealed ? bx.w - 1.0 : -1.0;
+#if SEGMENTS > 1
+    float ln = length(vn), lo = path_extent(po);
+#else
     float ln = length(vn), lo = length(fx.xy);
+#endif
     float ro = 0.5 * lo, rn = 0.5 * ln;
     float a, b;
     presence_reset(1);
 
+#if SEGMENTS > 1
+    // The own line along the own path, segment by segment (see the top); its taps in
+    // time order (bit 0 the latest) give the presence bits.
+#if OWN_STILL
+    const bool merged = false;
+#else
+    const bool merged = false;
+    if (own_moves) {
+        // What lies on x at time t_k is the surface point that moves there, from x minus
+        // its own offset o_k: refined once from the pixel at x - o_k where that is the own
+        // object (to second order the pre-image of a rotation; x - o_k alone bends the
+        // wrong way).
+        vec2 pb[PATH_POINTS];
+        for (int k = 0; k < PATH_POINTS; ++k) {
+            pb[k] = po[k];
+            ivec2 y0 = clamp(ivec2(floor(vec2(x) + 0.5 - po[k])), ivec2(0), g_size - 1);
+            if (k != SEGMENTS / 2 && texelFetch(u_front, y0, 0).w == own_id) {
+                vec2 oy[PATH_POINTS];
+                front_path_raw(y0, oy);
+                clamp_path(oy, u_max_disp);
+                pb[k] = oy[k];
+            }
+        }
+        int n = path_taps(pb);
+        presence_reset(n * SEGMENTS);
+        for (int k = 0; k < SEGMENTS; ++k) {
+            vec2 mid, dir;
+            float r = segment_line(pb, k, mid, dir);
+            for (int i = 0; i < n; ++i) {
+                ivec2 y = tap_at(vec2(x) + 0.5 - mid, dir, r, i, n, a, b);
+                vec4 m = texelFetch(u_front, y, 0);
+                vec3 c = texelFetch(u_front_color, y, 0).rgb;
+                bool own = m.w == own_id;
+                presence_add((SEGMENTS - 1 - k) * n + i, own);
+                float len;
+                float w = path_coverage(y, k, mid, dir, a, b, len);
+                add(OWN, c, own ? w : 0.0);
+                bool far = !own && m.z >= own_depth;
+                g_far_sum += far ? c : vec3(0.0);
+                g_far_count += far ? 1.0 : 0.0;
+            }
+        }
+    } else
+#endif
+    {
+        add(OWN, own_colour, 1.0);            // the own object (nearly) still
+    }
+#else
     // The own line: the own object's coverage and colour along its displacement, and
     // the bits of its presence along its path for the time pairing.
 #if OWN_STILL
@@ -221,6 +380,39 @@ void main() {
     {
         add(OWN, own_colour, 1.0);            // the own object (nearly) still
     }
+#endif
+#if SEGMENTS > 1
+    // The neighbourhood's line along the NeighborMax tile's path, segment by segment (each
+// on its spoke from x).
+#if !SIMPLE
+    if (path_extent(pn) > 1.0) {
+        int n = spoke_taps(pn);
+        for (int k = 0; k < SEGMENTS; ++k) {
+            vec2 mid, dir;
+            float r = spoke_line(pn, k, mid, dir);
+            for (int i = 0; i < n; ++i) {
+                ivec2 y = tap_at(vec2(x) + 0.5 - mid, dir, r, i, n, a, b);
+                vec4 m = texelFetch(u_front, y, 0);
+                vec3 c = texelFetch(u_front_color, y, 0).rgb;
+                float len;
+                float w = path_coverage(y, k, mid, dir, a, b, len);
+                bool own = m.w == own_id;
+                bool near = !own && m.z < own_depth;
+                bool between = !own && !near && m.w != back_id && m.z < back_depth;
+                add(NEAR, c, near ? w : 0.0);
+                // The time the fragment passes the pixel: within segment k, at -s / len.
+                float u = (float(k) + 0.5 + clamp(-g_s / max(len, 1e-6), -0.5, 0.5))
+                          / float(SEGMENTS) - 0.5;
+                bool covers = len < 1e-3 || lo < 1e-3 || own_covers_at(u);
+                g_near_free += own_moves && near && !covers ? w : 0.0;
+                add(BETWEEN, c, between ? w : 0.0);
+                g_far_sum += between ? c : vec3(0.0);
+                g_far_count += between ? 1.0 : 0.0;
+            }
+        }
+    }
+#endif
+#else
     // The neighbourhood's line: what passes over the pixel; where merged, only its ends
     // beyond the own line, about as densely as the whole line's taps (rounded to the
     // nearest count, at least one a side: under a pan the ends are a few pixels long, and
@@ -258,6 +450,7 @@ void main() {
 #endif
         }
     }
+#endif
     // The revealed layer's line, blurred along its own motion (merged with the raster
     // where nothing was revealed, so the line may run out of the mask).
     vec3 fill = g_far_count > 0.0 ? g_far_sum / g_far_count : own_colour;

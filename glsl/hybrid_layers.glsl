@@ -2,19 +2,14 @@
 // front: the G-buffer's hybrid_front, (D.xy, depth, object id), D the displacement over the
 //     exposure, read through front_motion() which clamps it to the blur limit u_max_disp
 //     (|D| <= 2k);
-// back (and back2): written by reveal_shade where a ray was cast, (D.xy, depth, 1 + the
-//     revealed object's id), and cleared to 0 elsewhere: there a layer reads the one in
-//     front of it (back -> front, back2 -> back) with w = 0, "nothing revealed here", so
-//     a back-layer walk that leaves the mask reads the visible surface. D clamped on read,
-//     as the front's.
+// back: written by reveal_shade where a ray was cast, (D.xy, depth, 1 + the revealed
+//     object's id), and cleared to 0 elsewhere: there it reads the front with w = 0,
+//     "nothing revealed here", so a back-layer walk that leaves the mask reads the
+//     visible surface. D clamped on read, as the front's.
 uniform sampler2D u_front_color;
 uniform sampler2D u_front;
 uniform sampler2D u_back_color;
 uniform sampler2D u_back;
-#if LAYERS >= 2
-uniform sampler2D u_back2_color;
-uniform sampler2D u_back2;
-#endif
 
 uniform float u_max_disp;
 
@@ -34,13 +29,3 @@ vec3 back_colour(ivec2 p) {
     vec4 c = texelFetch(u_back_color, p, 0);
     return c.a > 0.5 ? c.rgb : front_colour(p);
 }
-#if LAYERS >= 2
-vec4 back2_motion(ivec2 p) {
-    vec4 b = texelFetch(u_back2, p, 0);
-    return b.w > 0.5 ? clamp_motion(b) : back_motion(p);
-}
-vec3 back2_colour(ivec2 p) {
-    vec4 c = texelFetch(u_back2_color, p, 0);
-    return c.a > 0.5 ? c.rgb : back_colour(p);
-}
-#endif

@@ -13,8 +13,14 @@
 // displacement at the pixel (what the moving foreground uncovers). Where nothing
 // covers (data missing: unmasked inner blur, off-screen), the closest miss stands in,
 // preferring surfaces behind the pixel's own. The average over the times is the pixel.
+// With a path (SEGMENTS > 1, glsl/path.glsl) the front layer's motion at time u is its
+// path's offset there, not u D.
 #include "noise.glsl"
 #include "hybrid_layers.glsl"
+#if SEGMENTS > 1
+#define PATH_READ
+#include "path.glsl"
+#endif
 uniform sampler2D u_neighbormax;    // largest displacement over the 3x3 tiles
 uniform sampler2D u_tilemax;        // largest displacement per tile
 uniform sampler2D u_mask_tiles;     // ray_mask_tiles (reveal_pass.mask_tiles): y = 1 if a tile has rays
@@ -33,18 +39,26 @@ float g_own_depth;
 
 vec4 motion(int layer, ivec2 p) {
     if (layer == 0) return front_motion(p);
-#if LAYERS >= 2
-    if (layer == 2) return back2_motion(p);
-#endif
     return back_motion(p);
 }
 
 vec3 colour(int layer, ivec2 p) {
     if (layer == 0) return front_colour(p);
-#if LAYERS >= 2
-    if (layer == 2) return back2_colour(p);
-#endif
     return back_colour(p);
+}
+
+// Where the surface of `layer` at pixel q (motion m) lies at time u, from its frame-time
+// position: u D, or on the front layer its path's offset.
+vec2 offset_at(int layer, ivec2 q, vec4 m, float u) {
+#if SEGMENTS > 1
+    if (layer == 0) {
+        vec2 o[PATH_POINTS];
+        front_path_raw(q, o);
+        clamp_path(o, u_max_disp);
+        return path_at(o, u);
+    }
+#endif
+    return u * m.xy;
 }
 
 // The frame-time pixel q of `layer` whose surface lies on this pixel at time u; returns
@@ -57,10 +71,11 @@ float walk(int layer, float u, vec2 seed, out ivec2 q, out vec4 m) {
         ivec2 raw = ivec2(floor(p));
         ivec2 qi = clamp(raw, ivec2(0), g_size - 1);
         vec4 mi = motion(layer, qi);
-        vec2 land = vec2(qi) + 0.5 + u * mi.xy - g_centre;
+        vec2 off = offset_at(layer, qi, mi, u);
+        vec2 land = vec2(qi) + 0.5 + off - g_centre;
         float r = raw == qi ? max(abs(land.x), abs(land.y)) : 1e30;
         if (r < best) { best = r; q = qi; m = mi; }
-        p = g_centre - u * mi.xy;
+        p = g_centre - off;
         if (ivec2(floor(p)) == raw) break;     // a fixed point: the next steps repeat it
     }
     return best;
@@ -123,10 +138,6 @@ void main() {
     ivec2 tile = x / u_tile;
     vec2 vn = clamp_length(texelFetch(u_neighbormax, tile, 0).xy);
     float reach = max(length(vn), max(length(fx.xy), length(bx.xy)));
-#if LAYERS >= 2
-    vec4 b2x = back2_motion(x);
-    reach = max(reach, length(b2x.xy));
-#endif
     // Nothing within reach moves half a pixel either way: the sharp pixel is the answer.
     if (reach <= 1.0) {
         out_color = vec4(own, 1.0);
@@ -161,9 +172,6 @@ void main() {
         consider(0, u, fx.xy);
         for (int i = 0; i < g_num_seeds; ++i) consider(0, u, g_seeds[i]);
         if (back_walk) consider(1, u, bx.xy);
-#if LAYERS >= 2
-        if (back_walk) consider(2, u, b2x.xy);
-#endif
         sum += g_covered ? g_best : g_stand_in;
     }
     out_color = vec4(sum / float(n), 1.0);

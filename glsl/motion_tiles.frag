@@ -6,7 +6,9 @@
 // many fragments: STAGE 0 over u_tile texels along x (full size -> strip), STAGE 1 over
 // u_tile strip texels along y. length() is the one the ray mask passes compare with
 // hybrid.min_speed, so a tile holds a moving pixel exactly when .x reaches that speed.
-// Texels past the screen are skipped.
+// Texels past the screen are skipped. With a path (SEGMENTS > 1, glsl/path.glsl) .x is
+// the longest path extent instead (twice the farthest point from the frame-time
+// position), what the ray mask then compares: a reversal's chord is short, not its path.
 //
 // The strip carries (longest, id of the run, or -1 where the run holds two ids or its
 // last pixel's right neighbour another): two runs one above the other with the same id
@@ -14,6 +16,10 @@
 uniform sampler2D u_source;
 uniform int u_tile;
 out vec2 out_tile;
+#if SEGMENTS > 1 && STAGE == 0
+#define PATH_READ
+#include "path.glsl"
+#endif
 
 void main() {
     ivec2 size = textureSize(u_source, 0);
@@ -25,7 +31,13 @@ void main() {
     bool mixed = false;
     for (int x = x0; x < x1; ++x) {
         vec4 f = texelFetch(u_source, ivec2(x, p.y), 0);
+#if SEGMENTS > 1
+        vec2 o[PATH_POINTS];
+        front_path_raw(ivec2(x, p.y), o);
+        m = max(m, path_extent(o));
+#else
         m = max(m, length(f.xy));
+#endif
         mixed = mixed || f.w != first;
     }
     if (x1 < size.x) mixed = mixed || texelFetch(u_source, ivec2(x1, p.y), 0).w != first;

@@ -23,6 +23,11 @@
 // (half the relative displacement, the object id) at an edge pixel, (0, 0) elsewhere (id
 // 0 is the sky, never a searching pixel's own).
 //
+// With a path (SEGMENTS > 1, glsl/path.glsl) the probes follow it: X's surface lies at
+// X + o_k at the path's time t_k, so X then shows what lies at X - o_k now; each of the
+// path's points is probed (a reversal's far point too, where the chord is short), the
+// relative ones at X - (o_k - o_bg,k), and the speed test reads the path's extent.
+//
 // STEP 0 runs both steps in one pass. Where the camera moves, most moving tiles hold no
 // survivor of step 1 and llvmpipe would pay the Sobel kernel in every 8-pixel group
 // holding one: STEP 1 then runs the displacement test alone, and STEP 2 the edge test on
@@ -57,6 +62,10 @@ layout(location = 0) out uint out_edge;
 layout(location = 1) out vec2 out_probe;
 #endif
 #endif
+#if SEGMENTS > 1 && DISPLACEMENT_TEST
+#define PATH_READ
+#include "path.glsl"
+#endif
 #if STEP == 2
 uniform usampler2D u_displacement_mask;
 uniform sampler2D u_relative;
@@ -74,6 +83,38 @@ bool uncovers(ivec2 x, vec2 offset, ivec2 size, out vec2 v) {
 }
 
 // Step 1 at x: out_mask and out_relative.
+#if SEGMENTS > 1
+void displacement_test(ivec2 x, ivec2 size) {
+    vec4 f = texelFetch(u_front, x, 0);
+    own_id = f.w;
+    own_depth = f.z;
+    out_mask = 0u;
+    out_relative = f.xy;
+    vec2 o[PATH_POINTS];
+    front_path_raw(x, o);
+    if (own_id == 0.0 || path_extent(o) < u_min_speed) return;
+    vec2 vb;
+    bool found = false;
+    ivec2 at = x;
+    for (int k = 0; k < PATH_POINTS; ++k) {
+        if (k == SEGMENTS / 2) continue;            // the frame time: X itself
+        if (uncovers(x, -o[k], size, vb)) {
+#if STEP != 3
+            out_mask = 1u;
+#endif
+            if (!found) { at = probe(x, -o[k], size); found = true; }
+        }
+    }
+    if (found) {
+        vec2 b[PATH_POINTS];
+        front_path_raw(at, b);
+        out_relative = (o[SEGMENTS] - o[0]) - (b[SEGMENTS] - b[0]);
+        for (int k = 0; k < PATH_POINTS; ++k) {
+            if (k != SEGMENTS / 2 && uncovers(x, b[k] - o[k], size, vb)) out_mask = 1u;
+        }
+    }
+}
+#else
 void displacement_test(ivec2 x, ivec2 size) {
     vec4 f = texelFetch(u_front, x, 0);
     vec2 d = f.xy;
@@ -98,6 +139,7 @@ void displacement_test(ivec2 x, ivec2 size) {
         }
     }
 }
+#endif
 #endif
 
 #if EDGE_TEST

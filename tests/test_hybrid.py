@@ -1,5 +1,5 @@
 """The hybrid mode (viewer/render/hybrid.py): the ray reveal against a raster oracle (the
-scene rendered without the pixel's own object), same-coloured objects, deeper layers,
+scene rendered without the pixel's own object), same-coloured objects,
 transforms at t != 0, the composite against tests/numpy_hybrid.py and the analytic box
 shutter, determinism, an empty mask, and the whole mode against the reference.
 """
@@ -23,7 +23,7 @@ from viewer.render.hybrid_composite import composite_kind, composite_passes, mas
 from viewer.render.modes import MODES
 from viewer.render.pool import TexSpec
 from viewer.render.renderer import Renderer
-from viewer.render.reveal_pass import PACKED, packed_names, shade_draws
+from viewer.render.reveal_pass import BACK, PACKED, shade_draws
 from world.loader import load_scene
 
 SMALL = (160, 90)
@@ -57,17 +57,17 @@ def without(scene, ids):
     return dataclasses.replace(scene, objects=objects)
 
 
-def revealed(bufs, k=0):
-    """Revealed layer k's (id, depth, D, colour with alpha) unpacked from hybrid_back*:
+def revealed(bufs):
+    """The revealed layer's (id, depth, D, colour with alpha) unpacked from hybrid_back*:
     packed (D, depth, 1 + id) and (colour, 1), 0 where nothing was revealed (id -1)."""
-    motion, colour = (bufs[n] for n in packed_names(k))
+    motion, colour = (bufs[n] for n in BACK)
     return motion[..., 3] - 1.0, motion[..., 2], motion[..., :2], colour
 
 
-def assert_layer_matches(bufs, k, oracle, sel):
-    """Revealed layer k at the selected pixels is the oracle's G-buffer there."""
+def assert_layer_matches(bufs, oracle, sel):
+    """The revealed layer at the selected pixels is the oracle's G-buffer there."""
     assert sel.any()
-    ids, depth, disp, colour = revealed(bufs, k)
+    ids, depth, disp, colour = revealed(bufs)
     np.testing.assert_array_equal(ids[sel], oracle["id"][sel])
     np.testing.assert_allclose(depth[sel], oracle["depth"][sel], rtol=2e-6)
     np.testing.assert_allclose(colour[sel][:, :3], oracle["color"][sel][:, :3], atol=1e-5)
@@ -88,7 +88,7 @@ def test_reveal_equals_raster_without_the_own_object(ctx, name, t):
     assert len(owners) >= 2
     for oid in owners:
         _, oracle = render(ctx, without(scene, {oid}), "off", t)
-        assert_layer_matches(bufs, 0, oracle, mask == oid)
+        assert_layer_matches(bufs, oracle, mask == oid)
     # The tile-bounded read found exactly the masked pixels (one revealed point each).
     assert res.stats["masked_pixels"] == np.count_nonzero(bufs["hybrid_back_color"][..., 3])
     # Unmasked pixels reveal nothing (every packed channel 0).
@@ -156,7 +156,7 @@ def test_reveal_shades_image_textured_surfaces_like_the_raster(ctx, tmp_path):
     assert (ids[mask > 0] == 1).sum() > 50          # the wall is what most rays reveal
     for oid in owners:
         _, oracle = render(ctx, without(scene, {oid}), "off", 0.0)
-        assert_layer_matches(bufs, 0, oracle, mask == oid)
+        assert_layer_matches(bufs, oracle, mask == oid)
 
 
 def test_shade_draws_join_runs_of_table_keys():
@@ -187,10 +187,10 @@ def test_many_revealed_objects_are_shaded_by_few_draws_like_the_raster(ctx, monk
     ids, *_ = revealed(bufs)
     shown = np.unique(ids[mask > 0])
     assert len(shown) >= 8, shown                   # objects revealed (with the sky, 0)
-    assert res.stats["shade_draws0"] == 1
+    assert res.stats["shade_draws"] == 1
     for oid in np.unique(mask[mask > 0]):
         _, oracle = render(ctx, without(scene, {int(oid)}), "off", 0.0, size=(320, 180))
-        assert_layer_matches(bufs, 0, oracle, mask == oid)
+        assert_layer_matches(bufs, oracle, mask == oid)
 
 
 def test_the_reveal_takes_the_movers_matrices_from_the_frame(ctx, monkeypatch):
@@ -260,25 +260,10 @@ def test_two_overlapping_objects_of_the_same_colour_reveal_the_right_one(ctx, tm
     res, bufs = render(ctx, scene, "hybrid", 0.0)
     front = bufs["ray_mask"] == 2
     _, oracle = render(ctx, without(scene, {2}), "off", 0.0)
-    assert_layer_matches(bufs, 0, oracle, front)
+    assert_layer_matches(bufs, oracle, front)
     # Behind the front box lie both the middle box (same colour) and the wall.
     ids = revealed(bufs)[0][front]
     assert np.count_nonzero(ids == 3) > 50 and np.count_nonzero(ids == 1) > 50
-
-
-def test_second_layer_reveals_what_lies_behind_a_revealed_moving_object(ctx, tmp_path):
-    scene = same_colour_scene(tmp_path)
-    res, bufs = render(ctx, scene, "hybrid", 0.0, params(layers=2))
-    front = bufs["ray_mask"] == 2
-    behind_middle = front & (revealed(bufs)[0] == 3)
-    _, oracle = render(ctx, without(scene, {2, 3}), "off", 0.0)
-    assert_layer_matches(bufs, 1, oracle, behind_middle)
-    # Layer 2 is traced only behind revealed moving objects; elsewhere it is empty.
-    assert not bufs["hybrid_back2_color"][~behind_middle].any()
-    assert res.stats["rays"] == res.stats["masked_pixels"] + np.count_nonzero(behind_middle)
-    # With one layer, the second stays cleared.
-    _, one = render(ctx, scene, "hybrid", 0.0, params(layers=1))
-    assert not one["hybrid_back2_color"].any() and not one["hybrid_back2"].any()
 
 
 def test_trace_off_leaves_the_revealed_layer_empty(ctx):
@@ -333,10 +318,8 @@ def run_composite(frame, b):
         2.0 * max_radius_px(frame), b["ids"], b["rev_ids"])
     upload(frame, "hybrid_front", front)
     stored = nh.stored_back(back, back_color)
-    empty = (np.zeros((H, W, 4)),) * 2
-    for k, layer in enumerate([stored, empty]):
-        for name, a in zip(packed_names(k), layer):
-            upload(frame, name, a)
+    for name, a in zip(BACK, stored):
+        upload(frame, name, a)
     # The mask the revealed pixels came from, summarised per tile for the composite.
     k = max_radius_px(frame)
     jj, ii = np.nonzero(to_image(b["rev_c"][..., 3] > 0))
@@ -557,7 +540,6 @@ def test_stored_layers_are_the_packed_g_buffer_and_revealed_layer(ctx):
     assert res.stats["revealed_pixels"] == np.count_nonzero(hit) > 0
     assert np.all(motion[hit, 3] >= 1.0) and np.all(motion[hit, 2] > 0.0)
     assert not motion[~hit].any() and not colour[~hit].any()
-    assert not bufs["hybrid_back2"].any()      # one layer traced
 
 
 def test_static_scene_traces_nothing_and_equals_off(ctx):

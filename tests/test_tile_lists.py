@@ -153,7 +153,7 @@ def test_partial_clears_leave_nothing_of_the_last_frame(ctx, name):
     # (and last frame's tiles not drawn again zeroed: under a moving camera too).
     scene = load_scene(name)
     names = ("mask_displacement", "mask_edge", "ray_mask", "hybrid_back", "hybrid_back_color",
-             "hybrid_back2", "hybrid_tilemax_x", "hybrid")
+             "hybrid_tilemax_x", "hybrid")
     r = Renderer(ctx, scene, SIZE)
     fresh = Renderer(ctx, scene, SIZE)
     t0 = scene.render.time

@@ -19,6 +19,10 @@ BUFFERS = {
     "id": "object id seen at the pixel (0 = background)",
     "velocity": "displacement D over the exposure, px (x, y)",
     "hybrid_front": "the hybrid's packed front layer: D.x, D.y (px), depth (m), object id",
+    "hybrid_path": "the pixel's screen path over the exposure (hybrid.segments = K): the "
+                   "offsets (px) from its position at t of its positions at t_k = t - s/2 "
+                   "+ k s/K: K = 2: x, y at k = 0, then at k = 2; K = 4: k = 0, then k = 1",
+    "hybrid_path2": "K = 4: the path's offsets at k = 3, then at k = 4 (px)",
     "mcguire_velocity": "McGuire 2012 velocity: half of D clamped to the blur limit, px",
     "mcguire_tilemax_x": "TileMax first step (k x 1 per row): largest half-velocity, px",
     "mcguire_tilemax": "TileMax: the largest half-velocity per k x k tile, px",
@@ -28,13 +32,23 @@ BUFFERS = {
     "ue4_tiles": "per tile: min velocity x, y and max velocity x, y (by length), px",
     "ue4_dilated": "ue4_tiles after the swept-quad dilation: min x, y and max x, y, px",
     "ue4": "UE4-style output, linear RGB (A = 1)",
-    "motion_tiles_x": "motion tiles, first step (per row of 16 px): longest |D| (px), the "
-                      "run's object id or -1 where it holds an id boundary",
-    "motion_tiles": "per 16 x 16 tile: longest |D| (px), 1 where the tile may hold an id "
-                    "boundary, else 0",
-    "hybrid_tilemax_x": "hybrid TileMax first step (k x 1 per row): largest D, px",
-    "hybrid_tilemax": "hybrid TileMax: the largest D per k x k tile, px",
+    "motion_tiles_x": "motion tiles, first step (per row of 16 px): longest |D| (px; with a "
+                      "path its extent, twice the farthest offset), the run's object id or "
+                      "-1 where it holds an id boundary",
+    "motion_tiles": "per 16 x 16 tile: longest |D| (px; with a path its extent), 1 where "
+                    "the tile may hold an id boundary, else 0",
+    "hybrid_tilemax_x": "hybrid TileMax first step (k x 1 per row): largest D, px (with a "
+                        "path: the chord of the longest path)",
+    "hybrid_tilemax": "hybrid TileMax: the largest D per k x k tile, px (as above)",
     "hybrid_neighbormax": "hybrid NeighborMax: the largest TileMax over the 3x3 tiles, px",
+    "hybrid_tilemax_x_path": "with a path: the path (as hybrid_path) of hybrid_tilemax_x's "
+                             "texel of longest path extent",
+    "hybrid_tilemax_x_path2": "K = 4: the rest of that path (as hybrid_path2)",
+    "hybrid_tilemax_path": "with a path: the path of hybrid_tilemax's texel (longest extent)",
+    "hybrid_tilemax_path2": "K = 4: the rest of that path (as hybrid_path2)",
+    "hybrid_neighbormax_path": "with a path: the path of hybrid_neighbormax's tile (longest "
+                               "extent over the 3x3 tiles)",
+    "hybrid_neighbormax_path2": "K = 4: the rest of that path (as hybrid_path2)",
     "mask_displacement": "ray mask step 1 (range check on): 1 where the displaced position "
                          "lands on a different, farther object, else 0",
     "mask_relative": "ray mask step 1: displacement relative to the background seen there, "
@@ -54,8 +68,6 @@ BUFFERS = {
     "hybrid_back": "revealed layer: D.x, D.y (px), depth (m), 1 + object id (0 = nothing "
                    "revealed)",
     "hybrid_back_color": "revealed layer's linear RGB colour, A = 1 where revealed",
-    "hybrid_back2": "second revealed layer (hybrid.layers=2): as hybrid_back",
-    "hybrid_back2_color": "second revealed layer's colour: as hybrid_back_color",
     "ray_mask_tiles": "per tile: ray-mask coverage read by the time composite",
     "hybrid": "hybrid output, linear RGB (A = 1)",
     "reference": "reference output: the mean of the sub-frames, linear RGB (A = 1)",

@@ -54,6 +54,8 @@ def visualise(name: str, a: np.ndarray) -> np.ndarray:
         return ((n * 0.5 + 0.5).clip(0, 1) * 255 + 0.5).astype(np.uint8)
     if a.ndim == 3 and a.shape[2] == 2:
         return colour_wheel(a.astype(np.float64))
+    if a.ndim == 3 and a.shape[2] == 4 and any(w.startswith("path") for w in base.split("_")):
+        return colour_wheel(a[..., :2].astype(np.float64))      # the first point's offset
     if a.ndim == 3 and a.shape[2] == 4 and ("tile" in base or "neighbor" in base or "max" in base):
         return colour_wheel(a[..., 2:4].astype(np.float64))
     if a.ndim == 3 and a.shape[2] >= 3:

@@ -44,6 +44,8 @@ def auto_kind(name: str, spec: TexSpec, dtype: str | None = None) -> tuple[str, 
         return "depth", 0
     if "normal" in base:
         return "normal", 0
+    if any(w.startswith("path") for w in words):    # path offsets, two points a texel
+        return "velocity", 0
     if spec.tile > 1 and spec.components >= 2:      # per-tile vectors; of 4, the max in .zw
         return "tiles", 2 if spec.components == 4 else 0
     if spec.components == 2:

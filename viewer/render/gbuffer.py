@@ -1,5 +1,6 @@
 """The G-buffer pass: linear colour shaded per SCENE_FORMAT.md, linear view depth, world
-normal, object id and the screen-space displacement over the exposure."""
+normal, object id and the screen-space displacement over the exposure; for the hybrid's
+curved motion also each pixel's path over the exposure (glsl/path.glsl)."""
 from __future__ import annotations
 
 import moderngl
@@ -18,7 +19,23 @@ GBUFFER = {
     "id": TexSpec(1, "u4"),
     "velocity": TexSpec(2, "f4"),
     "hybrid_front": TexSpec(4, "f4"),    # (D, depth, id): the hybrid mode's packed layer
+    # The path's offsets from the frame-time position, two points a target (glsl/path.glsl).
+    "hybrid_path": TexSpec(4, "f4"),
+    "hybrid_path2": TexSpec(4, "f4"),
 }
+
+# Segments a path may have (glsl/path.glsl): 1 is the chord alone (no path targets).
+SEGMENT_CHOICES = (1, 2, 4)
+
+
+def path_targets(segments: int) -> tuple[str, ...]:
+    """The path targets written for `segments` pieces: K stored points, two a target."""
+    return ("hybrid_path", "hybrid_path2")[:segments // 2]
+
+
+def path_times(t_open: float, t_close: float, segments: int) -> list[float]:
+    """t_k = t_open + k (t_close - t_open) / K, k = 0..K: the path's points' times."""
+    return [t_open + (t_close - t_open) * k / segments for k in range(segments + 1)]
 
 
 # Target sets by GBUFFER_LAYOUT (glsl/gbuffer_outputs.glsl), in attachment order. Each
@@ -52,8 +69,13 @@ class GBufferPass(Pass):
         self.layout_name = layout
         self.produces = self.targets(layout)
 
-    def targets(self, layout: str) -> tuple[str, ...]:
-        return tuple(self.prefix + n for n in LAYOUTS[layout][1])
+    def targets(self, layout: str, segments: int = 1) -> tuple[str, ...]:
+        return tuple(self.prefix + n for n in LAYOUTS[layout][1] + path_targets(segments))
+
+    def segments(self, frame: Frame) -> int:
+        """Path segments this frame writes (1: the chord D alone; a subclass may choose
+        by the frame's parameters)."""
+        return 1
 
     def layout(self, frame: Frame) -> str:
         """The layout this frame writes (a subclass may choose by the frame's parameters,
@@ -61,17 +83,22 @@ class GBufferPass(Pass):
         return self.layout_name
 
     def outputs(self, frame: Frame):
-        return {p: GBUFFER[p[len(self.prefix):]] for p in self.targets(self.layout(frame))}
+        return {p: GBUFFER[p[len(self.prefix):]]
+                for p in self.targets(self.layout(frame), self.segments(frame))}
 
     def execute(self, frame: Frame, time: float | None = None):
         t = frame.time if time is None else time
         t_open, t_close = frame.exposure_at(t)
         ctx, cam, gpu = frame.ctx, frame.camera, frame.gpu
         layout = self.layout(frame)
-        names = self.targets(layout)
+        segments = self.segments(frame)
+        names = self.targets(layout, segments)
         for stale in set(self.produces) - set(names):
             frame.pool.discard(stale)      # (written under other parameters: not this frame's)
-        defines = {**glsl_defines(), **gpu.light_defines(), **layout_defines(layout)}
+        defines = {**glsl_defines(), **gpu.light_defines(), **layout_defines(layout),
+                   "SEGMENTS": segments, "PATH_LOCATION": len(LAYOUTS[layout][1]),
+                   "PATH_LOCATION1": len(LAYOUTS[layout][1]) + 1}
+        times = path_times(t_open, t_close, segments) if segments > 1 else None
         fbo = frame.pool.framebuffer(names, depth=True)
         fbo.use()
         fbo.viewport = (0, 0) + fbo.size
@@ -94,6 +121,9 @@ class GBufferPass(Pass):
                 continue
             model_eye = gpu.bind_object(prog, obj, cam, t, t_open, t_close,
                                         frame.object_matrices)[0]
+            if times is not None:
+                set_uniform(prog, "u_modelview_path",
+                            gpu.path_matrices(obj, cam, times, frame.object_matrices))
             set_uniform(prog, "u_modelview", turn @ model_eye)
             gpu.vao(prog, obj).render(moderngl.TRIANGLES)
         ctx.disable(moderngl.DEPTH_TEST)

@@ -250,6 +250,23 @@ class GpuScene:
                 memo[key] = mats
         return mats
 
+    @staticmethod
+    def path_matrices(obj: SceneObject, cam, times, memo: dict | None = None) -> bytes:
+        """V(t_k) M(t_k) for the path's times (glsl/path.glsl), composed in float64, as
+        the bytes of a GLSL mat4 array; `memo` as object_matrices'."""
+        key = ("path", obj.id, tuple(times))
+        out = None if memo is None else memo.get(key)
+        if out is None:
+            views = None if memo is None else memo.get(("path_views", tuple(times)))
+            if views is None:
+                views = [cam.view(tk) for tk in times]
+                if memo is not None:
+                    memo[("path_views", tuple(times))] = views
+            out = b"".join(mat(v @ obj.matrix(tk)) for v, tk in zip(views, times))
+            if memo is not None:
+                memo[key] = out
+        return out
+
     def bind_object(self, prog: moderngl.Program, obj: SceneObject, cam, t: float,
                     t_open: float, t_close: float, memo: dict | None = None):
         """Transforms of `obj` at the frame time, and seen by the camera `cam` at shutter

@@ -21,7 +21,7 @@ Stats: masked_pixels, rays, revealed_pixels, reveal_ms (host work) and its parts
 """
 from __future__ import annotations
 
-from .gbuffer import GBufferPass
+from .gbuffer import SEGMENT_CHOICES, GBufferPass
 from .hybrid_composite import Composite, composite_tile_passes
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .registry import mode
@@ -44,9 +44,13 @@ class HybridGBuffer(GBufferPass):
 
     def __init__(self):
         super().__init__(layout="hybrid")
+        self.produces = self.targets("hybrid", max(SEGMENT_CHOICES))
 
     def layout(self, frame) -> str:
         return "hybrid" if frame.params["hybrid"].range_check else "front"
+
+    def segments(self, frame) -> int:
+        return int(frame.params["hybrid"].segments)
 
 
 @mode("hybrid", groups=("blur", "hybrid"))

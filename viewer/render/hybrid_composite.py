@@ -25,7 +25,8 @@ from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" g
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
 from .tile_kernels import mark_tiles, outlines_along, pixel_tiles, square_max
-from .tile_lists import FINE, moving_strips, tile_coords, tile_list
+from .tile_lists import (FINE, moving_strips, path_textures, segments, tile_coords, tile_list,
+                         within_reach)
 from .tiles import tile_passes
 
 # Which noise stream of glsl/noise.glsl's hash01 jitters the time samples or taps.
@@ -60,12 +61,35 @@ def near_outlines(frame: Frame, todo: np.ndarray) -> np.ndarray:
     lists = frame.host.get("tile_lists")
     if lists is None or lists.boundary.shape != todo.shape:
         return np.ones(todo.shape, bool)
+    if segments(frame) > 1:
+        return todo & within_reach(lists.boundary, path_reach(frame, todo.shape), FINE)
     vn = frame.host.get("neighbormax")
     if vn is None:                      # (not read back: the composite run on its own)
         vn = read_neighbormax(frame)
     k = max_radius_px(frame)
     return outlines_along(lists.boundary, todo, vn, FINE, k, frame.size[0], frame.size[1],
                           2.0 * k, OUTLINE_MARGIN_PX, MERGE_SPREAD)
+
+
+def path_reach(frame: Frame, shape: tuple[int, int]) -> np.ndarray:
+    """Per FINE tile (GL rows), how far (px) from its pixels the taps of a neighbourhood
+    path can land: half the largest NeighborMax path extent (clamped to the blur limit)
+    over the k-tiles it meets, plus rounding and the other pixel of a boundary pair. A
+    path bends, so this bounds it in every direction (glsl/hybrid_bucket.frag)."""
+    k = max_radius_px(frame)
+    w, h = frame.size
+    points = []
+    for name in ("hybrid_neighbormax_path", "hybrid_neighbormax_path2")[:segments(frame) // 2]:
+        tex = frame.pool.get(name)
+        points.append(np.frombuffer(tex.read(), np.float32).reshape(tex.size[1], tex.size[0], 2, 2))
+    o = np.concatenate(points, axis=2).astype(np.float64)
+    extent = np.minimum(2.0 * np.sqrt((o * o).sum(-1).max(-1)), 2.0 * k)
+    reach = 0.5 * extent + OUTLINE_MARGIN_PX + 1.0
+    per_pixel = np.repeat(np.repeat(reach, k, axis=0)[:h], k, axis=1)[:, :w]
+    rows, cols = shape
+    padded = np.zeros((rows * FINE, cols * FINE))
+    padded[:h, :w] = per_pixel
+    return padded.reshape(rows, FINE, cols, FINE).max(axis=(1, 3))
 
 
 def read_neighbormax(frame: Frame) -> np.ndarray:
@@ -138,8 +162,9 @@ class Composite(FullscreenPass):
     """The composite composite_kind picks: "time" (glsl/hybrid_time.frag), "bucket"
     (glsl/hybrid_bucket.frag), or "split" between them by tiles."""
     name = "hybrid_composite"
-    inputs = ("color", "hybrid_front", "hybrid_back", "hybrid_back_color", "hybrid_back2",
-              "hybrid_back2_color", "hybrid_tilemax", "hybrid_neighbormax")
+    inputs = ("color", "hybrid_front", "hybrid_back", "hybrid_back_color", "hybrid_tilemax",
+              "hybrid_neighbormax", "hybrid_path", "hybrid_path2", "hybrid_neighbormax_path",
+              "hybrid_neighbormax_path2")
     produces = ("hybrid", MASK_TILES)   # ray_mask_tiles: held only while "time" draws
 
     def __init__(self):
@@ -152,7 +177,7 @@ class Composite(FullscreenPass):
 
     def defines(self, frame: Frame):
         p = frame.params["hybrid"]
-        return {"LAYERS": int(p.layers), "MAX_SEEDS": int(p.seeds),
+        return {"MAX_SEEDS": int(p.seeds), "SEGMENTS": segments(frame),
                 "JITTER_STREAM": f"{JITTER_STREAM}u", "BACK_LAYER": self._back,
                 "OWN_STILL": self._still, "SIMPLE": self._simple, "MERGE_COS": repr(MERGE_COS)}
 
@@ -205,8 +230,10 @@ class Composite(FullscreenPass):
         self._kind, self._back, self._still, self._simple = kind, back, own_still, simple
         textures = {"u_front_color": "color", "u_front": "hybrid_front",
                     "u_back_color": "hybrid_back_color", "u_back": "hybrid_back",
-                    "u_back2_color": "hybrid_back2_color", "u_back2": "hybrid_back2",
-                    "u_tilemax": "hybrid_tilemax", "u_neighbormax": "hybrid_neighbormax"}
+                    "u_tilemax": "hybrid_tilemax", "u_neighbormax": "hybrid_neighbormax",
+                    **path_textures(frame),
+                    **path_textures(frame, {"u_neighbormax_path0": "hybrid_neighbormax_path",
+                                            "u_neighbormax_path1": "hybrid_neighbormax_path2"})}
         if kind == "time":
             write_mask_tiles(frame)
             textures["u_mask_tiles"] = MASK_TILES
@@ -222,7 +249,8 @@ class Composite(FullscreenPass):
 def composite_tile_passes() -> list:
     """The raster displacement's tiles for the composite (and NeighborMax on the host):
     they need only the G-buffer and the tile lists."""
-    return [*tile_passes("hybrid_front", "hybrid", select_x=moving_strips), ReadNeighborMax()]
+    return [*tile_passes("hybrid_front", "hybrid", select_x=moving_strips, segments=segments,
+                         paths=("hybrid_path", "hybrid_path2")), ReadNeighborMax()]
 
 
 def composite_passes() -> list:

@@ -4,12 +4,20 @@ importing any of them has the group)."""
 from __future__ import annotations
 
 from ..params import group, param
+from .gbuffer import SEGMENT_CHOICES
 
 COMPOSITES = ("bucket", "split", "time")
 
 
 @group("hybrid")
 class HybridParams:
+    # ---- motion (viewer/render/gbuffer.py, glsl/path.glsl)
+    segments: int = param(2, unit="segments", choices=SEGMENT_CHOICES, effect="recompile",
+                          help="linear pieces of each pixel's screen path over the "
+                               "exposure (its points projected at evenly spaced times): "
+                               "tiles, ray mask and composite follow the path (rotation, "
+                               "approach, a reversal); 1 = the chord alone (the paper); 4 "
+                               "is best on keyed arcs and bounces, worse on fast spins")
     # ---- ray mask (viewer/render/raymask.py)
     min_speed: float = param(1.0, unit="px", lo=0.0, hi=64.0,
                              help="displacement over the exposure (px) below which a pixel "
@@ -40,9 +48,6 @@ class HybridParams:
     # ---- ray reveal (viewer/render/reveal_pass.py)
     trace: bool = param(True, help="cast the masked pixels' rays; off leaves the revealed "
                                    "layer empty (the composite alone, for comparison)")
-    layers: int = param(1, choices=(1, 2), effect="realloc",
-                        help="revealed layers: 1 = the paper; 2 also reveals what lies "
-                             "behind a revealed moving object")
     max_depth: int = param(8, unit="restarts", lo=0, hi=64,
                            help="restarts allowed to pass through the pixel's own static "
                                 "object (recursion depth of the reveal)")

@@ -38,7 +38,8 @@ from .frame import Frame
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass
 from .pool import TexSpec
-from .tile_lists import FINE, tile_coords, tile_list, tile_strips, within_reach
+from .tile_lists import (FINE, path_textures, segments, tile_coords, tile_list, tile_strips,
+                         within_reach)
 from .tiles import StripSpec
 
 MASK = TexSpec(1, "u1")
@@ -57,7 +58,7 @@ class SurfaceTests(FullscreenPass):
     (the Sobel kernel) on those alone."""
     name = "mask_displacement"
     fragment = "raymask_displacement.frag"
-    inputs = ("hybrid_front", "normal")
+    inputs = ("hybrid_front", "normal", "hybrid_path", "hybrid_path2")
     produces = ("mask_displacement", "mask_relative", "mask_edge", "mask_edge_probe",
                 "mask_survivors_x", "mask_survivors", "ray_mask")
 
@@ -66,7 +67,7 @@ class SurfaceTests(FullscreenPass):
         self._any = AnyTiles()
 
     def defines(self, frame: Frame):
-        return {"STEP": self._step}
+        return {"STEP": self._step, "SEGMENTS": segments(frame)}
 
     def outputs(self, frame: Frame):
         return {"mask_displacement": MASK, "mask_relative": RELATIVE, "mask_edge": MASK,
@@ -88,18 +89,20 @@ class SurfaceTests(FullscreenPass):
             # the other mask targets hold nothing this frame.
             self._step = 3
             clear_unwritten(frame, self.produces[:-1] + EdgeIdTiles.produces)
-            return self.draw(frame, ("ray_mask",), {"u_front": "hybrid_front"}, first,
+            return self.draw(frame, ("ray_mask",),
+                             {"u_front": "hybrid_front", **path_textures(frame)}, first,
                              tiles=tiles)
         if not reach_test(frame):
             self._step = 0
             if tiles is not None:       # where the edge outputs were written (EdgeIdTiles)
                 frame.host["edge_tiles_written"] = frame.host["tile_lists"].surface_tiles
             return self.draw(frame, self.produces[:4],
-                             {"u_front": "hybrid_front", "u_normal": "normal"},
+                             {"u_front": "hybrid_front", "u_normal": "normal",
+                              **path_textures(frame)},
                              {**first, **second}, tiles=tiles)
         self._step = 1
-        self.draw(frame, ("mask_displacement", "mask_relative"), {"u_front": "hybrid_front"},
-                  first, tiles=tiles)
+        self.draw(frame, ("mask_displacement", "mask_relative"),
+                  {"u_front": "hybrid_front", **path_textures(frame)}, first, tiles=tiles)
         survivors = self._any.tiles(frame, "mask_displacement", "mask_survivors")
         lists = frame.host["tile_lists"]
         tl = lists.extra("survivors")

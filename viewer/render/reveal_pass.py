@@ -13,9 +13,9 @@ shade what they reveal on the GPU exactly as the raster layer is shaded.
       GpuScene uniforms and image): it interpolates the face's
       corners (a texture of every mesh's faces, uploaded once) and shades with the same
       glsl/shading.glsl and glsl/motion.glsl as the G-buffer, into the composite's packed
-      layers hybrid_back (D, depth, 1 + id) and hybrid_back_color (colour, 1), hybrid_back2*
-      for a second layer (a fragment pass, because llvmpipe draws one point per pixel at
-      ~1.5 us; two packed targets, because each target written costs on llvmpipe).
+      layer hybrid_back (D, depth, 1 + id) and hybrid_back_color (colour, 1) (a fragment
+      pass, because llvmpipe draws one point per pixel at ~1.5 us; two packed targets,
+      because each target written costs on llvmpipe).
       Under a still camera, a ray whose hit is the first static surface along its
       primary ray (RayScene.intersect's view) reveals what a raster of the static objects
       alone shows at its pixel: that layer is rendered once per view (static_layer) and
@@ -43,7 +43,6 @@ from . import reveal_kernels as kernels
 from .tile_lists import TileList, clear_outside
 
 PACKED = TexSpec(4, "f4")
-MAX_LAYERS = 2
 STATE_KEY = "hybrid_reveal"
 STATIC_PREFIX = "static_"     # the static objects' raster: static_color, static_hybrid_front
 
@@ -147,15 +146,15 @@ def shade_draws(keys, has_row) -> list[tuple[list[int], int, int]]:
 
 class RevealState:
     """Per-scene host state: the Embree scene (built once), the faces' corners as a GPU
-    texture (uploaded once), and this frame's hits per layer."""
+    texture (uploaded once), and this frame's hits."""
 
     def __init__(self, ctx: moderngl.Context, scene):
         self.ctx, self.scene = ctx, scene
         self.rays = RayScene(scene)
         self._faces: moderngl.Texture | None = None
-        self.layers: list = []        # per layer: LayerHits of the current frame, or None
-        self.tiles: dict[int, TileList] = {}
-        self.records: dict[int, moderngl.Texture] = {}
+        self.hits: LayerHits | None = None     # the current frame's, None: nothing traced
+        self.tiles: dict[str, TileList] = {}
+        self.records: moderngl.Texture | None = None
         # Keys above every 1 + object id: the rays whose hit the static layer holds.
         self.static_key = max((o.id for o in scene.objects), default=0) + 2
         self._static_gbuffer = GBufferPass(prefix=STATIC_PREFIX, layout="front",
@@ -194,24 +193,24 @@ class RevealState:
             self._faces.filter = (moderngl.NEAREST, moderngl.NEAREST)
         return self._faces
 
-    def records_texture(self, k: int, shape: tuple[int, int]) -> moderngl.Texture:
-        """Layer k's hit-record texture, at least `shape` (rows, columns); grown in whole
+    def records_texture(self, shape: tuple[int, int]) -> moderngl.Texture:
+        """The hit-record texture, at least `shape` (rows, columns); grown in whole
         powers of two of rows so that it is seldom reallocated."""
-        tex = self.records.get(k)
+        tex = self.records
         h, w = shape
         if tex is None or tex.size[0] < w or tex.size[1] < h:
             if tex is not None:
                 tex.release()
             rows = 1 << max(4, (h - 1).bit_length())
-            tex = self.records[k] = self.ctx.texture((w, rows), 4, dtype="f4")
+            tex = self.records = self.ctx.texture((w, rows), 4, dtype="f4")
             tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
         return tex
 
-    def tile_list(self, k) -> TileList:
-        """Layer k's tile list (or another kept list, by name)."""
-        if k not in self.tiles:
-            self.tiles[k] = TileList(self.ctx)
-        return self.tiles[k]
+    def tile_list(self, name: str = "shade") -> TileList:
+        """The revealed pixels' tile list (or another kept list, by name)."""
+        if name not in self.tiles:
+            self.tiles[name] = TileList(self.ctx)
+        return self.tiles[name]
 
     def release(self):
         if self._faces is not None:
@@ -222,9 +221,10 @@ class RevealState:
             self._table = None
         for tl in self.tiles.values():
             tl.release()
-        for tex in self.records.values():
-            tex.release()
-        self.tiles.clear(), self.records.clear()
+        if self.records is not None:
+            self.records.release()
+            self.records = None
+        self.tiles.clear()
 
 
 @dataclass
@@ -297,10 +297,10 @@ def layer_hits(pixels: np.ndarray, layer, height: int, static_key: int | None = 
 
 
 class RevealTrace(Pass):
-    """Host side: mask read-back, ray casting, and the hit records of every layer."""
+    """Host side: mask read-back, ray casting, and the hits' records."""
     name = "reveal"
     inputs = ("ray_mask",)
-    produces = ("reveal_hits",)         # host-side: RevealState.layers
+    produces = ("reveal_hits",)         # host-side: RevealState.hits
 
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
@@ -310,12 +310,12 @@ class RevealTrace(Pass):
         t1 = time.perf_counter()
         result = None
         if len(pixels) and p.trace:
-            result = reveal(st.rays, frame.camera, frame.time, pixels, own, layers=p.layers,
+            result = reveal(st.rays, frame.camera, frame.time, pixels, own, layers=1,
                             max_depth=p.max_depth, threads=p.threads or None,
                             matrices=frame_models(frame, st.rays.moving))
         t2 = time.perf_counter()
-        st.layers = [layer_hits(pixels, result.layers[k], frame.size[1], st.static_key)
-                     if result else None for k in range(p.layers)]
+        st.hits = (layer_hits(pixels, result.layers[0], frame.size[1], st.static_key)
+                   if result else None)
         t3 = time.perf_counter()
         s = frame.stats
         s["masked_pixels"] = int(len(pixels))
@@ -335,23 +335,17 @@ class RevealTrace(Pass):
                                       "pixels": pixels, "own": own, "t": frame.time}
 
 
-def packed_names(k: int) -> tuple[str, str]:
-    """The composite's packed motion and colour textures of revealed layer k
-    (glsl/hybrid_layers.glsl): hybrid_back, hybrid_back_color; hybrid_back2, ..."""
-    tag = "hybrid_back" if k == 0 else f"hybrid_back{k + 1}"
-    return tag, tag + "_color"
+BACK = ("hybrid_back", "hybrid_back_color")    # glsl/hybrid_layers.glsl's back layer
 
 
 class RevealShade(FullscreenPass):
-    """GPU side: the revealed layers' displacement, depth, id and colour at the masked
-    pixels, packed for the composite (packed_names), everything else cleared to 0,
-    'nothing revealed'. Every layer up to MAX_LAYERS is produced (the deeper ones stay
-    cleared when fewer are traced), so the pipeline's textures do not depend on the
-    `hybrid.layers` setting."""
+    """GPU side: the revealed layer's displacement, depth, id and colour at the masked
+    pixels, packed for the composite (BACK), everything else cleared to 0, 'nothing
+    revealed'."""
     name = "reveal_shade"
     fragment = "reveal_shade.frag"
     inputs = ("reveal_hits",)
-    produces = tuple(n for k in range(MAX_LAYERS) for n in packed_names(k))
+    produces = BACK
 
     def __init__(self):
         self._static = self._table = 0
@@ -369,57 +363,56 @@ class RevealShade(FullscreenPass):
         st = reveal_state(frame)
         t = frame.time
         t_open, t_close = frame.exposure
-        for k in range(MAX_LAYERS):
-            names = packed_names(k)
-            tl = st.tile_list(k)
-            hits = st.layers[k] if k < len(st.layers) else None
-            if hits is None:
-                tl.set(np.zeros((0, 2), np.int64), SHADE_TILE, frame.size, BLOCKS_PER_ROW)
-                clear_outside(frame, names, tl)     # last frame's tiles
-                frame.pool.mark_tiles(names, tl)
-                continue
-            # The tiles holding this layer's pixels; each key's draw keeps its own run.
-            # Its draws together write every pixel of them (records: the key's own, 0 "no
-            # ray", -1 another key's), so only last frame's other tiles are cleared.
-            tl.set(hits.tiles, SHADE_TILE, frame.size, BLOCKS_PER_ROW,
-                   cuts=[first for _, first, _ in hits.keys])
-            clear_outside(frame, names, tl)
-            records = st.records_texture(k, hits.records.shape[:2])
-            h, w = hits.records.shape[:2]
-            records.write(hits.records.tobytes(), viewport=(0, 0, w, h))
-            st.face_texture().use(FACE_UNIT)      # draw() binds its textures from unit 0
-            records.use(RECORD_UNIT)
-            objects = {o.id: o for o in frame.scene.objects}
-            if any(key == st.static_key for key, _, _ in hits.keys):
-                colour, front = st.static_layer(frame)
-            table = st.object_table()
-            draws = shade_draws(hits.keys, table.has_row)
-            ids = [k - 1 for k, _, _ in hits.keys if k > 1 and table.has_row(k)]
-            if ids:
-                table.write(frame, ids)
-            table.texture.use(OBJECT_UNIT)
-            for keys, first, count in draws:
-                key = keys[0]
-                self._static = int(key == st.static_key)
-                self._table = int(table.has_row(key))
-                textures = ({"u_static_front": front, "u_static_color": colour}
-                            if self._static else {})
-                prog = self.program(frame, tl.vertex_shader)
-                set_uniform(prog, "u_hits", RECORD_UNIT)
-                if not self._static:
-                    gpu.bind_camera(prog, cam, t, frame.size)
-                    set_uniform(prog, "u_background", frame.scene.background)
-                    gpu.bind_lights(prog)
-                    set_uniform(prog, "u_faces", FACE_UNIT)
-                if self._table:
-                    set_uniform(prog, "u_objects", OBJECT_UNIT)
-                elif not self._static:          # an image-textured object
-                    gpu.bind_object(prog, objects[key - 1], cam, t, t_open, t_close,
-                                    frame.object_matrices)
-                self.draw(frame, names, textures, tiles=tl.part(first, count), clear=False)
-            self._static = self._table = 0
-            frame.stats[f"shade_draws{k}"] = len(draws)
+        names = BACK
+        tl = st.tile_list()
+        hits = st.hits
+        if hits is None:
+            tl.set(np.zeros((0, 2), np.int64), SHADE_TILE, frame.size, BLOCKS_PER_ROW)
+            clear_outside(frame, names, tl)     # last frame's tiles
             frame.pool.mark_tiles(names, tl)
+            return
+        # The tiles holding the traced pixels; each key's draw keeps its own run. Its
+        # draws together write every pixel of them (records: the key's own, 0 "no ray",
+        # -1 another key's), so only last frame's other tiles are cleared.
+        tl.set(hits.tiles, SHADE_TILE, frame.size, BLOCKS_PER_ROW,
+               cuts=[first for _, first, _ in hits.keys])
+        clear_outside(frame, names, tl)
+        records = st.records_texture(hits.records.shape[:2])
+        h, w = hits.records.shape[:2]
+        records.write(hits.records.tobytes(), viewport=(0, 0, w, h))
+        st.face_texture().use(FACE_UNIT)      # draw() binds its textures from unit 0
+        records.use(RECORD_UNIT)
+        objects = {o.id: o for o in frame.scene.objects}
+        if any(key == st.static_key for key, _, _ in hits.keys):
+            colour, front = st.static_layer(frame)
+        table = st.object_table()
+        draws = shade_draws(hits.keys, table.has_row)
+        ids = [k - 1 for k, _, _ in hits.keys if k > 1 and table.has_row(k)]
+        if ids:
+            table.write(frame, ids)
+        table.texture.use(OBJECT_UNIT)
+        for keys, first, count in draws:
+            key = keys[0]
+            self._static = int(key == st.static_key)
+            self._table = int(table.has_row(key))
+            textures = ({"u_static_front": front, "u_static_color": colour}
+                        if self._static else {})
+            prog = self.program(frame, tl.vertex_shader)
+            set_uniform(prog, "u_hits", RECORD_UNIT)
+            if not self._static:
+                gpu.bind_camera(prog, cam, t, frame.size)
+                set_uniform(prog, "u_background", frame.scene.background)
+                gpu.bind_lights(prog)
+                set_uniform(prog, "u_faces", FACE_UNIT)
+            if self._table:
+                set_uniform(prog, "u_objects", OBJECT_UNIT)
+            elif not self._static:          # an image-textured object
+                gpu.bind_object(prog, objects[key - 1], cam, t, t_open, t_close,
+                                frame.object_matrices)
+            self.draw(frame, names, textures, tiles=tl.part(first, count), clear=False)
+        self._static = self._table = 0
+        frame.stats["shade_draws"] = len(draws)
+        frame.pool.mark_tiles(names, tl)
 
 
 def reveal_passes() -> list:

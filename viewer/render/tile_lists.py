@@ -32,6 +32,7 @@ import numpy as np
 
 from .blur_common import max_radius_px
 from .frame import Frame
+from .gbuffer import path_targets
 from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
@@ -279,14 +280,31 @@ def tile_coords(selected: np.ndarray) -> np.ndarray:
     return tile_kernels.true_coords(np.ascontiguousarray(selected, np.bool_))
 
 
+def segments(frame: Frame) -> int:
+    """The hybrid's path segments this frame (glsl/path.glsl): hybrid.segments where the
+    G-buffer wrote the path targets (it discards them when it writes none), else 1, the
+    chord alone (passes run on buffers without a path)."""
+    k = int(frame.params["hybrid"].segments)
+    names = frame.pool.names()
+    return k if all(n in names for n in path_targets(k)) else 1
+
+
+PATH_TEXTURES = {"u_path0": "hybrid_path", "u_path1": "hybrid_path2"}
+
+
+def path_textures(frame: Frame, names=PATH_TEXTURES) -> dict[str, str]:
+    """The sampler bindings of the path targets this frame has (none for one segment)."""
+    return dict(list(names.items())[:segments(frame) // 2])
+
+
 class MotionTiles(FullscreenPass):
     name = "motion_tiles"
     fragment = "motion_tiles.frag"
-    inputs = ("hybrid_front",)          # .xy: the displacement D
+    inputs = ("hybrid_front", "hybrid_path", "hybrid_path2")   # D, id; the path
     produces = ("motion_tiles_x", "motion_tiles")
 
     def defines(self, frame: Frame):
-        return {"STAGE": self._stage}
+        return {"STAGE": self._stage, "SEGMENTS": segments(frame)}
 
     def outputs(self, frame: Frame):
         return {"motion_tiles_x": StripSpec(2, "f4", tile=FINE),
@@ -295,7 +313,8 @@ class MotionTiles(FullscreenPass):
     def execute(self, frame: Frame):
         for self._stage, src, dst in ((0, "hybrid_front", "motion_tiles_x"),
                                       (1, "motion_tiles_x", "motion_tiles")):
-            self.draw(frame, (dst,), {"u_source": src}, {"u_tile": FINE})
+            paths = path_textures(frame) if self._stage == 0 else {}
+            self.draw(frame, (dst,), {"u_source": src, **paths}, {"u_tile": FINE})
 
 
 class SelectTiles(Pass):

@@ -6,7 +6,9 @@ keeps the largest TileMax vector over the 3x3 tiles around each tile. Tiles are 
 from the GL origin (bottom-left); the last column and row of tiles may be partial.
 
 Every pass is parameterised by its input and output texture names, so another mode can
-run the same chain on its own velocity buffer under its own names.
+run the same chain on its own velocity buffer under its own names. Given paths (the
+hybrid's, glsl/path.glsl), the chain ranks by path extent and carries the winner's path
+in OUTPUT_path (and OUTPUT_path2) beside its chord.
 """
 from __future__ import annotations
 
@@ -16,6 +18,13 @@ from .blur_common import max_radius_px
 from .frame import Frame
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
+
+
+def one_segment(frame: Frame) -> int:
+    return 1
+
+
+PATH_SUFFIXES = ("_path", "_path2")       # two path points a target (glsl/path.glsl)
 
 
 @dataclass(frozen=True)
@@ -31,20 +40,30 @@ class TileMaxPass(FullscreenPass):
     axis "y" reduces 1 x k (strip -> tiles)."""
     fragment = "tilemax.frag"
 
-    def __init__(self, source: str, output: str, axis: str, tile=max_radius_px, select=None):
+    def __init__(self, source: str, output: str, axis: str, tile=max_radius_px, select=None,
+                 segments=one_segment, paths: tuple[str, ...] = ()):
         """select(frame, k): a TileList over the output's texels that can be nonzero (the
-        rest is cleared to 0, the value of a still strip), or None for all of them."""
+        rest is cleared to 0, the value of a still strip), or None for all of them.
+        segments(frame): the path segments of the frame; paths: the source's path
+        targets (glsl/path.glsl), read where segments > 1."""
         if axis not in ("x", "y"):
             raise ValueError(f"TileMaxPass axis must be 'x' or 'y', got {axis!r}")
         self.name = output
-        self.inputs, self.produces = (source,), (output,)
+        self.path_outputs = tuple(output + s for s in PATH_SUFFIXES[:len(paths)])
+        self.inputs, self.produces = (source, *paths), (output, *self.path_outputs)
         self.source, self.output, self.axis, self.tile = source, output, axis, tile
-        self.select = select
+        self.select, self.segments, self.paths = select, segments, paths
+
+    def defines(self, frame: Frame):
+        return {"SEGMENTS": self.segments(frame)}
 
     def outputs(self, frame: Frame):
         k = self.tile(frame)
-        spec = StripSpec(2, "f4", tile=k) if self.axis == "x" else TexSpec(2, "f4", tile=k)
-        return {self.output: spec}
+        strip = self.axis == "x"
+        spec = StripSpec(2, "f4", tile=k) if strip else TexSpec(2, "f4", tile=k)
+        path = StripSpec(4, "f4", tile=k) if strip else TexSpec(4, "f4", tile=k)
+        n = self.segments(frame) // 2
+        return {self.output: spec, **{name: path for name in self.path_outputs[:n]}}
 
     def execute(self, frame: Frame):
         k = self.tile(frame)
@@ -52,28 +71,47 @@ class TileMaxPass(FullscreenPass):
         tiles = self.select(frame, k) if self.select is not None else None
         if tiles is not None:
             uniforms["u_viewport"] = tuple(float(x) for x in tiles.size)
-        self.draw(frame, (self.output,), {"u_velocity": self.source}, uniforms, tiles=tiles)
+        n = self.segments(frame) // 2
+        textures = {"u_velocity": self.source,
+                    **{f"u_path{j}": self.paths[j] for j in range(n)}}
+        self.draw(frame, (self.output, *self.path_outputs[:n]), textures, uniforms,
+                  tiles=tiles)
 
 
 class NeighborMaxPass(FullscreenPass):
     """The largest of the 3x3 tile vectors around each tile (centre wins ties)."""
     fragment = "neighbormax.frag"
 
-    def __init__(self, source: str, output: str, tile=max_radius_px):
+    def __init__(self, source: str, output: str, tile=max_radius_px, segments=one_segment,
+                 paths: tuple[str, ...] = ()):
         self.name = output
-        self.inputs, self.produces = (source,), (output,)
+        self.path_outputs = tuple(output + s for s in PATH_SUFFIXES[:len(paths)])
+        self.inputs, self.produces = (source, *paths), (output, *self.path_outputs)
         self.source, self.output, self.tile = source, output, tile
+        self.segments, self.paths = segments, paths
+
+    def defines(self, frame: Frame):
+        return {"SEGMENTS": self.segments(frame)}
 
     def outputs(self, frame: Frame):
-        return {self.output: TexSpec(2, "f4", tile=self.tile(frame))}
+        k = self.tile(frame)
+        n = self.segments(frame) // 2
+        return {self.output: TexSpec(2, "f4", tile=k),
+                **{name: TexSpec(4, "f4", tile=k) for name in self.path_outputs[:n]}}
 
     def execute(self, frame: Frame):
-        self.draw(frame, (self.output,), {"u_tiles": self.source})
+        n = self.segments(frame) // 2
+        self.draw(frame, (self.output, *self.path_outputs[:n]),
+                  {"u_tiles": self.source, **{f"u_path{j}": self.paths[j] for j in range(n)}})
 
 
-def tile_passes(source: str, prefix: str, tile=max_radius_px, select_x=None) -> list[Pass]:
+def tile_passes(source: str, prefix: str, tile=max_radius_px, select_x=None,
+                segments=one_segment, paths: tuple[str, ...] = ()) -> list[Pass]:
     """TileMax x, TileMax y and NeighborMax of `source`, producing PREFIX_tilemax_x,
-    PREFIX_tilemax and PREFIX_neighbormax; select_x: TileMaxPass's `select` for the first."""
-    return [TileMaxPass(source, f"{prefix}_tilemax_x", "x", tile, select_x),
-            TileMaxPass(f"{prefix}_tilemax_x", f"{prefix}_tilemax", "y", tile),
-            NeighborMaxPass(f"{prefix}_tilemax", f"{prefix}_neighbormax", tile)]
+    PREFIX_tilemax and PREFIX_neighbormax; select_x: TileMaxPass's `select` for the first;
+    paths: the source's path targets, carried along where segments(frame) > 1."""
+    tx, ty, nm = f"{prefix}_tilemax_x", f"{prefix}_tilemax", f"{prefix}_neighbormax"
+    names = lambda base: tuple(base + s for s in PATH_SUFFIXES[:len(paths)])  # noqa: E731
+    return [TileMaxPass(source, tx, "x", tile, select_x, segments, paths),
+            TileMaxPass(tx, ty, "y", tile, None, segments, names(tx)),
+            NeighborMaxPass(ty, nm, tile, segments, names(ty))]
