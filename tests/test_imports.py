@@ -21,7 +21,9 @@ def modules() -> dict[str, Path]:
 
 
 def imports(name: str, path: Path, known: dict) -> set[str]:
-    """Project modules that `name` imports anywhere in its file."""
+    """Project modules that `name` imports anywhere in its file, with the packages that
+    Python runs first to reach them (importing a.b.c runs a.b's __init__), except the
+    packages holding `name` itself (already being imported when it runs)."""
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     targets = []
     for node in ast.walk(ast.parse(path.read_text())):
@@ -34,12 +36,14 @@ def imports(name: str, path: Path, known: dict) -> set[str]:
                 base = ".".join(head + ([base] if base else []))
             targets += [f"{base}.{a.name}" if f"{base}.{a.name}" in known else base
                         for a in node.names]
+    own = {".".join(name.split(".")[:k]) for k in range(1, name.count(".") + 2)}
     out = set()
     for t in targets:
         while t and t not in known:
             t = t.rpartition(".")[0]
-        if t and t != name:
-            out.add(t)
+        parts = t.split(".") if t else []
+        out |= {m for m in (".".join(parts[:k]) for k in range(1, len(parts) + 1))
+                if m in known and m not in own}
     return out
 
 
@@ -95,9 +99,18 @@ def test_imports_resolve_relative_and_function_level_imports(tmp_path):
     known = {"pkg": tmp_path / "pkg/__init__.py", "pkg.a": tmp_path / "pkg/a.py",
              "pkg.sub": tmp_path / "pkg/sub/__init__.py", "pkg.sub.b": tmp_path / "pkg/sub/b.py"}
     g = {n: imports(n, p, known) for n, p in known.items()}
-    assert g == {"pkg": {"pkg.a"}, "pkg.a": {"pkg.sub.b"}, "pkg.sub": set(),
+    # pkg.a reaches pkg.sub.b through pkg.sub's __init__; pkg.sub.b's own packages are
+    # being imported when it runs.
+    assert g == {"pkg": {"pkg.a"}, "pkg.a": {"pkg.sub", "pkg.sub.b"}, "pkg.sub": set(),
                  "pkg.sub.b": {"pkg.a"}}
     assert cycles(g) == [["pkg.a", "pkg.sub.b"]]
+    # A package whose __init__ reaches back to a module importing one of its modules.
+    (tmp_path / "pkg/sub/__init__.py").write_text("from . import c\n")
+    (tmp_path / "pkg/sub/b.py").write_text("")
+    (tmp_path / "pkg/sub/c.py").write_text("from .. import a\n")
+    known["pkg.sub.c"] = tmp_path / "pkg/sub/c.py"
+    g = {n: imports(n, p, known) for n, p in known.items()}
+    assert cycles(g) == [["pkg.a", "pkg.sub", "pkg.sub.c"]]
 
 
 def test_every_package_is_scanned():
