@@ -1,4 +1,4 @@
-"""The hybrid mode (viewer/render/hybrid.py): the ray reveal against a raster oracle (the
+"""The hybrid mode (viewer/render/hybrid/pipeline.py): the ray reveal against a raster oracle (the
 scene rendered without the pixel's own object), same-coloured objects,
 transforms at t != 0, the composite against tests/numpy_hybrid.py and the analytic box
 shutter, determinism, an empty mask, and the whole mode against the reference.
@@ -19,11 +19,11 @@ from viewer.metrics import image_metrics
 from viewer.params import ParamSet
 from viewer.render.blur_common import max_radius_px
 from viewer.render.gbuffer import GBUFFER
-from viewer.render.hybrid_composite import composite_kind, composite_passes, mask_tiles
+from viewer.render.hybrid.composite import composite_kind, composite_passes, mask_tiles
 from viewer.render.modes import MODES
 from viewer.render.pool import TexSpec
 from viewer.render.renderer import Renderer
-from viewer.render.reveal_pass import BACK, PACKED, shade_draws
+from viewer.render.hybrid.reveal import BACK, PACKED, shade_draws
 from world.loader import load_scene
 
 SMALL = (160, 90)
@@ -178,7 +178,7 @@ def test_many_revealed_objects_are_shaded_by_few_draws_like_the_raster(ctx, monk
     """crowd_pan (32 movers, moving camera): every revealed object in one draw of the
     object table, each the raster without the pixel's own object; with 4 objects to a
     row of the table too (its records over 9 rows, as past 256 objects)."""
-    from viewer.render.reveal_pass import ObjectTable
+    from viewer.render.hybrid.reveal import ObjectTable
     from world.loader import builtin_dir
     monkeypatch.setattr(ObjectTable, "OBJECTS_PER_ROW", per_row)
     scene = load_scene(builtin_dir() / "bench" / "crowd_pan.toml")
@@ -198,7 +198,7 @@ def test_the_reveal_takes_the_movers_matrices_from_the_frame(ctx, monkeypatch):
     (asking 32 objects again cost ~0.2 ms in the frame), equal to SceneObject.matrix(t);
     its hits are those of asking each object."""
     from raytrace import reveal
-    from viewer.render.reveal_pass import frame_models, reveal_state
+    from viewer.render.hybrid.reveal import frame_models, reveal_state
     from world.scene import SceneObject
     from world.loader import builtin_dir
     scene = load_scene(builtin_dir() / "bench" / "crowd_pan.toml")
@@ -622,7 +622,7 @@ def test_mask_tiles_are_made_only_where_the_time_composite_reads_them(ctx):
 
 
 def test_split_tiles_hand_values():
-    from viewer.render.hybrid_composite import split_tiles
+    from viewer.render.hybrid.composite import split_tiles
     from viewer.render.tile_lists import FINE
     active = np.ones((3, 6), bool)
     active[0, 5] = False

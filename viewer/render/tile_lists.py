@@ -33,7 +33,7 @@ import numpy as np
 from .blur_common import max_radius_px
 from .frame import Frame
 from .gbuffer import path_targets
-from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
+from .hybrid.params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
 from . import tile_kernels

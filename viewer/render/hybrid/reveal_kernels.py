@@ -57,7 +57,7 @@ def _counting_order(values, top, order):
 
 @njit(**_JIT)
 def pack_blocks(gx, gy, key, face, bary, tile_bits, row_bits):
-    """Hit records in blocks (viewer/render/reveal_pass.py layer_hits): for ray k at GL
+    """Hit records in blocks (viewer/render/hybrid/reveal.py layer_hits): for ray k at GL
     pixel (gx, gy) with key (1 + object id; small non-negative ints), face row and
     barycentrics, the record (max(face, 0), u, v, key) in one tile x tile block per
     (key, screen tile) holding its pixels, tile = 2^tile_bits; in the blocks of the same

@@ -33,14 +33,14 @@ from raytrace import RayScene
 from raytrace.reveal import primary_view, reveal
 
 from world.conventions import flip_row
-from .frame import Frame
-from .gbuffer import GBufferPass
-from .gpu_scene import TEX_KINDS, set_uniform
-from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
-from .passes import FullscreenPass, Pass
-from .pool import TexSpec
+from ..frame import Frame
+from ..gbuffer import GBufferPass
+from ..gpu_scene import TEX_KINDS, set_uniform
+from .params import HybridParams  # noqa: F401  (registers the "hybrid" group)
+from ..passes import FullscreenPass, Pass
+from ..pool import TexSpec
 from . import reveal_kernels as kernels
-from .tile_lists import TileList, clear_outside
+from ..tile_lists import TileList, clear_outside
 
 PACKED = TexSpec(4, "f4")
 STATE_KEY = "hybrid_reveal"

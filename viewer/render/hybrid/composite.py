@@ -19,15 +19,15 @@ import math
 
 import numpy as np
 
-from .blur_common import max_radius_px
-from .frame import Frame
-from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
-from .passes import FullscreenPass, Pass
-from .pool import TexSpec
-from .tile_kernels import mark_tiles, outlines_along, pixel_tiles, square_max
-from .tile_lists import (FINE, moving_strips, path_textures, segments, tile_coords, tile_list,
+from ..blur_common import max_radius_px
+from ..frame import Frame
+from .params import HybridParams  # noqa: F401  (registers the "hybrid" group)
+from ..passes import FullscreenPass, Pass
+from ..pool import TexSpec
+from ..tile_kernels import mark_tiles, outlines_along, pixel_tiles, square_max
+from ..tile_lists import (FINE, moving_strips, path_textures, segments, tile_coords, tile_list,
                          within_reach)
-from .tiles import tile_passes
+from ..tiles import tile_passes
 
 # Which noise stream of glsl/noise.glsl's hash01 jitters the time samples or taps.
 JITTER_STREAM = 2
