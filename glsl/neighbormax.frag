@@ -1,9 +1,12 @@
 #version 330 core
-// NeighborMax (ALGORITHMS.md 1.3): the TileMax vector of largest magnitude over the 3x3
+// NeighborMax (McGuire et al. 2012): the TileMax vector of largest magnitude over the 3x3
 // tiles around this one, tiles outside the grid skipped. The centre is taken first and
 // wins ties, so a neighbourhood of equal speeds keeps its own direction. With a path
 // (SEGMENTS > 1, glsl/tilemax.frag's path targets in u_path0/u_path1) the tile of longest
 // path extent wins, and its path is written too.
+// DIAGONAL_TOWARD 1 (Guertin et al. 2014): a diagonal neighbour at offset o counts only
+// where its vector points toward this tile (dot(v, -o) > 0); its blur cannot reach this
+// tile otherwise, and taking it would smear a corner across the tile.
 uniform sampler2D u_tiles;
 layout(location = 0) out vec2 out_max;
 #if SEGMENTS > 1
@@ -36,6 +39,9 @@ void main() {
             ivec2 p = t + ivec2(dx, dy);
             if (p.x < 0 || p.y < 0 || p.x >= size.x || p.y >= size.y) continue;
             vec2 v = texelFetch(u_tiles, p, 0).xy;
+#if DIAGONAL_TOWARD
+            if (dx != 0 && dy != 0 && dot(v, -vec2(dx, dy)) <= 0.0) continue;
+#endif
 #if SEGMENTS > 1
             float m2 = extent_at(p);
             if (m2 > best2) { best = v; best2 = m2; at = p; }

@@ -65,7 +65,7 @@ void main() {
     vec4 tile = texelFetch(u_tiles, t, 0);
     vec2 vmin = tile.xy, vmax = tile.zw;
     float lmax2 = dot(vmax, vmax);
-    if (lmax2 < 0.25) {                         // nothing here moves by half a pixel
+    if (lmax2 < EARLY_OUT_PX * EARLY_OUT_PX) {  // nothing here moves by half a pixel
         out_color = vec4(centre_color, 1.0);
         return;
     }

@@ -35,6 +35,9 @@ def _context():
 @pytest.fixture
 def ctx():
     c = _context()
+    # Current again: a command run in-process (`main(["shot", ...])`) makes its own
+    # context current, and GL calls on this one would then go to that one.
+    c.__enter__()
     assert c.error == "GL_NO_ERROR"
     yield c
     assert c.error == "GL_NO_ERROR"

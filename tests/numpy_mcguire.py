@@ -62,8 +62,9 @@ def tilemax(v: np.ndarray, k: int) -> np.ndarray:
     return tilemax_y(tilemax_x(v, k), k)
 
 
-def neighbormax(tiles: np.ndarray) -> np.ndarray:
-    """Largest of the 3x3 tiles around each tile; the centre is first, so it wins ties."""
+def neighbormax(tiles: np.ndarray, accept=None) -> np.ndarray:
+    """Largest of the 3x3 tiles around each tile; the centre is first, so it wins ties.
+    accept(dx, dy, v): whether the neighbour at offset (dx, dy) with vector v counts."""
     th, tw = tiles.shape[:2]
     out = np.zeros_like(tiles, dtype=F32)
     for ty in range(th):
@@ -72,7 +73,8 @@ def neighbormax(tiles: np.ndarray) -> np.ndarray:
             for dy in (-1, 0, 1):
                 for dx in (-1, 0, 1):
                     y, x = ty + dy, tx + dx
-                    if 0 <= y < th and 0 <= x < tw:
+                    if 0 <= y < th and 0 <= x < tw and (
+                            accept is None or accept(dx, dy, tiles[y, x].astype(F32))):
                         cand.append(tiles[y, x])
             out[ty, tx] = _longest(np.array(cand))
     return out
@@ -127,6 +129,17 @@ def tap_offsets(samples: int, j):
     return np.array(ts, F32)
 
 
+def tap_pixel(px, py, w: int, h: int, ambiguous, where, margin: float = 1e-3):
+    """The pixel holding the float32 point (px, py), clamped to the w x h screen; marks
+    `ambiguous` (in place) where `where` and the point lies within `margin` px of a pixel
+    edge, where float32 in the shader and here may round to different pixels."""
+    for p in (px, py):
+        frac = p.astype(np.float64) - np.floor(p)
+        ambiguous |= (np.minimum(frac, 1.0 - frac) < margin) & where
+    return (np.clip(np.floor(px).astype(int), 0, w - 1),
+            np.clip(np.floor(py).astype(int), 0, h - 1))
+
+
 def gather(color, depth, v, nmax, k: int, samples: int = 15, soft_z: float = 0.1,
            jitter: float = 1.0, seed: int = 0, stream: int = 1, kappa: float = 0.0,
            early_out: float = 0.5 + 1e-3):
@@ -149,11 +162,7 @@ def gather(color, depth, v, nmax, k: int, samples: int = 15, soft_z: float = 0.1
     for t in tap_offsets(samples, j):
         px = xs.astype(F32) + F32(0.5) + t * vn[..., 0]
         py = ys.astype(F32) + F32(0.5) + t * vn[..., 1]
-        for p in (px, py):
-            frac = p.astype(np.float64) - np.floor(p)
-            ambiguous |= (np.minimum(frac, 1.0 - frac) < 1e-3) & ~still
-        yx = np.clip(np.floor(px).astype(int), 0, w - 1)
-        yy = np.clip(np.floor(py).astype(int), 0, h - 1)
+        yx, yy = tap_pixel(px, py, w, h, ambiguous, ~still)
         dist = np.hypot(yx - xs, yy - ys)
         zy = zx[yy, yx]
         ry = rx[yy, yx]
@@ -166,7 +175,12 @@ def gather(color, depth, v, nmax, k: int, samples: int = 15, soft_z: float = 0.1
     return out, ambiguous
 
 
-def mcguire(color, depth, displacement, k: int, **kw):
-    """The whole filter from G-buffer colour, depth and full displacement (GL orientation)."""
+def whole_filter(gather, neighbormax, color, depth, displacement, k: int, **kw):
+    """A filter of this family from G-buffer colour, depth and full displacement (GL
+    orientation): the clamped half vector, TileMax, `neighbormax`, then `gather`."""
     v = clamp_velocity(displacement, k)
     return gather(color, depth, v, neighbormax(tilemax(v, k)), k, **kw)
+
+
+def mcguire(color, depth, displacement, k: int, **kw):
+    return whole_filter(gather, neighbormax, color, depth, displacement, k, **kw)

@@ -72,7 +72,7 @@ def bad_cases(tmp_path):
                             "--out " + str(tmp_path / "e.jpg") + ": expected a path ending in .png"),
         "--set for a group the mode does not use": (
             ["shot", BASIC, "--mode", "off", "--set", "blur.max_radius=0.1", "--out", out],
-            "mode off does not use the blur parameters (used by mcguire, ue4, hybrid)"),
+            "mode off does not use the blur parameters (used by mcguire, ue4, guertin, hybrid)"),
         "--set for a group compare does not render": (
             ["compare", BASIC, "--modes", "off,ue4", "--set", "mcguire.samples=9", "--out",
              str(tmp_path / "c")], "modes off, ue4, reference does not use the mcguire"),
@@ -330,7 +330,7 @@ def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys, ct
     from viewer.render.modes import MODES
     from viewer.render.timing import PassClock, describe
     assert rep["pass_timing"] == describe(PassClock(ctx).method)
-    assert set(rep["modes"]) == {"off", "mcguire", "ue4", "hybrid"}
+    assert set(rep["modes"]) == {"off", "mcguire", "ue4", "guertin", "hybrid"}
     for mode, r in rep["modes"].items():
         assert r["frame"]["n"] == 2 and r["frame_ms"] == r["frame"]["median"]
         assert r["frame"]["p10"] <= r["frame"]["median"] <= r["frame"]["p90"]

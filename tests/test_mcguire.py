@@ -25,12 +25,13 @@ SIZE = (32, 16)          # W, H
 
 # ---- helpers --------------------------------------------------------------------------------
 
-def params(max_radius=None, **mc):
+def params(max_radius=None, group="mcguire", **kw):
+    """blur.max_radius and GROUP.key = value for each keyword."""
     p = ParamSet()
     if max_radius is not None:
         p.set("blur.max_radius", max_radius)
-    for key, value in mc.items():
-        p.set(f"mcguire.{key}", value)
+    for key, value in kw.items():
+        p.set(f"{group}.{key}", value)
     return p
 
 
@@ -343,47 +344,65 @@ def test_uniform_translation_is_a_box_blur_of_length_D(synthetic_frame, axis):
     assert np.all(np.abs(got - stripes)[mixed] > 0.05 * 0.8)
 
 
-def test_static_scene_is_unchanged_exactly(synthetic_frame):
+def assert_still_scene_unchanged(synthetic_frame, params, run):
+    """A scene where nothing moves comes out of `run` as its colour, exactly."""
     rng = np.random.default_rng(6)
     w, h = SIZE
-    frame = synthetic_frame(SIZE, params())
+    frame = synthetic_frame(SIZE, params)
     color = rng.uniform(0, 4, (h, w, 3))
     upload(frame, color, rng.uniform(1, 20, (h, w)), np.zeros((h, w, 2)))
     out = run(frame)
     np.testing.assert_array_equal(out.astype(np.float32), color.astype(np.float32))
 
 
-def test_deterministic_per_seed(synthetic_frame):
+def test_static_scene_is_unchanged_exactly(synthetic_frame):
+    assert_still_scene_unchanged(synthetic_frame, params(), run)
+
+
+def images_per_seed(synthetic_frame, params, run, output, seeds=(5, 5, 6)):
+    """The bytes of `output` after `run` on the two-layer scene, one frame per seed."""
     rng = np.random.default_rng(7)
     w, h = SIZE
     color, depth, disp = two_layer_scene(rng, h, w)
     images = []
-    for seed in (5, 5, 6):
-        frame = synthetic_frame(SIZE, params(max_radius=0.25), seed=seed)
+    for seed in seeds:
+        frame = synthetic_frame(SIZE, params, seed=seed)
         upload(frame, color, depth, disp)
         run(frame)
-        images.append(frame.pool.get("mcguire").read())
+        images.append(frame.pool.get(output).read())
+    return images
+
+
+def test_deterministic_per_seed(synthetic_frame):
+    images = images_per_seed(synthetic_frame, params(max_radius=0.25), run, "mcguire")
     assert images[0] == images[1]
     assert images[0] != images[2]
 
 
 # ---- the whole mode --------------------------------------------------------------------------
 
-def test_mode_beats_off_in_outer_blur_on_basic(ctx):
-    from viewer.regions import OUTER
+def render_basic(ctx, modes, size=(160, 90)):
+    """The conformance scene `basic` at its time: the reference (with regions), each of
+    `modes` at seed 1 (linear images) and the description of each mode's pipeline."""
     from viewer.render.renderer import Renderer
     from world.loader import load_scene
-    from viewer.metrics import image_metrics
     scene = load_scene(CONFORMANCE / "basic.toml")
-    r = Renderer(ctx, scene, (160, 90))
+    r = Renderer(ctx, scene, size)
     try:
         t = scene.render.time
         ref = r.render("reference", t, record_visibility=True)
-        off = r.render("off", t).image
-        mc = r.render("mcguire", t, seed=1).image
-        names = r.pipeline("mcguire").describe()
+        images = {m: r.render(m, t, seed=1).image for m in modes}
+        names = {m: r.pipeline(m).describe() for m in modes}
     finally:
         r.release()
+    return ref, images, names
+
+
+def test_mode_beats_off_in_outer_blur_on_basic(ctx):
+    from viewer.regions import OUTER
+    from viewer.metrics import image_metrics
+    ref, images, names = render_basic(ctx, ("off", "mcguire"))
+    off, mc = images["off"], images["mcguire"]
     region = ref.host["regions"]
     outer = region == OUTER
     assert outer.sum() > 50
@@ -397,4 +416,4 @@ def test_mode_beats_off_in_outer_blur_on_basic(ctx):
     assert np.abs(mc - off)[static].mean() < 0.003         # static pixels are left alone
     for tex in ("mcguire_velocity", "mcguire_tilemax_x", "mcguire_tilemax",
                 "mcguire_neighbormax", "mcguire"):
-        assert tex in names
+        assert tex in names["mcguire"]

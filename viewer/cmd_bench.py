@@ -19,7 +19,7 @@ from .render.modes import MODE_GROUPS, MODES
 from .render.renderer import Renderer
 from .render.timing import PassClock, describe, gpu_timers_truthful
 
-REALTIME = ("off", "mcguire", "ue4", "hybrid")
+REALTIME = ("off", "mcguire", "ue4", "guertin", "hybrid")
 
 
 # Bounds of --speeds and --animate: beyond them a scene's motion is no longer a frame's.
@@ -251,7 +251,7 @@ def run(args) -> int:
               "modes": results, "reveal": reveal, "ratios": {}, "seed": s.seed,
               "params": s.params.to_dict()}     # (--params of shot/compare reads these back)
     base = results.get("mcguire", {}).get("frame_ms")
-    for m in ("hybrid", "ue4"):
+    for m in ("hybrid", "ue4", "guertin"):
         if base and m in results:
             report["ratios"][f"{m}/mcguire"] = results[m]["frame_ms"] / base
     if table is not None:

@@ -16,8 +16,9 @@ from .render.modes import MODE_GROUPS, MODES
 from .render.renderer import Renderer
 from .strip import choose_inset, error_strip, make_strip, metrics_markdown, region_picture
 
-REALTIME = ("off", "mcguire", "ue4", "hybrid")
+REALTIME = ("off", "mcguire", "ue4", "guertin", "hybrid")
 LABELS = {"off": "off (sharp)", "mcguire": "McGuire 2012", "ue4": "UE4-style",
+          "guertin": "Guertin 2014",
           "hybrid": "hybrid", "reference": "reference"}
 
 

@@ -12,15 +12,14 @@ from __future__ import annotations
 from ..params import group, param
 from .blur_common import max_radius_px
 from .frame import Frame
+from .gather_tiles import draw_gather, gather_tiles
 from .gbuffer import GBufferPass
+from .half_velocity import EARLY_OUT_PX, VelocityPrep
 from .registry import mode
 from .passes import FullscreenPass, Pipeline
 from .pool import TexSpec
 from .tiles import tile_passes
 
-# The paper's early out is |vN| <= 0.5 px + eps: the 0.5 px floor of the velocity clamp,
-# plus room for its float rounding, so a neighbourhood moving at the floor stays sharp.
-EARLY_OUT_PX = 0.5 + 1e-3
 # Which noise stream of glsl/noise.glsl's hash01 the per-pixel tap jitter uses.
 JITTER_STREAM = 1
 
@@ -41,25 +40,16 @@ class McGuireParams:
                                      "later S/(kappa |V|) (40 in G3D)")
 
 
-class VelocityPrep(FullscreenPass):
-    name = "mcguire_velocity"
-    fragment = "mcguire_velocity.frag"
-    inputs = ("velocity",)
-    produces = ("mcguire_velocity",)
-
-    def outputs(self, frame: Frame):
-        return {"mcguire_velocity": TexSpec(2, "f4")}
-
-    def execute(self, frame: Frame):
-        self.draw(frame, self.produces, {"u_displacement": "velocity"},
-                  {"u_max_radius": float(max_radius_px(frame))})
-
-
 class Gather(FullscreenPass):
+    """The reconstruction; tiled: drawn only on the tiles whose NeighborMax passes the
+    early out (viewer/render/gather_tiles.py), the same image."""
     name = "mcguire_gather"
     fragment = "mcguire_gather.frag"
     inputs = ("color", "depth", "mcguire_velocity", "mcguire_neighbormax")
     produces = ("mcguire",)
+
+    def __init__(self, tiled: bool = True):
+        self.tiled = tiled
 
     def defines(self, frame: Frame):
         return {"EARLY_OUT_PX": EARLY_OUT_PX, "JITTER_STREAM": f"{JITTER_STREAM}u"}
@@ -69,17 +59,20 @@ class Gather(FullscreenPass):
 
     def execute(self, frame: Frame):
         p = frame.params["mcguire"]
-        self.draw(frame, self.produces,
-                  {"u_color": "color", "u_depth": "depth", "u_velocity": "mcguire_velocity",
-                   "u_neighbormax": "mcguire_neighbormax"},
-                  {"u_tile": max_radius_px(frame), "u_samples": int(p.samples),
-                   "u_soft_z": float(p.soft_z_extent), "u_jitter": float(p.jitter),
-                   "u_kappa": float(p.centre_kappa)})
+        k = max_radius_px(frame)
+        tiles = (gather_tiles(frame, "mcguire_neighbormax", slice(0, 2), k, EARLY_OUT_PX, 0)
+                 if self.tiled else None)
+        draw_gather(self, frame, "mcguire",
+                    {"u_color": "color", "u_depth": "depth", "u_velocity": "mcguire_velocity",
+                     "u_neighbormax": "mcguire_neighbormax"},
+                    {"u_tile": k, "u_samples": int(p.samples),
+                     "u_soft_z": float(p.soft_z_extent), "u_jitter": float(p.jitter),
+                     "u_kappa": float(p.centre_kappa)}, tiles)
 
 
-def mcguire_passes() -> list:
+def mcguire_passes(tiled: bool = True) -> list:
     """The filter's passes after a G-buffer (colour, depth, velocity) exists."""
-    return [VelocityPrep(), *tile_passes("mcguire_velocity", "mcguire"), Gather()]
+    return [VelocityPrep(), *tile_passes("mcguire_velocity", "mcguire"), Gather(tiled)]
 
 
 @mode("mcguire", groups=("blur", "mcguire"))

@@ -19,4 +19,5 @@ def _off() -> Pipeline:
 from . import reference  # noqa: E402,F401
 from . import mcguire  # noqa: E402,F401
 from . import ue4  # noqa: E402,F401
+from . import guertin  # noqa: E402,F401
 from .hybrid import pipeline  # noqa: E402,F401  (the hybrid)

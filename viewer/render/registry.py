@@ -9,6 +9,7 @@ from .passes import Pipeline
 
 MODES: dict[str, Callable[[], Pipeline]] = {}
 MODE_GROUPS: dict[str, tuple[str, ...]] = {}   # parameter groups each mode uses
+ORDER = ("off", "reference", "mcguire", "ue4", "guertin", "hybrid")
 
 
 def mode(name: str, groups: tuple[str, ...] = (), steps: bool = True):
@@ -19,5 +20,11 @@ def mode(name: str, groups: tuple[str, ...] = (), steps: bool = True):
     def register(builder):
         MODES[name] = builder
         MODE_GROUPS[name] = tuple(groups) + (("motion",) if steps else ())
+        # Listed (CLI, panel, compare) in ORDER, whichever mode module is imported first.
+        rank = {n: k for k, n in enumerate(ORDER)}
+        for table in (MODES, MODE_GROUPS):
+            items = sorted(table.items(), key=lambda kv: rank.get(kv[0], len(rank)))
+            table.clear()
+            table.update(items)
         return builder
     return register

@@ -79,19 +79,22 @@ class TileMaxPass(FullscreenPass):
 
 
 class NeighborMaxPass(FullscreenPass):
-    """The largest of the 3x3 tile vectors around each tile (centre wins ties)."""
+    """The largest of the 3x3 tile vectors around each tile (centre wins ties);
+    diagonal_toward: a diagonal neighbour only where its vector points toward the tile
+    (Guertin et al. 2014)."""
     fragment = "neighbormax.frag"
 
     def __init__(self, source: str, output: str, tile=max_radius_px, segments=one_segment,
-                 paths: tuple[str, ...] = ()):
+                 paths: tuple[str, ...] = (), diagonal_toward: bool = False):
         self.name = output
         self.path_outputs = tuple(output + s for s in PATH_SUFFIXES[:len(paths)])
         self.inputs, self.produces = (source, *paths), (output, *self.path_outputs)
         self.source, self.output, self.tile = source, output, tile
         self.segments, self.paths = segments, paths
+        self.diagonal_toward = diagonal_toward
 
     def defines(self, frame: Frame):
-        return {"SEGMENTS": self.segments(frame)}
+        return {"SEGMENTS": self.segments(frame), "DIAGONAL_TOWARD": int(self.diagonal_toward)}
 
     def outputs(self, frame: Frame):
         k = self.tile(frame)
@@ -106,12 +109,14 @@ class NeighborMaxPass(FullscreenPass):
 
 
 def tile_passes(source: str, prefix: str, tile=max_radius_px, select_x=None,
-                segments=one_segment, paths: tuple[str, ...] = ()) -> list[Pass]:
+                segments=one_segment, paths: tuple[str, ...] = (),
+                diagonal_toward: bool = False) -> list[Pass]:
     """TileMax x, TileMax y and NeighborMax of `source`, producing PREFIX_tilemax_x,
     PREFIX_tilemax and PREFIX_neighbormax; select_x: TileMaxPass's `select` for the first;
-    paths: the source's path targets, carried along where segments(frame) > 1."""
+    paths: the source's path targets, carried along where segments(frame) > 1;
+    diagonal_toward: NeighborMaxPass's."""
     tx, ty, nm = f"{prefix}_tilemax_x", f"{prefix}_tilemax", f"{prefix}_neighbormax"
     names = lambda base: tuple(base + s for s in PATH_SUFFIXES[:len(paths)])  # noqa: E731
     return [TileMaxPass(source, tx, "x", tile, select_x, segments, paths),
             TileMaxPass(tx, ty, "y", tile, None, segments, names(tx)),
-            NeighborMaxPass(ty, nm, tile, segments, names(ty))]
+            NeighborMaxPass(ty, nm, tile, segments, names(ty), diagonal_toward)]

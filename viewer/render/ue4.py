@@ -20,6 +20,7 @@ import math
 from ..params import group, param
 from .blur_common import max_radius_px
 from .frame import Frame
+from .gather_tiles import draw_gather, gather_tiles, jitter_reach
 from .gbuffer import GBufferPass
 from .registry import mode
 from .passes import FullscreenPass, Pipeline
@@ -111,28 +112,42 @@ class Dilate(FullscreenPass):
                    "u_guard": bool(p.fast_path_guard), "u_tile_jitter": p.tile_jitter})
 
 
+# The gather's early out: the looked-up tile's max velocity is under half a pixel.
+EARLY_OUT_PX = 0.5
+
+
 class Gather(FullscreenPass):
+    """The gather; tiled: drawn only on the tiles whose lookup can pass the early out
+    (viewer/render/gather_tiles.py), the same image."""
     name = "ue4_gather"
     fragment = "ue4_gather.frag"
     inputs = ("color", "ue4_flat", "ue4_dilated")
     produces = ("ue4",)
+
+    def __init__(self, tiled: bool = True):
+        self.tiled = tiled
+
+    def defines(self, frame):
+        return {"EARLY_OUT_PX": EARLY_OUT_PX}
 
     def outputs(self, frame):
         return {"ue4": TexSpec(4, "f4")}
 
     def execute(self, frame):
         p = frame.params["ue4"]
-        self.draw(frame, self.produces,
-                  {"u_color": "color", "u_flat": "ue4_flat", "u_tiles": "ue4_dilated"},
-                  {"u_tile": p.tile, "u_taps": p.taps, "u_depth_scale": p.depth_scale,
-                   "u_tile_jitter": p.tile_jitter, "u_tap_jitter": p.tap_jitter,
-                   "u_fast_path": bool(p.fast_path), "u_fast_ratio": p.fast_ratio,
-                   "u_mirror": bool(p.mirror), "u_bilinear": bool(p.bilinear)})
+        tiles = (gather_tiles(frame, "ue4_dilated", slice(2, 4), p.tile, EARLY_OUT_PX,
+                              jitter_reach(p.tile_jitter, p.tile)) if self.tiled else None)
+        draw_gather(self, frame, "ue4",
+                    {"u_color": "color", "u_flat": "ue4_flat", "u_tiles": "ue4_dilated"},
+                    {"u_tile": p.tile, "u_taps": p.taps, "u_depth_scale": p.depth_scale,
+                     "u_tile_jitter": p.tile_jitter, "u_tap_jitter": p.tap_jitter,
+                     "u_fast_path": bool(p.fast_path), "u_fast_ratio": p.fast_ratio,
+                     "u_mirror": bool(p.mirror), "u_bilinear": bool(p.bilinear)}, tiles)
 
 
-def ue4_passes() -> list:
+def ue4_passes(tiled: bool = True) -> list:
     """The post passes after the G-buffer (the hybrid mode may reuse them)."""
-    return [Flatten(), TileMinMax(), Dilate(), Gather()]
+    return [Flatten(), TileMinMax(), Dilate(), Gather(tiled)]
 
 
 @mode("ue4", groups=("blur", "ue4"))

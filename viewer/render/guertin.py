@@ -1,0 +1,99 @@
+"""Mode `guertin`: Guertin, McGuire, Nowrouzezahrai 2014, "A Fast and Stable Feature-Aware
+Motion Blur Filter" (HPG 2014), as fragment passes:
+
+  gbuffer -> guertin_velocity (McGuire's half vector, clamped to [0.5, r] px)
+          -> guertin_tilemax_x -> guertin_tilemax
+          -> guertin_neighbormax (3x3, a diagonal tile only where it points toward the
+             centre tile)                                       (viewer/render/tiles.py)
+          -> guertin (the reconstruction, glsl/guertin_gather.frag: jittered NeighborMax
+             lookup, taps alternating between the neighbourhood's and the pixel's
+             direction, direction-weighted cases, centre weight N / (kappa |vC|),
+             relative depth compare), drawn only on the tiles that can move
+             (viewer/render/gather_tiles.py)
+
+r is the shared `blur.max_radius` in pixels (tile size and blur limit, as for McGuire).
+The taps always alternate between the two directions, as the paper's Appendix A does; its
+per-tile direction variance, which only decides how the taps are shared between them in
+some later implementations, is not computed.
+"""
+from __future__ import annotations
+
+from ..params import group, param
+from .blur_common import max_radius_px
+from .frame import Frame
+from .gather_tiles import draw_gather, gather_tiles, jitter_reach
+from .gbuffer import GBufferPass
+from .half_velocity import EARLY_OUT_PX, VelocityPrep
+from .registry import mode
+from .passes import FullscreenPass, Pipeline
+from .pool import TexSpec
+from .tiles import tile_passes
+
+# Noise streams of glsl/noise.glsl's hash01: the tap jitter, and the NeighborMax lookup
+# offset along x and y.
+TAP_STREAM, TILE_STREAM_X, TILE_STREAM_Y = 3, 4, 5
+
+
+@group("guertin")
+class GuertinParams:
+    samples: int = param(15, lo=2, hi=63,
+                         help="taps N, alternating between the pixel's and the "
+                              "neighbourhood's direction (G3D: 27)")
+    gamma: float = param(1.5, lo=0.01, hi=20.0,
+                         help="px over the 0.5 px floor at which the centre direction is "
+                              "the pixel's own; slower pixels sample toward the "
+                              "perpendicular of the dominant motion")
+    kappa: float = param(40.0, lo=1.0, hi=1000.0,
+                         help="centre weight N / (kappa |vC|): larger lets more of the "
+                              "neighbours in")
+    eta: float = param(0.95, lo=0.0, hi=1.0,
+                       help="tap jitter scale: 0 = fixed taps (banding), up to 1 = a "
+                            "whole tap spacing (noise)")
+    tile_jitter: float = param(0.25, lo=0.0, hi=0.5,
+                               help="largest NeighborMax lookup offset per axis, in tiles "
+                                    "(hides tile seams as noise)")
+    z_scale: float = param(1.0, lo=0.01, hi=10.0,
+                           help="depth compare extent as a fraction of the nearer depth: "
+                                "a tap that far behind counts as wholly behind")
+
+
+class Gather(FullscreenPass):
+    name = "guertin_gather"
+    fragment = "guertin_gather.frag"
+    inputs = ("color", "depth", "guertin_velocity", "guertin_neighbormax")
+    produces = ("guertin",)
+
+    def __init__(self, tiled: bool = True):
+        self.tiled = tiled
+
+    def defines(self, frame: Frame):
+        return {"EARLY_OUT_PX": EARLY_OUT_PX, "TAP_STREAM": f"{TAP_STREAM}u",
+                "TILE_STREAM_X": f"{TILE_STREAM_X}u", "TILE_STREAM_Y": f"{TILE_STREAM_Y}u"}
+
+    def outputs(self, frame: Frame):
+        return {"guertin": TexSpec(4, "f4")}
+
+    def execute(self, frame: Frame):
+        p = frame.params["guertin"]
+        r = max_radius_px(frame)
+        tiles = (gather_tiles(frame, "guertin_neighbormax", slice(0, 2), r, EARLY_OUT_PX,
+                              jitter_reach(p.tile_jitter, r)) if self.tiled else None)
+        draw_gather(self, frame, "guertin",
+                    {"u_color": "color", "u_depth": "depth", "u_velocity": "guertin_velocity",
+                     "u_neighbormax": "guertin_neighbormax"},
+                    {"u_tile": r, "u_samples": int(p.samples), "u_gamma": float(p.gamma),
+                     "u_kappa": float(p.kappa), "u_eta": float(p.eta),
+                     "u_tile_jitter": float(p.tile_jitter), "u_z_scale": float(p.z_scale)},
+                    tiles)
+
+
+def guertin_passes(tiled: bool = True) -> list:
+    """The filter's passes after a G-buffer (colour, depth, velocity) exists."""
+    return [VelocityPrep("guertin_velocity"),
+            *tile_passes("guertin_velocity", "guertin", diagonal_toward=True), Gather(tiled)]
+
+
+@mode("guertin", groups=("blur", "guertin"))
+def guertin_pipeline() -> Pipeline:
+    return Pipeline("guertin", [GBufferPass(layout="motion"), *guertin_passes()],
+                    output="guertin")
