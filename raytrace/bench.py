@@ -15,7 +15,7 @@ def ceiling_jobs(batch: dict, front: bool = False) -> list[tuple]:
     """The Embree calls of the ceiling, [(Embree scene, origins, directions, rows)], rows
     the batch's rays each call takes. `batch`: {"rayscene": RayScene, "camera": Camera,
     "pixels": (n, 2) image (i, j), "own": (n,) own object ids, "t": float}, as the hybrid
-    mode records it (frame.host["reveal_batch"]): the primary ray through each pixel
+    mode records it (host resource reveal_batch): the primary ray through each pixel
     centre, into the static objects but its own (RayScene.exclusion_scene: the scene the
     reveal answers it from; the whole static scene where the own object moves or has no
     exclusion scene) and into every moving object's scene but its own's.

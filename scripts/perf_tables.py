@@ -40,7 +40,7 @@ HOST_TOP = 3                # the hybrid's largest host-CPU passes listed per ro
 
 # The README's rows: (file stem, label); one row per size found, the animated ratio beside.
 README_ROWS = [("living_room", "living_room"), ("thin", "thin"), ("basic", "basic (conformance)"),
-               ("spinner", "spinner"), ("vase_pan", "vase_pan (conformance, camera moves)"),
+               ("spinner", "spinner"), ("wheel", "wheel (keyed)"), ("vase_pan", "vase_pan (conformance, camera moves)"),
                ("pan", "pan (camera moves)"), ("crowd", "crowd (32 movers, bench scene)"),
                ("crowd_pan", "crowd_pan (32 movers, camera moves)")]
 README_SIZES = ("640x360", "1280x720")
@@ -63,9 +63,9 @@ def size(r) -> str:
 def frame_table(reports) -> str:
     """Frame times, the ratios to McGuire, and the main thread's CPU time in a McGuire
     and a hybrid frame (host work: on llvmpipe it adds to the frame)."""
-    lines = ["| scene | size | off | McGuire | UE4-style | hybrid | hybrid / McGuire | "
-             "UE4 / McGuire | host CPU McGuire / hybrid |",
-             "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+    lines = ["| scene | size | off | McGuire | UE4-style | Guertin | hybrid | hybrid / McGuire | "
+             "UE4 / McGuire | Guertin / McGuire | host CPU McGuire / hybrid |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for _, r in reports:
         m, ratios = r["modes"], r.get("ratios", {})
 
@@ -75,8 +75,8 @@ def frame_table(reports) -> str:
         def ratio(key):
             return f"{ratios[key]:.2f}" if key in ratios else "-"
         lines.append(f"| {r['scene']} | {size(r)} | {ms('off')} | {ms('mcguire')} | "
-                     f"{ms('ue4')} | {ms('hybrid')} | {ratio('hybrid/mcguire')} | "
-                     f"{ratio('ue4/mcguire')} | {ms('mcguire', 'frame_cpu_ms')} / "
+                     f"{ms('ue4')} | {ms('guertin')} | {ms('hybrid')} | {ratio('hybrid/mcguire')} | "
+                     f"{ratio('ue4/mcguire')} | {ratio('guertin/mcguire')} | {ms('mcguire', 'frame_cpu_ms')} / "
                      f"{ms('hybrid', 'frame_cpu_ms')} |")
     return "\n".join(lines)
 
@@ -165,8 +165,8 @@ def readme_table(reports) -> str:
     """The README's table: McGuire, UE4-style and hybrid frame times and the ratio per
     scene and size, the animated ratio beside the rows that have one."""
     by_stem = dict(reports)
-    lines = ["| scene | size | McGuire ms | UE4-style ms | hybrid ms | hybrid / McGuire "
-             "| animated, 60 fps |", "|---|---|---:|---:|---:|---:|---:|"]
+    lines = ["| scene | size | McGuire ms | UE4-style ms | Guertin ms | hybrid ms | hybrid / McGuire "
+             "| animated, 60 fps |", "|---|---|---:|---:|---:|---:|---:|---:|"]
     for name, label in README_ROWS:
         for sz in README_SIZES:
             r = by_stem.get(f"{name}_{sz}")
@@ -178,7 +178,7 @@ def readme_table(reports) -> str:
                 return f"{modes[m]['frame_ms']:.1f}" if m in modes else "-"
             anim = by_stem.get(f"{name}_{sz}_animated")
             a = f"{anim['ratios']['hybrid/mcguire']:.2f}" if anim else "-"
-            lines.append(f"| {label} | {sz} | {ms('mcguire')} | {ms('ue4')} | {ms('hybrid')} "
+            lines.append(f"| {label} | {sz} | {ms('mcguire')} | {ms('ue4')} | {ms('guertin')} | {ms('hybrid')} "
                          f"| {r['ratios']['hybrid/mcguire']:.2f} | {a} |")
     return "\n".join(lines)
 

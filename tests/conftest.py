@@ -29,15 +29,15 @@ def _context():
             if os.environ.get("CI"):
                 raise
             pytest.skip(f"no EGL context: {exc}")
+    # Current again: a command run in-process (`main(["shot", ...])`) makes its own
+    # context current, and GL calls on this one would then go to that one.
+    _ctx.__enter__()
     return _ctx
 
 
 @pytest.fixture
 def ctx():
     c = _context()
-    # Current again: a command run in-process (`main(["shot", ...])`) makes its own
-    # context current, and GL calls on this one would then go to that one.
-    c.__enter__()
     assert c.error == "GL_NO_ERROR"
     yield c
     assert c.error == "GL_NO_ERROR"

@@ -566,3 +566,14 @@ def test_bench_header_says_animated_and_explains_the_medians():
     assert len(reveal) == 6 and all(len(x) < 100 for x in reveal)
     rep["animate_fps"] = None
     assert "one frame time, t = 0.5 s" in format_report(rep).splitlines()[1]
+
+
+def test_graph_prints_the_modes_passes_and_host_resources(capsys):
+    from viewer.cli import main
+    assert main(["graph", "hybrid"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("mode hybrid -> hybrid\n")
+    assert "  reveal (cpu): ray_mask -> host:masked_pixels, host:reveal_hits, host:reveal_batch\n" in out
+    assert "  masked_pixels (ndarray): reveal -> hybrid_composite\n" in out
+    assert main(["graph", "fancy"]) == 2
+    assert "graph fancy: expected one of" in capsys.readouterr().err

@@ -11,6 +11,7 @@ from PIL import Image
 
 from viewer.imageio import linear_to_srgb8
 from viewer.render.renderer import Renderer
+from viewer.render.reference import REGIONS
 from world.loader import load_scene
 
 from conftest import CONFORMANCE
@@ -87,6 +88,6 @@ def test_ids_and_depth_match(rendered):
 
 def test_regions_match(rendered):
     _, _, _, _, ref, data = rendered
-    assert (ref.host["regions"] != data["region"]).sum() <= 5
+    assert (ref.host[REGIONS] != data["region"]).sum() <= 5
     for k in (0, 1, 2):
         assert (data["region"] == k).sum() > 0

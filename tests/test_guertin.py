@@ -19,6 +19,7 @@ from viewer.render.blur_common import max_radius_px
 from viewer.render.guertin import EARLY_OUT_PX, TAP_STREAM, TILE_STREAM_X, TILE_STREAM_Y, \
     guertin_passes
 from viewer.render.mcguire import mcguire_passes
+from viewer.render.reference import REGIONS
 from viewer.render.ue4 import ue4_passes
 
 SIZE = (32, 16)
@@ -242,7 +243,7 @@ def test_tiled_gather_is_the_full_screen_one(synthetic_frame, mode):
             run(frame, make(tiled=tiled), out)
             got[tiled] = frame.pool.get(out).read()
         assert got[True] == got[False], (mode, x0)
-        tl = next(v for k, v in frames[True].host["state"].items()
+        tl = next(v for k, v in frames[True].kept.items()
                   if k.startswith("gather_tiles:"))
         assert (0 < tl.count < -(-w // tl.tile) * -(-h // tl.tile)) if moving else tl.count == 0
 
@@ -253,7 +254,7 @@ def test_mode_beats_off_on_basic(ctx):
     from viewer.metrics import image_metrics
     from viewer.regions import OUTER
     ref, images, names = render_basic(ctx, ("off", "guertin"))
-    region = ref.host["regions"]
+    region = ref.host[REGIONS]
     assert (region == OUTER).sum() > 50
     m = {k: image_metrics(img, ref.image, region) for k, img in images.items()}
     assert m["guertin"]["outer"]["flip"] < m["off"]["outer"]["flip"]

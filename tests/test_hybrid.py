@@ -23,7 +23,9 @@ from viewer.render.hybrid.composite import composite_kind, composite_passes, mas
 from viewer.render.modes import MODES
 from viewer.render.pool import TexSpec
 from viewer.render.renderer import Renderer
-from viewer.render.hybrid.reveal import BACK, PACKED, shade_draws
+from viewer.render.reference import REGIONS
+from viewer.render.hybrid.reveal import BACK, PACKED, REVEAL_BATCH, shade_draws
+from viewer.render.tile_lists import KEPT_LISTS
 from world.loader import load_scene
 
 SMALL = (160, 90)
@@ -207,7 +209,7 @@ def test_the_reveal_takes_the_movers_matrices_from_the_frame(ctx, monkeypatch):
         t = 0.01
         frame = r.frame(t, ParamSet())
         r.pipeline("hybrid").run(frame)
-        batch = frame.host["reveal_batch"]
+        batch = frame.host[REVEAL_BATCH]
         rs = reveal_state(frame).rays
         models = frame_models(frame, rs.moving)
         assert models is not None and len(models) == len(rs.moving) == 32
@@ -563,7 +565,7 @@ def test_inner_blur_beats_the_post_process_modes_on_basic(ctx):
     r = Renderer(ctx, scene, SMALL)
     try:
         ref = r.render("reference", 0.0, p, record_visibility=True)
-        region = ref.host["regions"]
+        region = ref.host[REGIONS]
         flip = {m: image_metrics(r.render(m, 0.0, p).image, ref.image, region)
                 for m in ("hybrid", "mcguire", "ue4") if m in MODES}
     finally:
@@ -583,7 +585,7 @@ def test_split_composite_is_time_near_the_mask_and_bucket_elsewhere(ctx):
     r = Renderer(ctx, scene, size)
     try:
         split = r.render("hybrid", 0.0, params(composite="split"))
-        lists = r._host_passes["tile_lists"]
+        lists = r.kept.get(KEPT_LISTS)
         time_tiles = lists.extra("time100").tiles.copy()
         bucket_tiles = np.concatenate([lists.extra(n).tiles
                                        for n in ("bucket000", "bucket001", "bucket010")])

@@ -19,6 +19,7 @@ from viewer.render.blur_common import max_radius_px
 from viewer.render.gbuffer import GBUFFER
 from viewer.render.mcguire import EARLY_OUT_PX, JITTER_STREAM, mcguire_passes
 from viewer.render.tiles import TileMaxPass
+from viewer.render.reference import REGIONS
 
 SIZE = (32, 16)          # W, H
 
@@ -403,7 +404,7 @@ def test_mode_beats_off_in_outer_blur_on_basic(ctx):
     from viewer.metrics import image_metrics
     ref, images, names = render_basic(ctx, ("off", "mcguire"))
     off, mc = images["off"], images["mcguire"]
-    region = ref.host["regions"]
+    region = ref.host[REGIONS]
     outer = region == OUTER
     assert outer.sum() > 50
     err = {k: float(((img - ref.image) ** 2)[outer].mean()) for k, img in

@@ -18,6 +18,7 @@ from viewer.metrics import image_metrics  # noqa: E402
 from viewer.params import ParamSet  # noqa: E402
 from viewer.render.modes import MODES  # noqa: E402
 from viewer.render.renderer import Renderer  # noqa: E402
+from viewer.render.reference import REGIONS as REGION_MAP  # noqa: E402
 from world.loader import builtin_scene_names, builtin_scene_path, load_scene  # noqa: E402
 
 SIZE, SAMPLES = (160, 90), 16
@@ -71,7 +72,7 @@ def measure(ctx, name: str) -> dict:
         p = ParamSet()
         p.set("reference.samples", SAMPLES)
         ref = r.render("reference", scene.render.time, p, record_visibility=True)
-        region = ref.host["regions"]
+        region = ref.host[REGION_MAP]
         out = {}
         for mode in MODES:
             if mode != "reference":

@@ -95,7 +95,6 @@ def test_one_step_is_the_plain_pipeline(spinner):
         pipe = r.pipeline(mode)                  # the pipeline run by hand, no steps code
         frame = r.frame(t, ParamSet(), 3)
         pipe.run(frame)
-        frame.host.pop("state", None)
         assert np.array_equal(res.image, frame.read(pipe.output)[..., :3]), mode
         assert "steps" not in res.stats
 

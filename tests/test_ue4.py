@@ -19,6 +19,7 @@ from viewer.render.gbuffer import GBUFFER
 from viewer.render.pool import TexSpec
 from viewer.render.blur_common import max_radius_px
 from viewer.render.ue4 import Dilate, Flatten, Gather, TileMinMax, dilation_reach, tile_spec
+from viewer.render.reference import REGIONS
 
 
 def make_params(**ue4) -> ParamSet:
@@ -474,7 +475,7 @@ def test_mode_beats_off_against_reference_on_basic(ctx):
     try:
         t = scene.render.time
         ref = r.render("reference", t, record_visibility=True)
-        region = ref.host["regions"]
+        region = ref.host[REGIONS]
         off = r.render("off", t).image
         ue4 = r.render("ue4", t).image
         assert set(("ue4_flat", "ue4_tiles", "ue4_dilated", "ue4")) <= set(r.pool.names())

@@ -9,7 +9,7 @@ from pathlib import Path
 from world.errors import UserError
 from .progress import end_line
 
-COMMANDS = ("shot", "compare", "bench", "view", "params", "video")
+COMMANDS = ("shot", "compare", "bench", "view", "params", "graph", "video")
 
 EPILOG = """\
 SCENE is a scene file (.toml) or a built-in name ({builtins}); more scenes:

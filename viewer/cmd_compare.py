@@ -13,6 +13,7 @@ from .metrics import SPACE, metric_maps, region_metrics
 from .progress import Progress
 from .regions import DEFINITIONS, region_counts
 from .render.modes import MODE_GROUPS, MODES
+from .render.reference import REGIONS
 from .render.renderer import Renderer
 from .strip import choose_inset, error_strip, make_strip, metrics_markdown, region_picture
 
@@ -60,7 +61,7 @@ def run(args) -> int:
         ref = r.render("reference", s.time, s.params, seed=s.seed, record_visibility=True,
                        progress=Progress(f"reference ({s.params['reference'].samples} sub-frames)"))
         timings["reference"] = (time.perf_counter() - t0) * 1e3
-        region = ref.host["regions"]
+        region = ref.host[REGIONS]
         for mode in modes:
             t0 = time.perf_counter()
             res = r.render(mode, s.time, s.params, seed=s.seed)

@@ -20,6 +20,7 @@ from .metrics import SPACE, image_metrics
 from .plot import PALETTE, line_plots
 from .progress import Progress
 from .render.modes import MODES
+from .render.reference import REGIONS
 from .strip import REGION_ORDER, make_strip
 from .temporal import FlickerAccumulator
 from .video_writer import OUT_HELP, VideoPaths, VideoWriter, video_paths
@@ -146,7 +147,7 @@ def run(args) -> int:
                 if metrics is not None:
                     if ref is None:
                         ref = r.render("reference", t, s.params, seed=s.seed, record_visibility=True)
-                    metrics.add(k, t, images, ref.image, ref.host["regions"])
+                    metrics.add(k, t, images, ref.image, ref.host[REGIONS])
                 writer.add(compose(images))
                 progress(k, frames)
             seconds = time.perf_counter() - t0

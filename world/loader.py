@@ -25,8 +25,8 @@ from PIL import Image
 
 import scenes
 
-from .errors import SceneError
-from .scene import (INTERPOLATIONS, CameraKeys, CameraSpec, Light, Material, Mesh, ObjectKeys,
+from world.errors import SceneError
+from world.scene import (INTERPOLATIONS, CameraKeys, CameraSpec, Light, Material, Mesh, ObjectKeys,
                     RenderDefaults, Scene, SceneObject, Texture)
 
 PRIMITIVES = ("box", "sphere", "cylinder", "revolve")

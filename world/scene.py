@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import conventions
-from . import transforms as tf
+from world import conventions
+from world import transforms as tf
 
 
 @dataclass

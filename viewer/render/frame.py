@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import time as _time
 from dataclasses import dataclass, field
+from typing import Callable
 
 import moderngl
 import numpy as np
@@ -14,6 +15,8 @@ from world.conventions import to_image
 from ..params import ParamSet
 from ..shaders import ProgramCache
 from .gpu_scene import GpuScene
+from .host import HostResources
+from .kept import KeptState
 from .pool import ResourcePool
 
 
@@ -34,7 +37,16 @@ class Frame:
     # calls on this thread and the driver's work here; not the waits for the GPU or
     # llvmpipe's rasteriser threads): how much of a pass is host work.
     pass_cpu_ms: dict = field(default_factory=dict)
-    host: dict = field(default_factory=dict)   # host-side results (e.g. region maps)
+    # This frame's host-side results, declared by the passes that make and read them
+    # (viewer/render/host.py).
+    host: HostResources = field(default_factory=HostResources)
+    # State kept across frames, the Renderer's (a frame made on its own gets its own).
+    kept: KeptState = field(default_factory=KeptState)
+    # What the caller asks for: every reference sub-frame's visibility, classified into
+    # the evaluation regions (host resource `regions`); progress(k, n) as long passes
+    # (the reference) advance.
+    record_visibility: bool = False
+    progress: Callable[[int, int], None] | None = None
     # GpuScene.object_matrices of this frame's objects by (id, t, t_open, t_close): the
     # camera and the objects hold still for a frame, and several passes ask.
     object_matrices: dict = field(default_factory=dict)

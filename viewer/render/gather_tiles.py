@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from .frame import Frame
-from .tile_lists import FINE, TileList, tile_coords
+from .tile_lists import FINE, TileList, kept_tile_list, tile_coords
 
 # Relative margin on the early-out speed: the host's float64 length and the shader's
 # float32 one may round apart; a tile near the threshold is drawn (that changes no pixel).
@@ -66,11 +66,7 @@ def gather_tiles(frame: Frame, source: str, components: slice, tile: int,
     frame.stats[f"{source}_gather_tiles"] = int(moving.sum())
     if moving.all():
         return None
-    state = frame.host.setdefault("state", {})
-    key = f"gather_tiles:{source}"
-    tl = state.get(key)
-    if tl is None or tl.ctx is not frame.ctx:
-        tl = state[key] = TileList(frame.ctx)
+    tl = kept_tile_list(frame, f"gather_tiles:{source}")
     tl.set(tile_coords(moving), tile, frame.size)
     return tl
 

@@ -1,6 +1,7 @@
-"""Pass and pipeline: a pass names its inputs and its outputs (with formats), takes its
-parameters from the frame, and executes; a pipeline is the passes of one mode, in order,
-checked when built so every input is produced earlier."""
+"""Pass and pipeline: a pass names its inputs and its outputs (with formats), and the
+host-side resources it reads and makes (viewer/render/host.py), takes its parameters
+from the frame, and executes; a pipeline is the passes of one mode, in order, checked
+when built so every input, texture or host resource, is produced earlier."""
 from __future__ import annotations
 
 import moderngl
@@ -8,6 +9,7 @@ import moderngl
 from world.conventions import glsl_defines
 from .frame import Frame, PassTimer
 from .gpu_scene import set_uniform
+from .host import HostResource
 from .pool import TexSpec
 
 
@@ -15,6 +17,9 @@ class Pass:
     name: str = "pass"
     inputs: tuple[str, ...] = ()
     produces: tuple[str, ...] = ()        # output names; `outputs` gives their formats
+    host_inputs: tuple[HostResource, ...] = ()
+    host_outputs: tuple[HostResource, ...] = ()
+    runs_on: str = "gpu"                  # "cpu": host work (read-backs, rays), no draw
 
     def outputs(self, frame: Frame) -> dict[str, TexSpec]:
         return {}
@@ -31,16 +36,23 @@ class FullscreenPass(Pass):
     fragment: str = ""
 
     def defines(self, frame: Frame) -> dict:
+        """The defines every draw of this pass compiles with (from the frame's settings);
+        a draw's own variant comes as draw(defines=...)."""
         return {}
 
-    def program(self, frame: Frame, vertex: str = "fullscreen.vert") -> moderngl.Program:
-        return frame.programs.get(vertex, self.fragment,
-                                  {**glsl_defines(), **self.defines(frame)})
+    def program(self, frame: Frame, vertex: str = "fullscreen.vert", defines: dict | None = None,
+                fragment: str | None = None) -> moderngl.Program:
+        return frame.programs.get(vertex, fragment or self.fragment,
+                                  {**glsl_defines(), **self.defines(frame), **(defines or {})})
 
     def draw(self, frame: Frame, outputs: tuple[str, ...], textures: dict[str, str],
              uniforms: dict | None = None, blend: bool = False, tiles=None,
-             clear: bool = True):
+             clear: bool = True, defines: dict | None = None, fragment: str | None = None):
         """Bind pool textures to sampler uniforms, set uniforms, draw into `outputs`.
+
+        defines, fragment: this draw's shader variant (added to defines(frame); instead of
+        the pass's fragment): program() with the same arguments gives the program drawn
+        (the cache's), for a caller that sets uniforms of its own first.
 
         tiles: a TileList (viewer/render/tile_lists.py) to draw only its tiles, every
         texel of which the pass writes; the targets are zero elsewhere (what they held
@@ -54,7 +66,8 @@ class FullscreenPass(Pass):
                 tiles.clear_outside(frame, tuple(outputs))
                 frame.pool.mark_tiles(tuple(outputs), tiles)
             return
-        prog = self.program(frame, "fullscreen.vert" if tiles is None else tiles.vertex_shader)
+        prog = self.program(frame, "fullscreen.vert" if tiles is None else tiles.vertex_shader,
+                            defines, fragment)
         for unit, (uniform, tex_name) in enumerate(textures.items()):
             frame.pool.get(tex_name).use(unit)
             set_uniform(prog, uniform, unit)
@@ -86,11 +99,21 @@ class Pipeline:
     def __init__(self, mode: str, passes: list[Pass], output: str, produced=()):
         self.mode, self.passes, self.output = mode, passes, output
         have = set(produced)
+        host: dict[str, Pass] = {}          # host resource name -> its producer
         for p in passes:
             missing = [n for n in p.inputs if n not in have]
             if missing:
                 raise ValueError(f"pipeline {mode}: pass {p.name} needs {missing}, not produced before it")
+            missing = [r.name for r in p.host_inputs if host_producer(host, r) is None]
+            if missing:
+                raise ValueError(f"pipeline {mode}: pass {p.name} needs host resources "
+                                 f"{missing}, not produced before it")
             have |= set(p.produces)
+            for r in p.host_outputs:
+                if r.name in host:
+                    raise ValueError(f"pipeline {mode}: host resource {r.name} is made by "
+                                     f"both {host[r.name].name} and {p.name}")
+                host[r.name] = p
         if output not in have:
             raise ValueError(f"pipeline {mode}: output {output} is not produced")
 
@@ -100,11 +123,34 @@ class Pipeline:
         timing.PassClock.measure for GL timer queries), passes [start, stop) only."""
         for p in self.passes[start:stop]:
             p.allocate(frame)
-            with measure(frame, p.name):
+            with measure(frame, p.name), frame.host.opened_to(p):
                 p.execute(frame)
 
+    def host_resources(self) -> list[tuple[HostResource, Pass, list[Pass]]]:
+        """(resource, producer, readers) of every host resource, in the order made."""
+        return [(r, p, [q for q in self.passes if r in q.host_inputs])
+                for p in self.passes for r in p.host_outputs]
+
     def describe(self) -> str:
+        """The whole graph: each pass (GPU or CPU) with what it reads and makes, textures
+        and host resources (marked `host:`), then every host resource with its type, its
+        producer and its readers ("the caller": read after the frame, e.g. by compare)."""
         lines = [f"mode {self.mode} -> {self.output}"]
         for p in self.passes:
-            lines.append(f"  {p.name}: {', '.join(p.inputs) or '-'} -> {', '.join(p.produces)}")
+            ins = [*p.inputs, *(f"host:{r.name}" for r in p.host_inputs)]
+            outs = [*p.produces, *(f"host:{r.name}" for r in p.host_outputs)]
+            kind = " (cpu)" if p.runs_on == "cpu" else ""
+            lines.append(f"  {p.name}{kind}: {', '.join(ins) or '-'} -> {', '.join(outs) or '-'}")
+        rows = self.host_resources()
+        if rows:
+            lines.append("host resources:")
+            for r, p, readers in rows:
+                lines.append(f"  {r.name} ({r.type_name()}): {p.name} -> "
+                             f"{', '.join(q.name for q in readers) or 'the caller'}")
         return "\n".join(lines)
+
+
+def host_producer(made: dict[str, Pass], res: HostResource) -> Pass | None:
+    """The pass of `made` (name -> producer) that makes `res`, or None."""
+    p = made.get(res.name)
+    return p if p is not None and res in p.host_outputs else None

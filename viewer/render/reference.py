@@ -3,10 +3,13 @@ averaged in unclamped linear colour (clamped once, at encoding). Optionally reco
 sub-frame's object ids and depths, from which the evaluation regions are classified."""
 from __future__ import annotations
 
+import numpy as np
+
 from ..params import group, param
 from ..regions import RegionAccumulator
 from .frame import Frame
 from .gbuffer import GBufferPass
+from .host import HostResource
 from .registry import mode
 from .passes import FullscreenPass, Pass, Pipeline
 from .pool import TexSpec
@@ -17,6 +20,11 @@ class ReferenceParams:
     samples: int = param(64, unit="sub-frames", lo=1, hi=4096, help="sharp sub-frames averaged over the exposure")
 
 
+# The evaluation region of every pixel (viewer/regions.py codes, image rows), made only
+# where the frame asks for it (Frame.record_visibility).
+REGIONS = HostResource("regions", np.ndarray, "evaluation region per pixel")
+
+
 class Accumulate(FullscreenPass):
     fragment = "accumulate.frag"
 
@@ -25,6 +33,7 @@ class ReferencePass(Pass):
     name = "reference"
     inputs = ("id", "depth")
     produces = ("reference",)
+    host_outputs = (REGIONS,)
 
     def __init__(self):
         self.sub_color = GBufferPass(prefix="sub_", layout="color")
@@ -44,10 +53,10 @@ class ReferencePass(Pass):
         # Regions (ALGORITHMS.md 5.3) from every sub-frame's visibility against the frame
         # time's G-buffer, streamed so no stack of N id buffers is kept.
         regions = (RegionAccumulator(frame.read("id"), frame.read("depth"))
-                   if frame.host.get("record_visibility") else None)
+                   if frame.record_visibility else None)
         sub = self.sub_color if regions is None else self.sub_visibility
         sub.allocate(frame)
-        progress = frame.host.get("progress")
+        progress = frame.progress
         for k, tk in enumerate(frame.sample_times(n)):
             if progress is not None:
                 progress(k, n)
@@ -57,7 +66,7 @@ class ReferencePass(Pass):
             if regions is not None:
                 regions.add(frame.read("sub_id"), frame.read("sub_depth"))
         if regions is not None:
-            frame.host["regions"] = regions.result()
+            frame.host.put(REGIONS, regions.result())
         frame.stats["samples"] = n
 
     # Progressive accumulation (the viewer): the same sub-frames, weights and blending order

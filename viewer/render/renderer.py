@@ -15,6 +15,8 @@ from ..shaders import ProgramCache
 from .allocator import keep_freed_memory
 from .frame import Frame, PassTimer
 from .gpu_scene import GpuScene
+from .host import HostResources
+from .kept import KeptState
 from .modes import MODES
 from .pool import ResourcePool
 from .steps import MakeFrame, Measure, run_steps, step_count
@@ -26,7 +28,7 @@ class RenderResult:
     image: np.ndarray                    # linear RGB float32, (H, W, 3), top row first
     stats: dict = field(default_factory=dict)
     pass_ms: dict = field(default_factory=dict)
-    host: dict = field(default_factory=dict)
+    host: HostResources = field(default_factory=HostResources)   # e.g. reference.REGIONS
 
 
 class Renderer:
@@ -38,7 +40,7 @@ class Renderer:
         self.gpu = GpuScene(ctx, scene)
         self.pool = ResourcePool(ctx)
         self._pipelines: dict = {}
-        self._host_passes: dict = {}     # per-scene host state (e.g. the ray tracer)
+        self.kept = KeptState()          # state kept across frames (e.g. the ray tracer)
         self.resize(size)
 
     def _check_size(self, size):
@@ -65,12 +67,13 @@ class Renderer:
         return self._pipelines[mode]
 
     def frame(self, t: float, params: ParamSet, seed: int = 0, timing: bool = False,
-              shutter: float | None = None) -> Frame:
+              shutter: float | None = None, record_visibility: bool = False,
+              progress=None) -> Frame:
         """A frame at t; `shutter` None: the scene camera's (read now, as the viewer may
-        change it between frames)."""
+        change it between frames). The frame shares the renderer's kept state."""
         return Frame(self.ctx, self.pool, self.programs, self.gpu, self.camera, float(t),
-                     params, seed=seed, timing=timing, host={"state": self._host_passes},
-                     shutter=shutter)
+                     params, seed=seed, timing=timing, kept=self.kept, shutter=shutter,
+                     record_visibility=record_visibility, progress=progress)
 
     def run(self, mode: str, t: float, params: ParamSet, seed: int, make_frame: MakeFrame,
             measure: Measure = PassTimer) -> Frame:
@@ -89,14 +92,10 @@ class Renderer:
         pipe = self.pipeline(mode)
 
         def make_frame(tk, shutter, seed_k):
-            f = self.frame(tk, params, seed_k, timing, shutter=shutter)
-            f.host["record_visibility"] = record_visibility
-            if progress is not None:
-                f.host["progress"] = progress
-            return f
+            return self.frame(tk, params, seed_k, timing, shutter=shutter,
+                              record_visibility=record_visibility, progress=progress)
         frame = self.run(mode, t, params, seed, make_frame)
         image = frame.read(pipe.output)[..., :3].copy() if read_image else None
-        frame.host.pop("state", None)
         return RenderResult(mode, image, frame.stats, frame.pass_ms, frame.host)
 
     def output_name(self, mode: str) -> str:
@@ -108,9 +107,7 @@ class Renderer:
         return {n: read_texture(self.pool.get(n)) for n in self.pool.names()}
 
     def release(self):
-        for state in self._host_passes.values():
-            if hasattr(state, "release"):
-                state.release()
+        self.kept.release()
         self.pool.release()
         self.programs.clear()
         self.gpu.release()

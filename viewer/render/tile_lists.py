@@ -33,14 +33,15 @@ import numpy as np
 from .blur_common import max_radius_px
 from .frame import Frame
 from .gbuffer import path_targets
+from .host import HostResource
 from .hybrid.params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
 from . import tile_kernels
+from .kept import KeptSlot
 from .tiles import StripSpec
 
 FINE = 16                      # px per side of a list tile
-STATE_KEY = "tile_lists"
 # Extra reach (px) on top of half the displacement and the landing tolerance: the
 # composite's walks floor positions to pixels, so a landing can sit a pixel further out.
 MARGIN = 1.0
@@ -189,6 +190,22 @@ class TileLists:
             tl.release()
 
 
+# The lists, kept from frame to frame (their vertex buffers reused), and this frame's.
+KEPT_LISTS = KeptSlot("tile_lists", TileLists, "the hybrid's tile lists, reused")
+TILE_LISTS = HostResource("tile_lists", TileLists,
+                          "this frame's moving, surface and active tiles (select_tiles)")
+
+
+def kept_tile_list(frame: Frame, name: str) -> TileList:
+    """A TileList kept across frames under `name` (its vertex buffer reused), made the
+    first time (e.g. clear_outside's "zero_tiles")."""
+    slot = KeptSlot(name, TileList)
+    tl = frame.kept.get(slot)
+    if tl is None or tl.ctx is not frame.ctx:
+        tl = frame.kept.put(slot, TileList(frame.ctx))
+    return tl
+
+
 def moving_tiles(longest: np.ndarray, min_speed: float) -> np.ndarray:
     """Tiles holding a pixel with |D| >= min_speed (the ray mask's own test)."""
     return longest >= _threshold(min_speed)
@@ -243,15 +260,15 @@ class ZeroTiles(FullscreenPass):
     fragment = "zero_tiles.frag"
 
     def defines(self, frame: Frame):
-        return {"OUT_FLOAT": OUT_FLOAT, "OUT_INT": OUT_INT,
-                **{f"OUT{k}": self._kinds[k] if k < len(self._kinds) else 0 for k in range(4)}}
+        return {"OUT_FLOAT": OUT_FLOAT, "OUT_INT": OUT_INT}
 
     def zero(self, frame: Frame, outputs: tuple[str, ...], tiles: TileList):
-        # moderngl's u* and i* formats are integer targets.
-        self._kinds = [OUT_INT if frame.pool.spec(n).dtype[0] in "ui" else OUT_FLOAT
-                       for n in outputs]
+        # moderngl's u* and i* formats are integer targets; OUTk 0: no target k.
+        kinds = [OUT_INT if frame.pool.spec(n).dtype[0] in "ui" else OUT_FLOAT
+                 for n in outputs]
         self.draw(frame, outputs, {}, {"u_viewport": tuple(float(x) for x in tiles.size)},
-                  tiles=tiles, clear=False)            # (a strip's size, not the frame's)
+                  tiles=tiles, clear=False,            # (a strip's size, not the frame's)
+                  defines={f"OUT{k}": kinds[k] if k < len(kinds) else 0 for k in range(4)})
 
 
 _ZERO = ZeroTiles()
@@ -267,10 +284,7 @@ def clear_outside(frame: Frame, outputs: tuple[str, ...], tiles: TileList):
         frame.pool.clear(outputs)
         return
     if stale.any():
-        state = frame.host.setdefault("state", {})
-        tl = state.get("zero_tiles")
-        if tl is None:
-            tl = state["zero_tiles"] = TileList(frame.ctx)
+        tl = kept_tile_list(frame, "zero_tiles")
         tl.set(tile_coords(stale), tiles.tile, tiles.size, tile_h=tiles.tile_h)
         _ZERO.zero(frame, outputs, tl)
 
@@ -304,30 +318,31 @@ class MotionTiles(FullscreenPass):
     produces = ("motion_tiles_x", "motion_tiles")
 
     def defines(self, frame: Frame):
-        return {"STAGE": self._stage, "SEGMENTS": segments(frame)}
+        return {"SEGMENTS": segments(frame)}
 
     def outputs(self, frame: Frame):
         return {"motion_tiles_x": StripSpec(2, "f4", tile=FINE),
                 "motion_tiles": TexSpec(2, "f4", tile=FINE)}
 
     def execute(self, frame: Frame):
-        for self._stage, src, dst in ((0, "hybrid_front", "motion_tiles_x"),
-                                      (1, "motion_tiles_x", "motion_tiles")):
-            paths = path_textures(frame) if self._stage == 0 else {}
-            self.draw(frame, (dst,), {"u_source": src, **paths}, {"u_tile": FINE})
+        for stage, src, dst in ((0, "hybrid_front", "motion_tiles_x"),
+                                (1, "motion_tiles_x", "motion_tiles")):
+            paths = path_textures(frame) if stage == 0 else {}
+            self.draw(frame, (dst,), {"u_source": src, **paths}, {"u_tile": FINE},
+                      defines={"STAGE": stage})
 
 
 class SelectTiles(Pass):
     """Host side: read `motion_tiles` back (a few thousand floats) and fill the lists."""
     name = "select_tiles"
+    runs_on = "cpu"
     inputs = ("motion_tiles",)
-    produces = ("tile_lists",)          # host-side: frame.host["tile_lists"]
+    host_outputs = (TILE_LISTS,)
 
     def execute(self, frame: Frame):
-        state = frame.host.setdefault("state", {})
-        lists = state.get(STATE_KEY)
+        lists = frame.kept.get(KEPT_LISTS)
         if lists is None or lists.ctx is not frame.ctx:
-            lists = state[STATE_KEY] = TileLists(frame.ctx)
+            lists = frame.kept.put(KEPT_LISTS, TileLists(frame.ctx))
         tex = frame.pool.get("motion_tiles")
         tw, th = tex.size
         both = np.frombuffer(tex.read(), np.float32).reshape(th, tw, 2)   # GL rows
@@ -344,7 +359,7 @@ class SelectTiles(Pass):
         lists.moving.set(tile_coords(moving), FINE, frame.size)
         lists.active.set(tile_coords(active), FINE, frame.size)
         lists.surface.set(tile_coords(surface), FINE, frame.size)
-        frame.host["tile_lists"] = lists
+        frame.host.put(TILE_LISTS, lists)
         frame.stats["tiles"] = int(tw * th)
         frame.stats["moving_tiles"] = lists.moving.count
         frame.stats["active_tiles"] = lists.active.count
@@ -356,7 +371,7 @@ def moving_strips(frame: Frame, k: int) -> TileList | None:
     whose k pixels meet a FINE tile with any displacement (longest |D| > 0, so elsewhere
     every D there is exactly 0, the strip's value), as 1 x FINE quads; None without tile
     lists."""
-    lists = frame.host.get("tile_lists")
+    lists = frame.host.get(TILE_LISTS)
     if lists is None:
         return None
     w, h = frame.size
@@ -375,7 +390,7 @@ def tile_strips(frame: Frame, tiles: np.ndarray, name: str) -> TileList:
     """The texels of a FINE x 1 strip (ceil(W / FINE) x H) under the FINE tiles `tiles`
     (GL rows), as 1 x FINE quads: the extra list `name`."""
     w, h = frame.size
-    tl = frame.host["tile_lists"].extra(name)
+    tl = frame.host[TILE_LISTS].extra(name)
     tl.set(tile_coords(tiles), 1, (-(-w // FINE), h), tile_h=FINE)
     return tl
 
@@ -383,7 +398,7 @@ def tile_strips(frame: Frame, tiles: np.ndarray, name: str) -> TileList:
 def tile_list(frame: Frame, which: str) -> TileList | None:
     """The frame's `which` ("moving", "active" or "surface") list, or None to draw full
     screen."""
-    lists = frame.host.get("tile_lists")
+    lists = frame.host.get(TILE_LISTS)
     return getattr(lists, which) if lists is not None else None
 
 

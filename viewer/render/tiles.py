@@ -41,9 +41,10 @@ class TileMaxPass(FullscreenPass):
     fragment = "tilemax.frag"
 
     def __init__(self, source: str, output: str, axis: str, tile=max_radius_px, select=None,
-                 segments=one_segment, paths: tuple[str, ...] = ()):
+                 segments=one_segment, paths: tuple[str, ...] = (), select_reads=()):
         """select(frame, k): a TileList over the output's texels that can be nonzero (the
-        rest is cleared to 0, the value of a still strip), or None for all of them.
+        rest is cleared to 0, the value of a still strip), or None for all of them;
+        select_reads: the host resources it reads (the pass's host_inputs).
         segments(frame): the path segments of the frame; paths: the source's path
         targets (glsl/path.glsl), read where segments > 1."""
         if axis not in ("x", "y"):
@@ -53,6 +54,7 @@ class TileMaxPass(FullscreenPass):
         self.inputs, self.produces = (source, *paths), (output, *self.path_outputs)
         self.source, self.output, self.axis, self.tile = source, output, axis, tile
         self.select, self.segments, self.paths = select, segments, paths
+        self.host_inputs = tuple(select_reads)
 
     def defines(self, frame: Frame):
         return {"SEGMENTS": self.segments(frame)}
@@ -110,13 +112,13 @@ class NeighborMaxPass(FullscreenPass):
 
 def tile_passes(source: str, prefix: str, tile=max_radius_px, select_x=None,
                 segments=one_segment, paths: tuple[str, ...] = (),
-                diagonal_toward: bool = False) -> list[Pass]:
+                diagonal_toward: bool = False, select_reads=()) -> list[Pass]:
     """TileMax x, TileMax y and NeighborMax of `source`, producing PREFIX_tilemax_x,
-    PREFIX_tilemax and PREFIX_neighbormax; select_x: TileMaxPass's `select` for the first;
-    paths: the source's path targets, carried along where segments(frame) > 1;
-    diagonal_toward: NeighborMaxPass's."""
+    PREFIX_tilemax and PREFIX_neighbormax; select_x, select_reads: TileMaxPass's `select`
+    for the first and the host resources it reads; paths: the source's path targets,
+    carried along where segments(frame) > 1; diagonal_toward: NeighborMaxPass's."""
     tx, ty, nm = f"{prefix}_tilemax_x", f"{prefix}_tilemax", f"{prefix}_neighbormax"
     names = lambda base: tuple(base + s for s in PATH_SUFFIXES[:len(paths)])  # noqa: E731
-    return [TileMaxPass(source, tx, "x", tile, select_x, segments, paths),
+    return [TileMaxPass(source, tx, "x", tile, select_x, segments, paths, select_reads),
             TileMaxPass(tx, ty, "y", tile, None, segments, names(tx)),
             NeighborMaxPass(ty, nm, tile, segments, names(ty), diagonal_toward)]

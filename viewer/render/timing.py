@@ -59,12 +59,9 @@ class PassClock:
         """Run every pass of `mode`, as its sub-exposure steps where set (the image stays
         on the GPU, in the pool)."""
         def make_frame(tk, shutter, seed_k):
-            f = renderer.frame(tk, params, seed_k, timing=self.method == "cpu", shutter=shutter)
-            f.host["record_visibility"] = False
-            return f
-        frame = renderer.run(mode, t, params, seed, make_frame, measure=self.measure)
-        frame.host.pop("state", None)
-        return frame
+            return renderer.frame(tk, params, seed_k, timing=self.method == "cpu",
+                                  shutter=shutter)
+        return renderer.run(mode, t, params, seed, make_frame, measure=self.measure)
 
     # Queries are kept, one per pass name, for the context's lifetime: moderngl 5 has no
     # Query.release(), and reusing them keeps the count bounded.

@@ -44,21 +44,17 @@ class Progressive:
         pipe = renderer.pipeline(mode)
         acc = accumulating_pass(pipe)
         frame = clock.frame(renderer, t, params, seed)
-        frame.host["record_visibility"] = False
         index = pipe.passes.index(acc)
-        try:
-            if key != self.key:
-                self.key, self.done = None, 0
-                pipe.run(frame, clock.measure, stop=index)   # e.g. the frame-time G-buffer, once
-                with clock.measure(frame, acc.name):
-                    acc.start(frame)
-                self.key = key
-            self.total = acc.total(frame)
-            if self.done < self.total:
-                with clock.measure(frame, acc.name):
-                    self.done = acc.accumulate(frame, self.done, per_frame)
-            pipe.run(frame, clock.measure, start=index + 1)
-        finally:
-            frame.host.pop("state", None)
+        if key != self.key:
+            self.key, self.done = None, 0
+            pipe.run(frame, clock.measure, stop=index)   # e.g. the frame-time G-buffer, once
+            with clock.measure(frame, acc.name):
+                acc.start(frame)
+            self.key = key
+        self.total = acc.total(frame)
+        if self.done < self.total:
+            with clock.measure(frame, acc.name):
+                self.done = acc.accumulate(frame, self.done, per_frame)
+        pipe.run(frame, clock.measure, start=index + 1)
         frame.stats.update(sub_frames=f"{self.done}/{self.total}")
         return frame

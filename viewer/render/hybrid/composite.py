@@ -21,12 +21,14 @@ import numpy as np
 
 from ..blur_common import max_radius_px
 from ..frame import Frame
+from ..host import HostResource
 from .params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from ..passes import FullscreenPass, Pass
 from ..pool import TexSpec
+from .reveal import MASKED_PIXELS
 from ..tile_kernels import mark_tiles, outlines_along, pixel_tiles, square_max
-from ..tile_lists import (FINE, moving_strips, path_textures, segments, tile_coords, tile_list,
-                         within_reach)
+from ..tile_lists import (FINE, TILE_LISTS, moving_strips, path_textures, segments,
+                         tile_coords, tile_list, within_reach)
 from ..tiles import tile_passes
 
 # Which noise stream of glsl/noise.glsl's hash01 jitters the time samples or taps.
@@ -46,6 +48,8 @@ MERGE_ANGLE_DEG = 7.0
 MERGE_COS = math.cos(math.radians(MERGE_ANGLE_DEG))
 MERGE_SPREAD = math.sin(math.radians(MERGE_ANGLE_DEG))
 FRAGMENTS = {"time": "hybrid_time.frag", "bucket": "hybrid_bucket.frag"}
+NEIGHBORMAX = HostResource("neighbormax", np.ndarray,
+                           "hybrid_neighbormax read back (GL rows), for near_outlines")
 
 
 def near_outlines(frame: Frame, todo: np.ndarray) -> np.ndarray:
@@ -58,12 +62,12 @@ def near_outlines(frame: Frame, todo: np.ndarray) -> np.ndarray:
     lines miss the outlines above and below). Elsewhere every tap lands on the pixel's own
     object, and the buckets of other objects stay empty: the SIMPLE variant, which skips
     them, gives the same image. Decided for the tiles of `todo` only."""
-    lists = frame.host.get("tile_lists")
+    lists = frame.host.get(TILE_LISTS)
     if lists is None or lists.boundary.shape != todo.shape:
         return np.ones(todo.shape, bool)
     if segments(frame) > 1:
         return todo & within_reach(lists.boundary, path_reach(frame, todo.shape), FINE)
-    vn = frame.host.get("neighbormax")
+    vn = frame.host.get(NEIGHBORMAX)
     if vn is None:                      # (not read back: the composite run on its own)
         vn = read_neighbormax(frame)
     k = max_radius_px(frame)
@@ -103,11 +107,12 @@ class ReadNeighborMax(Pass):
     (the hybrid runs the tile passes before the ray mask), so a GPU driver waits only for
     those passes, not for the reveal's, as a read in the composite would."""
     name = "hybrid_neighbormax_read"
+    runs_on = "cpu"
     inputs = ("hybrid_neighbormax",)
-    produces = ("neighbormax",)         # host-side: frame.host["neighbormax"]
+    host_outputs = (NEIGHBORMAX,)
 
     def execute(self, frame: Frame):
-        frame.host["neighbormax"] = read_neighbormax(frame)
+        frame.host.put(NEIGHBORMAX, read_neighbormax(frame))
 
 
 def composite_kind(frame: Frame) -> str:
@@ -153,7 +158,7 @@ def write_mask_tiles(frame: Frame):
     reveal) reads what its caller wrote there."""
     k = max_radius_px(frame)
     frame.pool.texture(MASK_TILES, TexSpec(2, "f4", tile=k))
-    pixels = frame.host.get("masked_pixels")
+    pixels = frame.host.get(MASKED_PIXELS)
     if pixels is not None:
         frame.write(MASK_TILES, mask_tiles(pixels, frame.size, k))
 
@@ -166,20 +171,13 @@ class Composite(FullscreenPass):
               "hybrid_neighbormax", "hybrid_path", "hybrid_path2", "hybrid_neighbormax_path",
               "hybrid_neighbormax_path2")
     produces = ("hybrid", MASK_TILES)   # ray_mask_tiles: held only while "time" draws
-
-    def __init__(self):
-        self._kind = "time"
-        self._back, self._still, self._simple = 1, 0, 0
-
-    def program(self, frame: Frame, vertex: str = "fullscreen.vert"):
-        self.fragment = FRAGMENTS[self._kind]
-        return super().program(frame, vertex)
+    host_inputs = (TILE_LISTS, NEIGHBORMAX, MASKED_PIXELS)
+    fragment = FRAGMENTS["time"]        # (each draw names its own: _draw)
 
     def defines(self, frame: Frame):
         p = frame.params["hybrid"]
         return {"MAX_SEEDS": int(p.seeds), "SEGMENTS": segments(frame),
-                "JITTER_STREAM": f"{JITTER_STREAM}u", "BACK_LAYER": self._back,
-                "OWN_STILL": self._still, "SIMPLE": self._simple, "MERGE_COS": repr(MERGE_COS)}
+                "JITTER_STREAM": f"{JITTER_STREAM}u", "MERGE_COS": repr(MERGE_COS)}
 
     def outputs(self, frame: Frame):
         return {"hybrid": TexSpec(4, "f4")}
@@ -189,7 +187,7 @@ class Composite(FullscreenPass):
         if kind == "bucket":
             frame.pool.discard(MASK_TILES)     # (made by an earlier time composite)
         tiles = tile_list(frame, "active")
-        lists = frame.host.get("tile_lists")
+        lists = frame.host.get(TILE_LISTS)
         if tiles is not None and tiles.count < lists.shape[0] * lists.shape[1]:
             # Outside the active tiles nothing reaches a pixel: its sharp colour stands.
             # (Where every tile is active, as under a moving camera, the draws below
@@ -200,7 +198,7 @@ class Composite(FullscreenPass):
             return self._draw(frame, "time" if kind == "split" else kind, tiles)
         active = np.zeros(lists.shape, bool)
         active[tiles.tiles[:, 1], tiles.tiles[:, 0]] = True
-        masked = frame.host.get("masked_pixels", np.zeros((0, 2), int))
+        masked = frame.host.get(MASKED_PIXELS, np.zeros((0, 2), int))
         # Only tiles holding a masked pixel have a revealed layer to blur (line 3); in
         # tiles where nothing moves (own D < 1e-3 px) the own surface needs no line.
         if kind == "split":
@@ -227,7 +225,6 @@ class Composite(FullscreenPass):
               simple: int = 0):
         p = frame.params["hybrid"]
         k = max_radius_px(frame)
-        self._kind, self._back, self._still, self._simple = kind, back, own_still, simple
         textures = {"u_front_color": "color", "u_front": "hybrid_front",
                     "u_back_color": "hybrid_back_color", "u_back": "hybrid_back",
                     "u_tilemax": "hybrid_tilemax", "u_neighbormax": "hybrid_neighbormax",
@@ -243,14 +240,16 @@ class Composite(FullscreenPass):
                    "u_samples_max": int(max(p.samples_max, p.samples_min)),
                    "u_spacing": float(p.sample_spacing), "u_jitter": float(p.jitter),
                    "u_tolerance": float(p.tolerance), "u_iterations": int(p.iterations)},
-                  tiles=tiles, clear=False)
+                  tiles=tiles, clear=False, fragment=FRAGMENTS[kind],
+                  defines={"BACK_LAYER": back, "OWN_STILL": own_still, "SIMPLE": simple})
 
 
 def composite_tile_passes() -> list:
     """The raster displacement's tiles for the composite (and NeighborMax on the host):
     they need only the G-buffer and the tile lists."""
     return [*tile_passes("hybrid_front", "hybrid", select_x=moving_strips, segments=segments,
-                         paths=("hybrid_path", "hybrid_path2")), ReadNeighborMax()]
+                         paths=("hybrid_path", "hybrid_path2"), select_reads=(TILE_LISTS,)),
+            ReadNeighborMax()]
 
 
 def composite_passes() -> list:

@@ -35,11 +35,12 @@ import numpy as np
 
 from ..blur_common import max_radius_px
 from ..frame import Frame
+from ..host import HostResource
 from .params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from ..passes import FullscreenPass
 from ..pool import TexSpec
-from ..tile_lists import (FINE, path_textures, segments, tile_coords, tile_list, tile_strips,
-                         within_reach)
+from ..tile_lists import (FINE, TILE_LISTS, path_textures, segments, tile_coords, tile_list,
+                         tile_strips, within_reach)
 from ..tiles import StripSpec
 
 MASK = TexSpec(1, "u1")
@@ -47,6 +48,13 @@ RAY_MASK = TexSpec(1, "u4")         # own object id where masked
 RELATIVE = TexSpec(2, "f4")
 EDGE_PROBE = TexSpec(2, "f4")       # (half |relative D|, object id) at edge pixels, else 0
 REACH_TEST_FRACTION = 0.5           # of the tiles moving, from which reach_test holds
+# FINE tile maps (GL rows) from the surface tests, for the passes after them; None where
+# the frame's mask path does not make them.
+PROBE_TILES = HostResource("edge_probe_tiles", np.ndarray,
+                           "tiles where mask_edge_probe was written (None: unknown)", optional=True)
+SURVIVOR_TILES = HostResource("survivor_tiles", np.ndarray,
+                              "tiles holding a displacement-test survivor (reach_test only)",
+                              optional=True)
 
 
 class SurfaceTests(FullscreenPass):
@@ -61,13 +69,14 @@ class SurfaceTests(FullscreenPass):
     inputs = ("hybrid_front", "normal", "hybrid_path", "hybrid_path2")
     produces = ("mask_displacement", "mask_relative", "mask_edge", "mask_edge_probe",
                 "mask_survivors_x", "mask_survivors", "ray_mask")
+    host_inputs = (TILE_LISTS,)
+    host_outputs = (PROBE_TILES, SURVIVOR_TILES)
 
     def __init__(self):
-        self._step = 0
         self._any = AnyTiles()
 
     def defines(self, frame: Frame):
-        return {"STEP": self._step, "SEGMENTS": segments(frame)}
+        return {"SEGMENTS": segments(frame)}
 
     def outputs(self, frame: Frame):
         return {"mask_displacement": MASK, "mask_relative": RELATIVE, "mask_edge": MASK,
@@ -87,33 +96,35 @@ class SurfaceTests(FullscreenPass):
         if not p.range_check:
             # The mask is the displacement test's survivors, written as ray_mask at once;
             # the other mask targets hold nothing this frame.
-            self._step = 3
+            frame.host.put(PROBE_TILES, None)
+            frame.host.put(SURVIVOR_TILES, None)
             clear_unwritten(frame, self.produces[:-1] + EdgeIdTiles.produces)
             return self.draw(frame, ("ray_mask",),
                              {"u_front": "hybrid_front", **path_textures(frame)}, first,
-                             tiles=tiles)
+                             tiles=tiles, defines={"STEP": 3})
         if not reach_test(frame):
-            self._step = 0
-            if tiles is not None:       # where the edge outputs were written (EdgeIdTiles)
-                frame.host["edge_tiles_written"] = frame.host["tile_lists"].surface_tiles
+            # Where the edge outputs were written (EdgeIdTiles).
+            frame.host.put(PROBE_TILES, None if tiles is None
+                           else frame.host[TILE_LISTS].surface_tiles)
+            frame.host.put(SURVIVOR_TILES, None)
             return self.draw(frame, self.produces[:4],
                              {"u_front": "hybrid_front", "u_normal": "normal",
                               **path_textures(frame)},
-                             {**first, **second}, tiles=tiles)
-        self._step = 1
+                             {**first, **second}, tiles=tiles, defines={"STEP": 0})
         self.draw(frame, ("mask_displacement", "mask_relative"),
-                  {"u_front": "hybrid_front", **path_textures(frame)}, first, tiles=tiles)
+                  {"u_front": "hybrid_front", **path_textures(frame)}, first, tiles=tiles,
+                  defines={"STEP": 1})
         survivors = self._any.tiles(frame, "mask_displacement", "mask_survivors")
-        lists = frame.host["tile_lists"]
+        lists = frame.host[TILE_LISTS]
         tl = lists.extra("survivors")
         tl.set(tile_coords(survivors), FINE, frame.size)
         frame.stats["survivor_tiles"] = tl.count
-        frame.host["survivor_tiles"] = frame.host["edge_tiles_written"] = survivors
-        self._step = 2
+        frame.host.put(SURVIVOR_TILES, survivors)
+        frame.host.put(PROBE_TILES, survivors)
         self.draw(frame, ("mask_edge", "mask_edge_probe"),
                   {"u_front": "hybrid_front", "u_normal": "normal",
                    "u_displacement_mask": "mask_displacement", "u_relative": "mask_relative"},
-                  second, tiles=tl)
+                  second, tiles=tl, defines={"STEP": 2})
 
 
 def clear_unwritten(frame: Frame, names):
@@ -129,12 +140,10 @@ class AnyTiles(FullscreenPass):
     SOURCE -> NAME_x strip -> NAME), as a GL-rows boolean map."""
     fragment = "mask_any.frag"
 
-    def defines(self, frame: Frame):
-        return {"STAGE": self._stage}
-
     def tiles(self, frame: Frame, source: str, name: str) -> np.ndarray:
-        for self._stage, src, dst in ((0, source, name + "_x"), (1, name + "_x", name)):
-            self.draw(frame, (dst,), {"u_source": src}, {"u_tile": FINE})
+        for stage, src, dst in ((0, source, name + "_x"), (1, name + "_x", name)):
+            self.draw(frame, (dst,), {"u_source": src}, {"u_tile": FINE},
+                      defines={"STAGE": stage})
         tex = frame.pool.get(name)
         return np.frombuffer(tex.read(), np.uint8).reshape(tex.size[1], tex.size[0]) != 0
 
@@ -146,13 +155,10 @@ def reach_tiles(frame: Frame) -> int:
 
 
 def edge_tiles(frame: Frame) -> np.ndarray:
-    """Which FINE tiles (GL rows) hold a ray-mask edge: mask_edge_ids read back (once a
-    frame), for the range check's tile list under a moving camera."""
-    if "edge_tiles" not in frame.host:
-        ids = frame.pool.get("mask_edge_ids")
-        frame.host["edge_tiles"] = np.frombuffer(ids.read(), np.uint32).reshape(
-            ids.size[1], ids.size[0], -1)[..., 0] != 0
-    return frame.host["edge_tiles"]
+    """Which FINE tiles (GL rows) hold a ray-mask edge: mask_edge_ids read back, for the
+    range check's tile list under a moving camera."""
+    ids = frame.pool.get("mask_edge_ids")
+    return np.frombuffer(ids.read(), np.uint32).reshape(ids.size[1], ids.size[0], -1)[..., 0] != 0
 
 
 def reach_test(frame: Frame) -> bool:
@@ -163,7 +169,7 @@ def reach_test(frame: Frame) -> bool:
     moving = tile_list(frame, "moving")
     if moving is None:
         return False
-    tiles = frame.host["tile_lists"].shape
+    tiles = frame.host[TILE_LISTS].shape
     return moving.count > REACH_TEST_FRACTION * tiles[0] * tiles[1]
 
 
@@ -176,9 +182,7 @@ class EdgeIdTiles(FullscreenPass):
     inputs = ("mask_edge_probe",)
     produces = ("mask_edge_ids_x", "mask_edge_ids", "mask_edge_near", "mask_edge_reach_x",
                 "mask_edge_reach")
-
-    def defines(self, frame: Frame):
-        return {"STAGE": self._stage}
+    host_inputs = (TILE_LISTS, PROBE_TILES)
 
     def outputs(self, frame: Frame):
         return {"mask_edge_ids_x": StripSpec(2, "u4", tile=FINE),
@@ -194,21 +198,20 @@ class EdgeIdTiles(FullscreenPass):
         # The edge test wrote mask_edge_probe only on some tiles (SurfaceTests: the surface
         # tiles, or under a moving camera those holding a survivor), 0 elsewhere: the
         # first step reads only their strips, the rest of the strip is 0.
-        written = frame.host.get("edge_tiles_written")
+        written = frame.host.get(PROBE_TILES)
         strips = None if written is None else tile_strips(frame, written, "edge_strips")
-        self._stage = 0
         first = dict(uniforms)
         if strips is not None:
             first["u_viewport"] = tuple(float(x) for x in strips.size)
         self.draw(frame, ("mask_edge_ids_x",), {"u_probe": "mask_edge_probe"}, first,
-                  tiles=strips)
+                  tiles=strips, defines={"STAGE": 0})
         steps = [(1, {"u_source": "mask_edge_ids_x"}, "mask_edge_ids"),
                  (2, {"u_source": "mask_edge_ids"}, "mask_edge_near")]
         if reach_test(frame):
             steps += [(3, {"u_source": "mask_edge_ids"}, "mask_edge_reach_x"),
                       (4, {"u_source": "mask_edge_reach_x"}, "mask_edge_reach")]
-        for self._stage, textures, out in steps:
-            self.draw(frame, (out,), textures, uniforms)
+        for stage, textures, out in steps:
+            self.draw(frame, (out,), textures, uniforms, defines={"STAGE": stage})
 
 
 class RangeCheck(FullscreenPass):
@@ -217,6 +220,7 @@ class RangeCheck(FullscreenPass):
     inputs = ("mask_displacement", "mask_edge_probe", "mask_edge_near", "mask_edge_reach",
               "hybrid_front")
     produces = ("ray_mask",)
+    host_inputs = (TILE_LISTS, SURVIVOR_TILES)
 
     def defines(self, frame: Frame):
         # The tile size as a constant: a division by a uniform runs lane by lane on
@@ -237,11 +241,11 @@ class RangeCheck(FullscreenPass):
             # nothing. A search walks min(k, relative_reach |D| / 2) px each way from its
             # pixel, and its probes land within half a pixel: tile T reaches
             # R_T = min(k, relative_reach * longest_T / 2) + 1 px.
-            lists = frame.host["tile_lists"]
+            lists = frame.host[TILE_LISTS]
             reach = np.minimum(float(max_radius_px(frame)),
                                0.5 * float(p.relative_reach) * lists.longest.astype(np.float64))
             in_reach = within_reach(edge_tiles(frame), reach + 1.0, FINE)
-            keep = lists.moving_tiles & (in_reach | frame.host["survivor_tiles"])
+            keep = lists.moving_tiles & (in_reach | frame.host[SURVIVOR_TILES])
             tiles = lists.extra("range_check")
             tiles.set(tile_coords(keep), FINE, frame.size)
             frame.stats["range_tiles"] = tiles.count

@@ -36,14 +36,15 @@ from world.conventions import flip_row
 from ..frame import Frame
 from ..gbuffer import GBufferPass
 from ..gpu_scene import TEX_KINDS, set_uniform
+from ..host import HostResource
 from .params import HybridParams  # noqa: F401  (registers the "hybrid" group)
+from ..kept import KeptSlot
 from ..passes import FullscreenPass, Pass
 from ..pool import TexSpec
 from . import reveal_kernels as kernels
 from ..tile_lists import TileList, clear_outside
 
 PACKED = TexSpec(4, "f4")
-STATE_KEY = "hybrid_reveal"
 STATIC_PREFIX = "static_"     # the static objects' raster: static_color, static_hybrid_front
 
 
@@ -146,13 +147,12 @@ def shade_draws(keys, has_row) -> list[tuple[list[int], int, int]]:
 
 class RevealState:
     """Per-scene host state: the Embree scene (built once), the faces' corners as a GPU
-    texture (uploaded once), and this frame's hits."""
+    texture (uploaded once), the object table, the static layer, the hit records."""
 
     def __init__(self, ctx: moderngl.Context, scene):
         self.ctx, self.scene = ctx, scene
         self.rays = RayScene(scene)
         self._faces: moderngl.Texture | None = None
-        self.hits: LayerHits | None = None     # the current frame's, None: nothing traced
         self.tiles: dict[str, TileList] = {}
         self.records: moderngl.Texture | None = None
         # Keys above every 1 + object id: the rays whose hit the static layer holds.
@@ -236,13 +236,20 @@ class LayerHits:
     tiles: np.ndarray            # (n, 2) SHADE_TILE tiles (GL orientation) of each key's pixels
 
 
+KEPT_REVEAL = KeptSlot("hybrid_reveal", RevealState, "the reveal's Embree scene and tables")
+# This frame's reveal: the pixels traced (image (i, j)), their hits (None: nothing traced),
+# and what `hmblur bench` needs to time bare Embree on the same primary rays
+# (raytrace.bench: rayscene, camera, pixels, own, t).
+MASKED_PIXELS = HostResource("masked_pixels", np.ndarray, "(n, 2) image (i, j) traced")
+REVEAL_HITS = HostResource("reveal_hits", LayerHits, "the traced pixels' hit records",
+                           optional=True)
+REVEAL_BATCH = HostResource("reveal_batch", dict, "the primary rays, for hmblur bench")
+
+
 def reveal_state(frame: Frame) -> RevealState:
-    state = frame.host.setdefault("state", {})
-    rs = state.get(STATE_KEY)
+    rs = frame.kept.get(KEPT_REVEAL)
     if rs is None or rs.scene is not frame.scene or rs.ctx is not frame.ctx:
-        if rs is not None:
-            rs.release()
-        rs = state[STATE_KEY] = RevealState(frame.ctx, frame.scene)
+        rs = frame.kept.put(KEPT_REVEAL, RevealState(frame.ctx, frame.scene))
     return rs
 
 
@@ -299,8 +306,9 @@ def layer_hits(pixels: np.ndarray, layer, height: int, static_key: int | None = 
 class RevealTrace(Pass):
     """Host side: mask read-back, ray casting, and the hits' records."""
     name = "reveal"
+    runs_on = "cpu"
     inputs = ("ray_mask",)
-    produces = ("reveal_hits",)         # host-side: RevealState.hits
+    host_outputs = (MASKED_PIXELS, REVEAL_HITS, REVEAL_BATCH)
 
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
@@ -314,8 +322,8 @@ class RevealTrace(Pass):
                             max_depth=p.max_depth, threads=p.threads or None,
                             matrices=frame_models(frame, st.rays.moving))
         t2 = time.perf_counter()
-        st.hits = (layer_hits(pixels, result.layers[0], frame.size[1], st.static_key)
-                   if result else None)
+        hits = (layer_hits(pixels, result.layers[0], frame.size[1], st.static_key)
+                if result else None)
         t3 = time.perf_counter()
         s = frame.stats
         s["masked_pixels"] = int(len(pixels))
@@ -329,10 +337,10 @@ class RevealTrace(Pass):
         s["reveal_trace_ms"] = (t2 - t1) * 1e3
         s["reveal_pack_ms"] = (t3 - t2) * 1e3
         s["reveal_ms"] = (t3 - t0) * 1e3
-        frame.host["masked_pixels"] = pixels        # the composite's split (image i, j)
-        # What `hmblur bench` needs to time bare Embree on the same primary rays.
-        frame.host["reveal_batch"] = {"rayscene": st.rays, "camera": frame.camera,
-                                      "pixels": pixels, "own": own, "t": frame.time}
+        frame.host.put(MASKED_PIXELS, pixels)
+        frame.host.put(REVEAL_HITS, hits)
+        frame.host.put(REVEAL_BATCH, {"rayscene": st.rays, "camera": frame.camera,
+                                      "pixels": pixels, "own": own, "t": frame.time})
 
 
 BACK = ("hybrid_back", "hybrid_back_color")    # glsl/hybrid_layers.glsl's back layer
@@ -344,16 +352,12 @@ class RevealShade(FullscreenPass):
     revealed'."""
     name = "reveal_shade"
     fragment = "reveal_shade.frag"
-    inputs = ("reveal_hits",)
+    host_inputs = (REVEAL_HITS,)
     produces = BACK
-
-    def __init__(self):
-        self._static = self._table = 0
 
     def defines(self, frame: Frame):
         return {**frame.gpu.light_defines(), **ObjectTable.glsl_defines(),
-                "FACES_PER_ROW": FACES_PER_ROW, "TEXELS_PER_FACE": TEXELS_PER_FACE,
-                "STATIC_LAYER": self._static, "OBJECT_TABLE": self._table}
+                "FACES_PER_ROW": FACES_PER_ROW, "TEXELS_PER_FACE": TEXELS_PER_FACE}
 
     def outputs(self, frame: Frame):
         return {n: PACKED for n in self.produces}
@@ -365,7 +369,7 @@ class RevealShade(FullscreenPass):
         t_open, t_close = frame.exposure
         names = BACK
         tl = st.tile_list()
-        hits = st.hits
+        hits = frame.host.get(REVEAL_HITS)
         if hits is None:
             tl.set(np.zeros((0, 2), np.int64), SHADE_TILE, frame.size, BLOCKS_PER_ROW)
             clear_outside(frame, names, tl)     # last frame's tiles
@@ -393,24 +397,23 @@ class RevealShade(FullscreenPass):
         table.texture.use(OBJECT_UNIT)
         for keys, first, count in draws:
             key = keys[0]
-            self._static = int(key == st.static_key)
-            self._table = int(table.has_row(key))
-            textures = ({"u_static_front": front, "u_static_color": colour}
-                        if self._static else {})
-            prog = self.program(frame, tl.vertex_shader)
+            static, from_table = key == st.static_key, table.has_row(key)
+            variant = {"STATIC_LAYER": int(static), "OBJECT_TABLE": int(from_table)}
+            textures = {"u_static_front": front, "u_static_color": colour} if static else {}
+            prog = self.program(frame, tl.vertex_shader, variant)   # the draw's, cached
             set_uniform(prog, "u_hits", RECORD_UNIT)
-            if not self._static:
+            if not static:
                 gpu.bind_camera(prog, cam, t, frame.size)
                 set_uniform(prog, "u_background", frame.scene.background)
                 gpu.bind_lights(prog)
                 set_uniform(prog, "u_faces", FACE_UNIT)
-            if self._table:
+            if from_table:
                 set_uniform(prog, "u_objects", OBJECT_UNIT)
-            elif not self._static:          # an image-textured object
+            elif not static:          # an image-textured object
                 gpu.bind_object(prog, objects[key - 1], cam, t, t_open, t_close,
                                 frame.object_matrices)
-            self.draw(frame, names, textures, tiles=tl.part(first, count), clear=False)
-        self._static = self._table = 0
+            self.draw(frame, names, textures, tiles=tl.part(first, count), clear=False,
+                      defines=variant)
         frame.stats["shade_draws"] = len(draws)
         frame.pool.mark_tiles(names, tl)
 
