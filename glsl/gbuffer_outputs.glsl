@@ -6,7 +6,7 @@
 // three (writing depth, id and D once each costs ~2.5 ms a frame at 640x360 on llvmpipe);
 // FRONT = colour and the packed front layer (the hybrid mode's without the poster's edge
 // test, which alone reads the normal target; and the static objects' layer that the
-// hybrid reveal copies where a ray's first hit is static: viewer/render/reveal_pass.py);
+// hybrid reveal copies where a ray's first hit is static: viewer/render/hybrid/reveal.py);
 // MOTION = colour, depth and displacement (the post-process filters').
 #define GBUFFER_FULL (GBUFFER_LAYOUT == GBUFFER_LAYOUT_FULL)
 #define GBUFFER_HYBRID (GBUFFER_LAYOUT == GBUFFER_LAYOUT_HYBRID)

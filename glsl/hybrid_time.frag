@@ -23,7 +23,7 @@
 #endif
 uniform sampler2D u_neighbormax;    // largest displacement over the 3x3 tiles
 uniform sampler2D u_tilemax;        // largest displacement per tile
-uniform sampler2D u_mask_tiles;     // ray_mask_tiles (reveal_pass.mask_tiles): y = 1 if a tile has rays
+uniform sampler2D u_mask_tiles;     // ray_mask_tiles (hybrid/composite.py): y = 1 if a tile has rays
 uniform int u_tile;
 uniform int u_samples_min;
 uniform int u_samples_max;

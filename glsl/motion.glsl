@@ -1,4 +1,4 @@
-// Screen-space displacement over the exposure (viewer/conventions.py): the window position
+// Screen-space displacement over the exposure (world/conventions.py): the window position
 // of a surface point at shutter close minus at shutter open, in pixels, GL axes (y up).
 
 // V(t_open) M(t_open) and V(t_close) M(t_close), t_open/close = t -/+ shutter/2: the camera's

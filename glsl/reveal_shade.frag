@@ -3,7 +3,7 @@
 // shade() with the same GpuScene uniforms, the object's M(t) (relative to the eye) for
 // position and normal, and its M at shutter open and close for the displacement, so the
 // filter can blur it.
-// Drawn over the tiles holding traced pixels (viewer/render/reveal_pass.py), in draws
+// Drawn over the tiles holding traced pixels (viewer/render/hybrid/reveal.py), in draws
 // of one or more revealed objects over their own tiles, each of whose pixels a draw
 // writes: its record's key is one of the draw's (shaded), 0 (no ray: cleared), or -1
 // (another draw writes it). The hit
@@ -30,7 +30,7 @@ uniform sampler2D u_faces;      // TEXELS_PER_FACE per face, FACES_PER_ROW faces
 uniform mat4 u_view;
 uniform vec3 u_background;
 #if OBJECT_TABLE
-uniform sampler2D u_objects;    // OBJECT_TEXELS per object id (reveal_pass.ObjectTable):
+uniform sampler2D u_objects;    // OBJECT_TEXELS per object id (hybrid/reveal.py ObjectTable):
                                 // T(-eye) M(t), the modelviews at shutter open and close,
                                 // the normal matrix, the material (OBJECT_<PART>: the
                                 // first texel of each)

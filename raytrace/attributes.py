@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from viewer.scene import SceneObject
+from world.scene import SceneObject
 
 
 @dataclass

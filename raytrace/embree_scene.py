@@ -29,7 +29,7 @@ from embreex import rtcore as rtc
 from embreex import rtcore_scene as rtcs
 from embreex.mesh_construction import TriangleMesh
 
-from viewer.scene import Scene, SceneObject
+from world.scene import Scene, SceneObject
 
 from . import kernels
 from .attributes import SurfaceTable
@@ -253,12 +253,6 @@ class RayScene:
             # Not renormalised, so t stays in world units; a pure translation keeps them.
             self._pose_cache = (key, Poses(lo, hi, inv, kernels.turns_or_scales(inv)))
         return self._pose_cache[1]
-
-    def reveal(self, camera, t: float, pixels_ij, own_ids, layers: int = 1, max_depth: int = 8,
-               threads: int | None = None, **kw):
-        """`raytrace.reveal.reveal` on this scene."""
-        from .reveal import reveal   # reveal builds on this module: import it late
-        return reveal(self, camera, t, pixels_ij, own_ids, layers, max_depth, threads, **kw)
 
     def static_view(self, view: tuple) -> "StaticHits":
         """The static scene's hits kept for `view` = (key, number of pixels), fresh when the

@@ -19,8 +19,8 @@ from functools import cached_property
 
 import numpy as np
 
-from viewer.camera import Camera
-from viewer.conventions import BACKGROUND_DEPTH
+from world.camera import Camera
+from world.conventions import BACKGROUND_DEPTH
 
 from . import kernels
 from .attributes import LocalSurface, SurfaceTable

@@ -1,3 +1,3 @@
 """Built-in scenes: TOML files in this folder, loadable by name with
-`viewer.scene_loader.load_scene("living_room")`. Assets they use live in `assets/`;
+`world.loader.load_scene("living_room")`. Assets they use live in `assets/`;
 `make_assets.py` regenerates them."""

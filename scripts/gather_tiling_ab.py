@@ -19,7 +19,7 @@ sys.path.insert(0, str(ROOT))
 
 from viewer.glcontext import create_headless  # noqa: E402
 from viewer.render.renderer import Renderer  # noqa: E402
-from viewer.scene_loader import load_scene  # noqa: E402
+from world.loader import load_scene  # noqa: E402
 
 GATHERS = {"mcguire": "mcguire_gather", "ue4": "ue4_gather", "guertin": "guertin_gather"}
 

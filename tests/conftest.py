@@ -22,7 +22,7 @@ def _context():
     global _ctx
     if _ctx is None:
         from viewer.glcontext import create_headless
-        from viewer.errors import UserError
+        from world.errors import UserError
         try:
             _ctx = create_headless()
         except UserError as exc:
@@ -44,7 +44,7 @@ def ctx():
 
 
 def empty_scene(shutter: float = 0.04):
-    from viewer.scene import CameraSpec, Scene
+    from world.scene import CameraSpec, Scene
     cam = CameraSpec(position=np.array([0.0, 0.0, 5.0]), look_at=np.zeros(3), fov_y=45.0,
                      shutter=shutter)
     return Scene("synthetic", None, cam)
@@ -54,7 +54,7 @@ def empty_scene(shutter: float = 0.04):
 def synthetic_frame(ctx):
     """make(size, params=None, seed=0) -> a Frame over an empty scene; upload buffers with
     frame.pool.texture(name, spec) then frame.write(name, array) (image orientation)."""
-    from viewer.camera import Camera
+    from world.camera import Camera
     from viewer.params import ParamSet
     from viewer.render.frame import Frame
     from viewer.render.gpu_scene import GpuScene

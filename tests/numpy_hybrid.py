@@ -1,9 +1,9 @@
-"""A numpy statement of the hybrid mode's GPU passes (viewer/render/raymask.py and
-viewer/render/hybrid_composite.py), the oracle for the GLSL.
+"""A numpy statement of the hybrid mode's GPU passes (viewer/render/hybrid/mask.py and
+viewer/render/hybrid/composite.py), the oracle for the GLSL.
 
 Arrays are in GL orientation: row 0 is the BOTTOM row, index [y, x], displacements in GL
 window axes (x right, y up), as the fragment shaders see them. Tests flip with
-viewer.conventions.to_image when reading or writing frames. Depth is positive linear view
+world.conventions.to_image when reading or writing frames. Depth is positive linear view
 depth; ids are uint (0 = background). Displacements are the full motion over the exposure.
 
 Positions that decide a discrete outcome (which pixel a probe reads) are computed in
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from viewer.render.hybrid_composite import MERGE_COS   # (a setting, not logic)
+from viewer.render.hybrid.composite import MERGE_COS   # (a setting, not logic)
 
 F32 = np.float32
 
@@ -138,7 +138,7 @@ def range_check(dmask, edge, ids, disp, rel, min_speed: float, relative_reach: f
 
 
 def tile_summary(mask, tile: int) -> np.ndarray:
-    """ray_mask_tiles (hybrid_composite.mask_tiles): per k x k tile (GL origin), (0, 1 if any
+    """ray_mask_tiles (hybrid/composite.py mask_tiles): per k x k tile (GL origin), (0, 1 if any
     pixel is masked)."""
     h, w = mask.shape
     th, tw = -(-h // tile), -(-w // tile)

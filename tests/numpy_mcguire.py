@@ -3,7 +3,7 @@ passes.
 
 Arrays are in GL orientation: row 0 is the BOTTOM row, index [y, x], velocities in GL
 window axes (x right, y up), the same frame the fragment shaders see through
-gl_FragCoord. Tests flip with viewer.conventions.to_image when reading or writing frames.
+gl_FragCoord. Tests flip with world.conventions.to_image when reading or writing frames.
 Depth is positive linear view depth (larger = farther).
 
 Float32 is used wherever the rounding decides a discrete outcome (which tap pixel, which

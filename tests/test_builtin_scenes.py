@@ -1,7 +1,7 @@
 """The built-in scenes: they load by name and each shows the motion it exists for.
 
 Blur lengths are measured as the screen displacement over the exposure with
-viewer.camera.Camera.project at the shutter open and close times, at 1280x720.
+world.camera.Camera.project at the shutter open and close times, at 1280x720.
 """
 from __future__ import annotations
 
@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from viewer.camera import Camera
-from viewer.errors import SceneError
-from viewer.scene_loader import builtin_scene_names, builtin_scene_path, load_scene
+from world.camera import Camera
+from world.errors import SceneError
+from world.loader import builtin_scene_names, builtin_scene_path, load_scene
 
 NAMES = ["living_room", "pan", "spinner", "thin", "wheel"]
 

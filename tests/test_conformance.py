@@ -12,7 +12,7 @@ from PIL import Image
 from viewer.imageio import linear_to_srgb8
 from viewer.render.renderer import Renderer
 from viewer.render.reference import REGIONS
-from viewer.scene_loader import load_scene
+from world.loader import load_scene
 
 from conftest import CONFORMANCE
 

@@ -9,7 +9,7 @@ import numpy as np
 from viewer.imageio import linear_to_srgb8
 from viewer.params import ParamSet
 from viewer.render.renderer import Renderer
-from viewer.scene_loader import load_scene
+from world.loader import load_scene
 
 W, H = 96, 64
 

@@ -1,7 +1,7 @@
-"""viewer/conventions.py: the one row flip, in its index and its array form."""
+"""world/conventions.py: the one row flip, in its index and its array form."""
 import numpy as np
 
-from viewer.conventions import flip_row, to_image
+from world.conventions import flip_row, to_image
 
 
 def test_row_flip_index_and_array_forms_agree():

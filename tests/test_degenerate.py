@@ -5,11 +5,11 @@ import textwrap
 import numpy as np
 import pytest
 
-from viewer.errors import UserError
+from world.errors import UserError
 from viewer.params import ParamSet
 from viewer.render.modes import MODES
 from viewer.render.renderer import Renderer
-from viewer.scene_loader import load_scene
+from world.loader import load_scene
 
 ALL = sorted(MODES)
 REALTIME = [m for m in ALL if m not in ("off", "reference")]

@@ -10,19 +10,19 @@ from viewer.render.host import HostResource, HostResources
 from viewer.render.kept import KeptSlot, KeptState
 from viewer.render.modes import MODES
 from viewer.render.passes import Pass, Pipeline
-from viewer.render.raymask import SurfaceTests
+from viewer.render.hybrid.mask import SurfaceTests
 from viewer.render.reference import REGIONS
 from viewer.render.renderer import Renderer
-from viewer.render.reveal_pass import MASKED_PIXELS
+from viewer.render.hybrid.reveal import MASKED_PIXELS
 from viewer.render.tile_lists import MotionTiles, SelectTiles, kept_tile_list
-from viewer.scene_loader import load_scene
+from world.loader import load_scene
 
 from conftest import CONFORMANCE
 
 GBUFFER = ("hybrid_front", "normal", "hybrid_path", "hybrid_path2")   # what they read of it
 
 # What each host resource of the hybrid is made by and read by, written from the passes'
-# roles (module docs of tile_lists, hybrid_composite, raymask, reveal_pass).
+# roles (module docs of tile_lists, hybrid/composite, hybrid/mask, hybrid/reveal).
 HYBRID_HOST = {
     "tile_lists": ("TileLists", "select_tiles",
                    "hybrid_tilemax_x, mask_displacement, mask_edge_near, ray_mask, hybrid_composite"),

@@ -1,4 +1,4 @@
-"""The hybrid mode (viewer/render/hybrid.py): the ray reveal against a raster oracle (the
+"""The hybrid mode (viewer/render/hybrid/pipeline.py): the ray reveal against a raster oracle (the
 scene rendered without the pixel's own object), same-coloured objects,
 transforms at t != 0, the composite against tests/numpy_hybrid.py and the analytic box
 shutter, determinism, an empty mask, and the whole mode against the reference.
@@ -14,19 +14,19 @@ import pytest
 import numpy_hybrid as nh
 import numpy_mcguire as nm
 from conftest import CONFORMANCE
-from viewer.conventions import to_image
+from world.conventions import to_image
 from viewer.metrics import image_metrics
 from viewer.params import ParamSet
 from viewer.render.blur_common import max_radius_px
 from viewer.render.gbuffer import GBUFFER
-from viewer.render.hybrid_composite import composite_kind, composite_passes, mask_tiles
+from viewer.render.hybrid.composite import composite_kind, composite_passes, mask_tiles
 from viewer.render.modes import MODES
 from viewer.render.pool import TexSpec
 from viewer.render.renderer import Renderer
 from viewer.render.reference import REGIONS
-from viewer.render.reveal_pass import BACK, PACKED, REVEAL_BATCH, shade_draws
+from viewer.render.hybrid.reveal import BACK, PACKED, REVEAL_BATCH, shade_draws
 from viewer.render.tile_lists import KEPT_LISTS
-from viewer.scene_loader import load_scene
+from world.loader import load_scene
 
 SMALL = (160, 90)
 
@@ -146,7 +146,7 @@ def test_reveal_shades_image_textured_surfaces_like_the_raster(ctx, tmp_path):
     """A moving camera: every revealed surface is shaded (no static layer), here an
     image-textured wall behind two movers; the image and the faces' table are bound to
     texture units of their own, whichever object's draw comes first."""
-    from viewer.scene_loader import builtin_dir
+    from world.loader import builtin_dir
     path = tmp_path / "image_wall.toml"
     path.write_text(textwrap.dedent(IMAGE_WALL.format(assets=builtin_dir() / "assets")))
     scene = load_scene(path)
@@ -180,8 +180,8 @@ def test_many_revealed_objects_are_shaded_by_few_draws_like_the_raster(ctx, monk
     """crowd_pan (32 movers, moving camera): every revealed object in one draw of the
     object table, each the raster without the pixel's own object; with 4 objects to a
     row of the table too (its records over 9 rows, as past 256 objects)."""
-    from viewer.render.reveal_pass import ObjectTable
-    from viewer.scene_loader import builtin_dir
+    from viewer.render.hybrid.reveal import ObjectTable
+    from world.loader import builtin_dir
     monkeypatch.setattr(ObjectTable, "OBJECTS_PER_ROW", per_row)
     scene = load_scene(builtin_dir() / "bench" / "crowd_pan.toml")
     res, bufs = render(ctx, scene, "hybrid", 0.0, size=(320, 180))
@@ -199,9 +199,10 @@ def test_the_reveal_takes_the_movers_matrices_from_the_frame(ctx, monkeypatch):
     """The G-buffer made every object's M(t): the reveal's poses take them from the frame
     (asking 32 objects again cost ~0.2 ms in the frame), equal to SceneObject.matrix(t);
     its hits are those of asking each object."""
-    from viewer.render.reveal_pass import frame_models, reveal_state
-    from viewer.scene import SceneObject
-    from viewer.scene_loader import builtin_dir
+    from raytrace import reveal
+    from viewer.render.hybrid.reveal import frame_models, reveal_state
+    from world.scene import SceneObject
+    from world.loader import builtin_dir
     scene = load_scene(builtin_dir() / "bench" / "crowd_pan.toml")
     r = Renderer(ctx, scene, (160, 90))
     try:
@@ -217,9 +218,9 @@ def test_the_reveal_takes_the_movers_matrices_from_the_frame(ctx, monkeypatch):
         asked = []
         real = SceneObject.matrix
         monkeypatch.setattr(SceneObject, "matrix", lambda o, tt: asked.append(o.id) or real(o, tt))
-        given = rs.reveal(batch["camera"], t, batch["pixels"], batch["own"], matrices=models)
+        given = reveal(rs, batch["camera"], t, batch["pixels"], batch["own"], matrices=models)
         assert not asked
-        own = rs.reveal(batch["camera"], t, batch["pixels"], batch["own"])
+        own = reveal(rs, batch["camera"], t, batch["pixels"], batch["own"])
         assert len(asked) == 32
         assert len(batch["pixels"]) > 100
         for name in ("object_id", "prim_id", "barycentrics", "distance"):
@@ -623,7 +624,7 @@ def test_mask_tiles_are_made_only_where_the_time_composite_reads_them(ctx):
 
 
 def test_split_tiles_hand_values():
-    from viewer.render.hybrid_composite import split_tiles
+    from viewer.render.hybrid.composite import split_tiles
     from viewer.render.tile_lists import FINE
     active = np.ones((3, 6), bool)
     active[0, 5] = False

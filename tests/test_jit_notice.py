@@ -1,10 +1,10 @@
-"""viewer/jit_notice.py: one line before the project's kernels compile, none for others."""
+"""world/jit_notice.py: one line before the project's kernels compile, none for others."""
 import io
 
 import numba
 from numba.core import event
 
-from viewer.jit_notice import CompileNotice
+from world.jit_notice import CompileNotice
 
 
 def test_compile_notice_once_and_only_for_the_projects_kernels():

@@ -9,10 +9,10 @@ import math
 import numpy as np
 import pytest
 
-from viewer import transforms as tf
-from viewer.camera import Camera
+from world import transforms as tf
+from world.camera import Camera
 from viewer.cli import main
-from viewer.scene_loader import check_camera, load_scene, merge_camera
+from world.loader import check_camera, load_scene, merge_camera
 
 CAMERA = """[camera]
 position = [0.0, 1.0, 5.0]

@@ -15,9 +15,9 @@ from hypothesis import strategies as st
 from PIL import Image
 
 from test_scene_loader import QUAD_OBJ, base_doc, toml_doc
-from viewer.errors import SceneError
-from viewer.scene import Scene
-from viewer.scene_loader import load_scene
+from world.errors import SceneError
+from world.scene import Scene
+from world.loader import load_scene
 
 SETTINGS = dict(max_examples=200, deadline=None,
                 suppress_health_check=[HealthCheck.too_slow])

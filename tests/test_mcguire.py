@@ -13,7 +13,7 @@ import pytest
 import numpy_mcguire as nm
 from conftest import CONFORMANCE
 from glsl import DIR as GLSL_DIR
-from viewer.conventions import to_image
+from world.conventions import to_image
 from viewer.params import ParamSet
 from viewer.render.blur_common import max_radius_px
 from viewer.render.gbuffer import GBUFFER
@@ -386,7 +386,7 @@ def render_basic(ctx, modes, size=(160, 90)):
     """The conformance scene `basic` at its time: the reference (with regions), each of
     `modes` at seed 1 (linear images) and the description of each mode's pipeline."""
     from viewer.render.renderer import Renderer
-    from viewer.scene_loader import load_scene
+    from world.loader import load_scene
     scene = load_scene(CONFORMANCE / "basic.toml")
     r = Renderer(ctx, scene, size)
     try:

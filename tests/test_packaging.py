@@ -13,7 +13,9 @@ def test_wheel_contains_code_shaders_and_scenes(tmp_path):
     wheel = next(tmp_path.glob("hybrid_mblur-*.whl"))
     names = set(zipfile.ZipFile(wheel).namelist())
     need = {"viewer/cli.py", "viewer/render/renderer.py", "viewer/render/gbuffer.py",
-            "raytrace/embree_scene.py", "glsl/gbuffer.frag", "glsl/shading.glsl",
+            "raytrace/embree_scene.py", "world/loader.py", "world/scene.py",
+            "world/camera.py", "viewer/render/hybrid/pipeline.py", "glsl/gbuffer.frag",
+            "glsl/shading.glsl",
             "glsl/fullscreen.vert", "scenes/living_room.toml", "scenes/assets/painting.png",
             "scenes/assets/quad_uv.obj"}
     assert need <= names, need - names

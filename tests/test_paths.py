@@ -14,15 +14,15 @@ import pytest
 
 import numpy_hybrid as nh
 from conftest import CONFORMANCE
-from viewer.camera import Camera
-from viewer.conventions import to_image
+from world.camera import Camera
+from world.conventions import to_image
 from viewer.params import ParamSet
 from viewer.render.gbuffer import GBUFFER, path_targets, path_times
-from viewer.render.hybrid_composite import composite_passes
-from viewer.render.raymask import raymask_passes
+from viewer.render.hybrid.composite import composite_passes
+from viewer.render.hybrid.mask import raymask_passes
 from viewer.render.renderer import Renderer
-from viewer.render.reveal_pass import BACK, PACKED
-from viewer.scene_loader import load_scene
+from viewer.render.hybrid.reveal import BACK, PACKED
+from world.loader import load_scene
 from raytrace import RayScene
 from raytrace.reveal import reveal
 

@@ -15,14 +15,14 @@ import pytest
 
 import numpy_mcguire as nm
 from conftest import CONFORMANCE
-from viewer.conventions import to_image
+from world.conventions import to_image
 from viewer.params import ParamSet
 from viewer.render.blur_common import max_radius_px
 from viewer.render.gbuffer import GBUFFER
 from viewer.render.mcguire import EARLY_OUT_PX, JITTER_STREAM, Gather
 from viewer.render.pool import TexSpec
 from viewer.render.renderer import Renderer
-from viewer.scene_loader import load_scene
+from world.loader import load_scene
 
 F32 = np.float32
 SIZE = (32, 16)

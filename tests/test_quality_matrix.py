@@ -19,7 +19,7 @@ from viewer.params import ParamSet  # noqa: E402
 from viewer.render.modes import MODES  # noqa: E402
 from viewer.render.renderer import Renderer  # noqa: E402
 from viewer.render.reference import REGIONS as REGION_MAP  # noqa: E402
-from viewer.scene_loader import builtin_scene_names, builtin_scene_path, load_scene  # noqa: E402
+from world.loader import builtin_scene_names, builtin_scene_path, load_scene  # noqa: E402
 
 SIZE, SAMPLES = (160, 90), 16
 REGIONS = ("all", "static", "inner", "outer")

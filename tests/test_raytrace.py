@@ -14,9 +14,9 @@ from raytrace import embree_scene
 from raytrace.embree_scene import transform_points
 from raytrace.workers import run_all
 from raytrace.reveal import primary_view
-from viewer.camera import Camera
-from viewer.conventions import BACKGROUND_DEPTH
-from viewer.scene import CameraSpec, Material, Mesh, Scene, SceneObject
+from world.camera import Camera
+from world.conventions import BACKGROUND_DEPTH
+from world.scene import CameraSpec, Material, Mesh, Scene, SceneObject
 
 CONFORMANCE = Path(__file__).parent / "conformance"
 A = np.array
@@ -603,7 +603,7 @@ def test_conformance_basic_ids_and_depths():
 
 
 def loaded(name: str) -> Scene:
-    from viewer.scene_loader import load_scene
+    from world.loader import load_scene
     return load_scene(CONFORMANCE / f"{name}.toml")
 
 
@@ -898,8 +898,9 @@ def test_record_inputs_match_their_numpy_statements(static_key):
     prim_id = np.where(object_id != 0, rng.integers(0, 30, n), -1).astype(np.int32)
     face_offset = np.array([0, 0, 30, 70], np.int64)
     static_view = rng.uniform(size=n) < 0.3
-    gx, gy, key, face = kernels.record_inputs(px, height, object_id, prim_id, face_offset,
-                                              static_view, static_key)
+    from viewer.render.hybrid.reveal_kernels import record_inputs
+    gx, gy, key, face = record_inputs(px, height, object_id, prim_id, face_offset,
+                                      static_view, static_key)
     np.testing.assert_array_equal(gx, px[:, 0])
     np.testing.assert_array_equal(gy, height - 1 - px[:, 1])
     want = object_id.astype(np.int64) + 1

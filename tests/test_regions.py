@@ -14,7 +14,7 @@ import trimesh
 from embreex import rtcore_scene
 from embreex.mesh_construction import TriangleMesh
 
-from viewer.conventions import BACKGROUND_DEPTH
+from world.conventions import BACKGROUND_DEPTH
 from viewer.regions import (INNER, OUTER, STATIC, RegionAccumulator, classify_regions,
                             region_counts)
 

@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 
 from conftest import CONFORMANCE
-from viewer.camera import Camera
-from viewer.conventions import BACKGROUND_DEPTH
+from world.camera import Camera
+from world.conventions import BACKGROUND_DEPTH
 from viewer.imageio import linear_to_srgb8
 from viewer.params import ParamSet
 from viewer.render.renderer import Renderer
-from viewer.scene_loader import load_scene
+from world.loader import load_scene
 
 
 def scene_from(tmp_path, text, name="s"):
@@ -254,7 +254,7 @@ def test_resize_reallocates(ctx, tmp_path):
 
 def numpy_directions(cam, t, i, j):
     """Camera.rays' directions as numpy statements of the same formula."""
-    from viewer.conventions import pixel_centres_ndc
+    from world.conventions import pixel_centres_ndc
     eye, fwd, up = cam.spec.pose(t)
     right = np.cross(fwd, up)
     right /= np.linalg.norm(right)
@@ -272,8 +272,8 @@ def test_camera_rays_equal_the_numpy_formula():
     # The compiled ray directions equal the formula in numpy bit for bit (well, to the
     # last ulp of the normalisation), at two poses, another field of view and size.
     import dataclasses
-    from viewer.camera import Camera
-    from viewer.scene_loader import load_scene
+    from world.camera import Camera
+    from world.loader import load_scene
     spec = load_scene(str(CONFORMANCE / "vase_pan.toml")).camera      # a moving camera
     rng = np.random.default_rng(2)
     i, j = rng.integers(0, 64, 500), rng.integers(0, 40, 500)
@@ -375,7 +375,7 @@ def test_any_number_of_lights_adds_up_light_by_light(ctx, tmp_path, mode):
 
 
 def test_lights_beyond_the_drivers_uniform_storage_go_in_a_texture():
-    from viewer.errors import SceneError
+    from world.errors import SceneError
     from viewer.render.gpu_scene import light_slots
 
     class Info:                                  # only the limits light_slots reads
@@ -478,7 +478,7 @@ def test_a_zero_normal_shades_as_ambient_only(ctx, tmp_path, mode):
 def test_an_image_texture_past_the_drivers_size_limit_is_a_scene_error(ctx, tmp_path):
     import trimesh
     from PIL import Image
-    from viewer.errors import SceneError
+    from world.errors import SceneError
     from viewer.render.gpu_scene import GpuScene
     limit = ctx.info["GL_MAX_TEXTURE_SIZE"]
     Image.new("RGB", (limit + 1, 1), (255, 128, 0)).save(tmp_path / "wide.png")

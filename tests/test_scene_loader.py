@@ -1,4 +1,4 @@
-"""viewer.scene_loader against the scene format (docs/scene-format.md): values, defaults,
+"""world.loader against the scene format (docs/scene-format.md): values, defaults,
 motion, and errors.
 
 Invalid inputs are small TOML documents written to tmp_path; each must raise SceneError
@@ -14,9 +14,9 @@ import pytest
 import trimesh
 from PIL import Image
 
-from viewer.errors import SceneError, UserError
-from viewer.scene import Scene
-from viewer.scene_loader import image_srgb, load_scene, srgb_to_linear
+from world.errors import SceneError, UserError
+from world.scene import Scene
+from world.loader import image_srgb, load_scene, srgb_to_linear
 
 CONFORMANCE = Path(__file__).resolve().parent / "conformance"
 

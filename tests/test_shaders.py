@@ -42,7 +42,7 @@ def test_missing_include_is_reported(glsl_dir):
 
 
 def test_shipped_shaders_compile(ctx):
-    from viewer.conventions import glsl_defines
+    from world.conventions import glsl_defines
     from viewer.render.gbuffer import LAYOUTS, layout_defines
     from viewer.render.gpu_scene import TEX_KINDS
     kinds = {f"TEX_{k.upper()}": v for k, v in TEX_KINDS.items() if k}

@@ -11,7 +11,7 @@ from viewer.render.modes import MODE_GROUPS
 from viewer.render.renderer import Renderer
 from viewer.render.steps import step_seed, sub_exposures
 from viewer.render.timing import PassClock
-from viewer.scene_loader import load_scene
+from world.loader import load_scene
 
 from conftest import CONFORMANCE
 

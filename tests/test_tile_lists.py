@@ -7,9 +7,10 @@ import pytest
 
 from conftest import CONFORMANCE
 from viewer.params import ParamSet
-from viewer.render import hybrid_composite, tile_kernels, tile_lists
+from viewer.render import tile_kernels, tile_lists
+from viewer.render.hybrid import composite as hybrid_composite
 from viewer.render.renderer import Renderer
-from viewer.scene_loader import load_scene
+from world.loader import load_scene
 
 SIZE = (200, 112)
 
@@ -221,7 +222,7 @@ def test_record_blocks_match_a_brute_force_packing(seed, tile_bits):
     # reveal_shade's hit records: one tile x tile block per (key, screen tile) in order of
     # (key, tile row, tile column), 4 blocks a row here, each pixel's record at its
     # offset within its tile, -1 there in the tile's other keys' blocks; else zero.
-    from raytrace.kernels import pack_blocks
+    from viewer.render.hybrid.reveal_kernels import pack_blocks
     rng = np.random.default_rng(seed)
     n, tile, per_row = 500, 1 << tile_bits, 4
     flat = rng.choice(70 * 50, n, replace=False)
@@ -308,7 +309,7 @@ def true_boundary_tiles(ids: np.ndarray, tile: int) -> np.ndarray:
 
 def run_motion_tiles(frame, ids, disp):
     """motion_tiles (GL rows: (longest |D|, boundary flag)) of ids and D given in GL rows."""
-    from viewer.conventions import to_image
+    from world.conventions import to_image
     from viewer.render.gbuffer import GBUFFER
     h, w = ids.shape
     front = np.dstack([disp, np.full((h, w), 5.0, np.float32), ids]).astype(np.float32)

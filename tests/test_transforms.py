@@ -1,8 +1,8 @@
 """Every matrix against an independent numpy formula (pyrr is row-vector and 2019-era)."""
 import numpy as np
-from viewer import transforms as tf
-from viewer.camera import Camera
-from viewer.scene import CameraSpec, Material, Mesh, SceneObject
+from world import transforms as tf
+from world.camera import Camera
+from world.scene import CameraSpec, Material, Mesh, SceneObject
 
 
 def rodrigues(axis, angle):

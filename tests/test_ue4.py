@@ -13,7 +13,7 @@ import pytest
 
 import numpy_ue4 as nu
 from conftest import CONFORMANCE
-from viewer.conventions import to_image
+from world.conventions import to_image
 from viewer.params import ParamSet
 from viewer.render.gbuffer import GBUFFER
 from viewer.render.pool import TexSpec
@@ -469,7 +469,7 @@ def test_mode_beats_off_against_reference_on_basic(ctx):
     over the whole image and in the outer-blur region."""
     from viewer.metrics import image_metrics
     from viewer.render.renderer import Renderer
-    from viewer.scene_loader import load_scene
+    from world.loader import load_scene
     scene = load_scene(CONFORMANCE / "basic.toml")
     r = Renderer(ctx, scene, (160, 90))
     try:

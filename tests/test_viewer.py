@@ -18,8 +18,8 @@ from PIL import Image
 
 from tests.conftest import ROOT
 from tests.xvfb import Xvfb
-from viewer.camera import Camera
-from viewer.errors import UserError
+from world.camera import Camera
+from world.errors import UserError
 from viewer.imageio import linear_to_srgb8
 from viewer.params import GROUPS, ParamSet
 from viewer.ui.camera_control import POLE_MARGIN, CameraControl
@@ -33,7 +33,7 @@ TIMEOUT = 240
 
 
 def spec():
-    from viewer.scene import CameraSpec
+    from world.scene import CameraSpec
     return CameraSpec(position=np.array([0.5, 1.0, 4.0]), look_at=np.array([0.0, 0.8, 0.0]),
                       fov_y=45.0)
 
@@ -215,7 +215,8 @@ def test_every_parameter_gets_a_widget_that_fits_its_type():
 
 def draw_view(ctx, array, dtype, settings=None, tile=1, name="buf"):
     from viewer.render.debug_view import DebugView
-    from viewer.render.pool import ResourcePool, TexSpec, park_framebuffer
+    from viewer.render.framebuffers import park_framebuffer
+    from viewer.render.pool import ResourcePool, TexSpec
     from viewer.shaders import ProgramCache
     a = np.asarray(array)
     comps = 1 if a.ndim == 2 else a.shape[2]
@@ -289,7 +290,7 @@ def test_debug_view_tiles_and_masks(ctx):
 
 def test_progressive_reference_equals_the_full_render_and_restarts(ctx):
     from viewer.render.renderer import Renderer
-    from viewer.scene_loader import load_scene
+    from world.loader import load_scene
     from viewer.ui.progressive import Progressive
     from viewer.render.timing import PassClock
     r = Renderer(ctx, load_scene(SCENE), (96, 54))
@@ -314,7 +315,7 @@ def test_progressive_reference_equals_the_full_render_and_restarts(ctx):
 
 def test_pass_clock_method_and_gpu_queries(ctx):
     from viewer.render.renderer import Renderer
-    from viewer.scene_loader import load_scene
+    from world.loader import load_scene
     from viewer.render.timing import PassClock, gpu_timers_truthful
     software = "llvmpipe" in ctx.info["GL_RENDERER"].lower()
     assert gpu_timers_truthful(ctx) is not software
@@ -358,7 +359,7 @@ def view(display, tmp_path, *args, script=None, frames=6, size=f"{W}x{H}", name=
 def headless(ctx, mode="off", size=(W, H), params=None, buffers=False):
     """The same scene rendered through the EGL context, as `hmblur shot` would."""
     from viewer.render.renderer import Renderer
-    from viewer.scene_loader import load_scene
+    from world.loader import load_scene
     r = Renderer(ctx, load_scene(SCENE), size)
     try:
         img = linear_to_srgb8(r.render(mode, 0.0, params or ParamSet()).image)
@@ -468,7 +469,7 @@ def test_open_scene_replaces_the_scene(display, tmp_path, ctx):
     img, stats = view(display, tmp_path, script="2 open thin\n", name="open")
     assert stats["scene"] == "thin" and stats["errors"] == []
     from viewer.render.renderer import Renderer
-    from viewer.scene_loader import load_scene
+    from world.loader import load_scene
     scene = load_scene("thin")
     r = Renderer(ctx, scene, (W, H))
     try:

@@ -17,13 +17,13 @@ import glfw  # noqa: F401  (before imgui_bundle, see viewer/ui/window.py)
 from imgui_bundle import imgui
 
 from .cliargs import Setup, parse_float, parse_int, parse_size
-from .errors import UserError
+from world.errors import UserError
 from .glcontext import device_name
 from .imageio import write_json_atomic, write_png_atomic
 from .render.debug_view import KINDS, DebugView
 from .render.modes import MODES
 from .render.renderer import Renderer
-from .scene_loader import load_scene
+from world.loader import load_scene
 from .ui import capture
 from .ui.camera_control import CameraControl
 from .ui.input import InputRouter

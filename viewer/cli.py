@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from .errors import UserError
+from world.errors import UserError
 from .progress import end_line
 
 COMMANDS = ("shot", "compare", "bench", "view", "params", "graph", "video")
@@ -50,7 +50,7 @@ class _Parser(argparse.ArgumentParser):
 def build_parser() -> argparse.ArgumentParser:
     import importlib
 
-    from .scene_loader import builtin_scene_names
+    from world.loader import builtin_scene_names
     parser = _Parser(prog="hmblur", formatter_class=argparse.RawDescriptionHelpFormatter,
                      description="Motion blur: post-process (McGuire 2012, UE4-style), the "
                      "hybrid ray-traced reveal, and a ground-truth reference to measure them "

@@ -9,10 +9,10 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from .errors import SceneError, UserError
+from world.errors import SceneError, UserError
 from .params import ParamSet
-from .scene import Scene
-from .scene_loader import (builtin_dir, builtin_scene_names, builtin_scene_path,
+from world.scene import Scene
+from world.loader import (builtin_dir, builtin_scene_names, builtin_scene_path,
                            load_scene, merge_camera)
 
 # Scene files beside the built-in ones that are not built-in names: the bench scenes, the
@@ -174,7 +174,7 @@ def read_sidecar(path: str) -> dict:
 
 def apply_camera(scene: Scene, data, source: str):
     """Override the scene's camera with a sidecar's (the viewer may have moved it), checked
-    as the scene file's camera is (scene_loader.merge_camera)."""
+    as the scene file's camera is (world.loader.merge_camera)."""
     if not isinstance(data, dict):
         raise UserError(f"{source}: camera: expected a table")
     scene.camera = merge_camera(scene.camera, data, source)

@@ -114,7 +114,7 @@ def time_modes(r: Renderer, modes: list[str], s, frames: int, warmup: int, progr
             if mode == "hybrid" and res.stats.get("rays"):
                 # The ceiling on this frame's rays, timed right after it (same conditions).
                 from raytrace.bench import bare_embree_rays_per_s
-                from .render.reveal_pass import REVEAL_BATCH
+                from .render.hybrid.reveal import REVEAL_BATCH
                 batch = res.host.get(REVEAL_BATCH)
                 res.stats["embree_rays_per_s"] = bare_embree_rays_per_s(batch, repeats=1)
                 # The static part into the whole static scene: rays of a static own

@@ -3,7 +3,7 @@ textures and host resources each reads and makes, then every host resource with 
 type, producer and readers (Pipeline.describe; no scene or GL context needed)."""
 from __future__ import annotations
 
-from .errors import UserError
+from world.errors import UserError
 from .render.modes import MODES
 
 

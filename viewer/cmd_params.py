@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import textwrap
 
-from .errors import UserError
+from world.errors import UserError
 from .params import GROUPS, describe_params
 from .render.modes import MODE_GROUPS, MODES
 

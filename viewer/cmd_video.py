@@ -14,7 +14,7 @@ from pathlib import Path
 from . import cliargs
 from .cmd_compare import LABELS
 from .cmd_shot import camera_dict
-from .errors import UserError
+from world.errors import UserError
 from .imageio import OutputSet, linear_to_srgb8
 from .metrics import SPACE, image_metrics
 from .plot import PALETTE, line_plots

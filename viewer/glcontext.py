@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import moderngl
 
-from .errors import UserError
+from world.errors import UserError
 
 REQUIRED_GL = 330
 

@@ -12,7 +12,7 @@ import dataclasses
 import math
 from dataclasses import dataclass, field, fields
 
-from .errors import UserError
+from world.errors import UserError
 
 GROUPS: dict[str, type] = {}
 

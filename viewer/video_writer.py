@@ -21,7 +21,7 @@ import numpy as np
 from PIL import Image
 
 from . import cliargs
-from .errors import UserError
+from world.errors import UserError
 from .imageio import OutputSet, write_png_atomic
 
 KINDS = ("mp4", "gif", "png")

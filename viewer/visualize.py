@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .conventions import BACKGROUND_DEPTH
+from world.conventions import BACKGROUND_DEPTH
 from .imageio import linear_to_srgb8
 
 

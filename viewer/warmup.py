@@ -14,11 +14,11 @@ from __future__ import annotations
 import sys
 import time
 
-from . import jit_notice
+from world import jit_notice
 from .glcontext import create_headless
 from .params import ParamSet
 from .render.renderer import Renderer
-from .scene_loader import builtin_scene_names, builtin_scene_path, load_scene
+from world.loader import builtin_scene_names, builtin_scene_path, load_scene
 
 SIZE = (64, 36)
 

@@ -1,6 +1,6 @@
 """What every real-time blur mode shares: the blur-length limit and the velocity convention.
 
-The G-buffer holds the full displacement D over the exposure (viewer/conventions.py); the
+The G-buffer holds the full displacement D over the exposure (world/conventions.py); the
 filters blur symmetrically from -D/2 to +D/2, so their "half vector" is v = D/2, and a
 method that clamps the blur length clamps |v| to `max_radius_px`.
 """

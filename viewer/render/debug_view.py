@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from ..conventions import BACKGROUND_DEPTH, glsl_defines
+from world.conventions import BACKGROUND_DEPTH, glsl_defines
 from ..shaders import ProgramCache
 from .frame import read_texture
 from .gpu_scene import set_uniform

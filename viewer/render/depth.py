@@ -18,6 +18,8 @@ import ctypes.util
 import moderngl
 import numpy as np
 
+from .framebuffers import park_framebuffer
+
 GL_LOWER_LEFT, GL_ZERO_TO_ONE = 0x8CA1, 0x935F
 GL_TEXTURE_2D, GL_DEPTH_COMPONENT32F = 0x0DE1, 0x8CAC
 GL_DEPTH_COMPONENT, GL_FLOAT = 0x1902, 0x1406
@@ -64,7 +66,6 @@ def _clips_below_zero(ctx: moderngl.Context) -> bool:
     """Whether the clip control took effect in `ctx` (the library's entry point may reach
     another context or none): a point at clip z = -w/2 is drawn under GL's default [-1, 1]
     depth range and clipped under [0, 1]."""
-    from .pool import park_framebuffer          # (pool imports this module)
     prog = ctx.program(
         vertex_shader="#version 330 core\nvoid main() { gl_Position = vec4(0, 0, -0.5, 1); }",
         fragment_shader="#version 330 core\nout vec4 c;\nvoid main() { c = vec4(1.0); }")

@@ -9,9 +9,9 @@ from typing import Callable
 import moderngl
 import numpy as np
 
-from ..camera import Camera
-from .. import conventions
-from ..conventions import to_image
+from world.camera import Camera
+from world import conventions
+from world.conventions import to_image
 from ..params import ParamSet
 from ..shaders import ProgramCache
 from .gpu_scene import GpuScene

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import moderngl
 
-from ..conventions import glsl_defines
+from world.conventions import glsl_defines
 from ..params import param
 from . import depth
 from .frame import Frame

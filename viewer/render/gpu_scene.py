@@ -9,10 +9,10 @@ import math
 import moderngl
 import numpy as np
 
-from .. import transforms as tf
-from ..conventions import to_image
-from ..errors import SceneError
-from ..scene import Scene, SceneObject
+from world import transforms as tf
+from world.conventions import to_image
+from world.errors import SceneError
+from world.scene import Scene, SceneObject
 from . import depth
 
 # The shaders' light arrays hold a multiple of this many lights (the define MAX_LIGHTS):

@@ -18,7 +18,7 @@ from .frame import Frame
 from .gather_tiles import draw_gather, gather_tiles
 from .gbuffer import GBufferPass, segments_in, segments_param
 from .half_velocity import EARLY_OUT_PX, GBUFFER_PATHS, VelocityPrep, path_bindings
-from .modes import mode
+from .registry import mode
 from .passes import FullscreenPass, Pipeline
 from .pool import TexSpec
 from .tiles import tile_passes

@@ -1,36 +1,13 @@
-"""The modes and their pipelines. Each mode module registers a builder with `mode()`; a
-mode that is not registered does not exist (the CLI lists exactly these)."""
+"""The modes and their pipelines: importing this module imports every mode module, each of
+which registers its builder with `registry.mode()` (the CLI lists exactly these)."""
 from __future__ import annotations
-
-from typing import Callable
 
 from .gbuffer import GBufferPass
 from .motion_params import MotionParams  # noqa: F401  (registers the "motion" group)
 from .passes import Pipeline
+from .registry import MODE_GROUPS, MODES, mode
 
-MODES: dict[str, Callable[[], Pipeline]] = {}
-MODE_GROUPS: dict[str, tuple[str, ...]] = {}   # parameter groups each mode uses
-
-
-def mode(name: str, groups: tuple[str, ...] = (), steps: bool = True):
-    """Register a mode's pipeline builder with its parameter groups. `steps`: the mode takes
-    sub-exposure steps (the "motion" group, viewer/render/steps.py, run by the renderer
-    around any pipeline): every real-time blur does; a sharp frame or a mode with its own
-    samples over the exposure does not."""
-    def register(builder):
-        MODES[name] = builder
-        MODE_GROUPS[name] = tuple(groups) + (("motion",) if steps else ())
-        # Listed (CLI, panel, compare) in ORDER, whichever mode module is imported first.
-        rank = {n: k for k, n in enumerate(ORDER)}
-        for table in (MODES, MODE_GROUPS):
-            items = sorted(table.items(), key=lambda kv: rank.get(kv[0], len(rank)))
-            table.clear()
-            table.update(items)
-        return builder
-    return register
-
-
-ORDER = ("off", "reference", "mcguire", "ue4", "guertin", "hybrid")
+__all__ = ["MODES", "MODE_GROUPS"]
 
 
 @mode("off", steps=False)
@@ -43,5 +20,4 @@ from . import reference  # noqa: E402,F401
 from . import mcguire  # noqa: E402,F401
 from . import ue4  # noqa: E402,F401
 from . import guertin  # noqa: E402,F401
-from . import hybrid  # noqa: E402,F401
-
+from .hybrid import pipeline  # noqa: E402,F401  (the hybrid)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import moderngl
 
-from ..conventions import glsl_defines
+from world.conventions import glsl_defines
 from .frame import Frame, PassTimer
 from .gpu_scene import set_uniform
 from .host import HostResource
@@ -56,15 +56,14 @@ class FullscreenPass(Pass):
 
         tiles: a TileList (viewer/render/tile_lists.py) to draw only its tiles, every
         texel of which the pass writes; the targets are zero elsewhere (what they held
-        outside the tiles is cleared first: tile_lists.clear_outside) unless `clear` is
+        outside the tiles is cleared first: TileList.clear_outside) unless `clear` is
         False (the caller filled them). None: the full-screen triangle."""
         ctx = frame.ctx
         if tiles is not None and not tiles.count:
             # No tiles: nothing to bind or draw (a program, its textures and uniforms cost
             # ~0.1 ms of host time); only last frame's tiles go where the pass clears.
             if clear:
-                from .tile_lists import clear_outside
-                clear_outside(frame, tuple(outputs), tiles)
+                tiles.clear_outside(frame, tuple(outputs))
                 frame.pool.mark_tiles(tuple(outputs), tiles)
             return
         prog = self.program(frame, "fullscreen.vert" if tiles is None else tiles.vertex_shader,
@@ -81,8 +80,7 @@ class FullscreenPass(Pass):
         fbo.viewport = (0, 0) + fbo.size
         ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
         if tiles is not None and clear:
-            from .tile_lists import clear_outside   # (tile_lists builds on this module)
-            clear_outside(frame, tuple(outputs), tiles)
+            tiles.clear_outside(frame, tuple(outputs))
         frame.pool.mark_written(outputs, None if tiles is None else tiles.box)
         if blend:
             ctx.enable(moderngl.BLEND)

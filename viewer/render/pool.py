@@ -12,6 +12,7 @@ import moderngl
 import numpy as np
 
 from . import depth
+from .framebuffers import park_framebuffer
 
 
 @dataclass(frozen=True)
@@ -23,18 +24,6 @@ class TexSpec:
 
     def size(self, full: tuple[int, int]) -> tuple[int, int]:
         return (-(-full[0] // self.tile), -(-full[1] // self.tile))
-
-
-def park_framebuffer(ctx: moderngl.Context):
-    """Bind a 1x1 framebuffer that lives as long as the context before releasing others:
-    moderngl re-binds its last bound framebuffer when it creates the next one, and a
-    released one would leave GL_INVALID_OPERATION behind."""
-    if not isinstance(ctx.extra, dict):
-        ctx.extra = {}
-    fbo = ctx.extra.get("parking_fbo")
-    if fbo is None:
-        fbo = ctx.extra["parking_fbo"] = ctx.framebuffer([ctx.renderbuffer((1, 1))])
-    fbo.use()
 
 
 class ResourcePool:

@@ -10,7 +10,7 @@ from ..regions import RegionAccumulator
 from .frame import Frame
 from .gbuffer import GBufferPass
 from .host import HostResource
-from .modes import mode
+from .registry import mode
 from .passes import FullscreenPass, Pass, Pipeline
 from .pool import TexSpec
 

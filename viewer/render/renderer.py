@@ -7,10 +7,10 @@ from dataclasses import dataclass, field
 import moderngl
 import numpy as np
 
-from ..camera import Camera
-from ..errors import UserError
+from world.camera import Camera
+from world.errors import UserError
 from ..params import ParamSet
-from ..scene import Scene
+from world.scene import Scene
 from ..shaders import ProgramCache
 from .allocator import keep_freed_memory
 from .frame import Frame, PassTimer

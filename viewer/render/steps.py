@@ -38,7 +38,7 @@ import numbers
 from contextlib import AbstractContextManager
 from typing import Callable
 
-from .. import conventions
+from world import conventions
 from ..params import ParamSet
 from .frame import Frame, PassTimer
 from .modes import MODE_GROUPS

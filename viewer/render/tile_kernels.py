@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .. import jit_notice
-from ..conventions import flip_row
+from world import jit_notice
+from world.conventions import flip_row
 
 _JIT = dict(cache=True, nogil=True)
 jit_notice.install()
@@ -297,4 +297,14 @@ def outlines_along(boundary, todo, vn, tile, k, w, h, max_len, margin, spread=0.
                         if hit:
                             break
             out[ty, tx] = hit
+    return out
+
+
+@njit(**_JIT)
+def mark_tiles(pixels, rows, cols, tile):
+    """(rows, cols, 2) float32, (0, 1) in the tile x tile tiles holding a pixel (i, j) of
+    `pixels`, 0 elsewhere (image orientation)."""
+    out = np.zeros((rows, cols, 2), np.float32)
+    for k in range(pixels.shape[0]):
+        out[pixels[k, 1] // tile, pixels[k, 0] // tile, 1] = 1.0
     return out

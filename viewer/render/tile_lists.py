@@ -34,7 +34,7 @@ from .blur_common import max_radius_px
 from .frame import Frame
 from .gbuffer import path_targets
 from .host import HostResource
-from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
+from .hybrid.params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
 from .pool import TexSpec
 from . import tile_kernels
@@ -136,6 +136,11 @@ class TileList:
 
     def release(self):
         self._release_buffer()
+
+    def clear_outside(self, frame: Frame, outputs: tuple[str, ...]):
+        """clear_outside for these tiles: what FullscreenPass.draw calls before it draws
+        them (the pass framework sits below this module and takes the tiles as an object)."""
+        clear_outside(frame, outputs, self)
 
 
 class TileRange:

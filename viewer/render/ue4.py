@@ -27,7 +27,7 @@ from .frame import Frame
 from .gather_tiles import draw_gather, gather_tiles, jitter_reach
 from .gbuffer import GBufferPass, segments_in, segments_param
 from .half_velocity import GBUFFER_PATHS, path_bindings
-from .modes import mode
+from .registry import mode
 from .passes import FullscreenPass, Pipeline
 from .pool import TexSpec
 

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from ..scene import CameraSpec
+from world.scene import CameraSpec
 
 ORBIT_RAD_PER_PX = 0.005
 LOOK_RAD_PER_PX = 0.003

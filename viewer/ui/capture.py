@@ -9,7 +9,7 @@ import numpy as np
 
 from ..cliargs import Setup
 from ..cmd_shot import sidecar
-from ..conventions import to_image
+from world.conventions import to_image
 from ..imageio import OutputSet, linear_to_srgb8
 from ..render.renderer import Renderer
 

@@ -3,17 +3,41 @@ dataclasses), buffer view, animation, camera, screenshot, errors. Built from MOD
 MODE_GROUPS and the pool's names, so new modes and buffers appear without changes here."""
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from imgui_bundle import imgui
 
 from ..render.debug_view import KINDS
 from ..render.modes import MODE_GROUPS, MODES
-from ..scene_loader import builtin_scene_names
+from world.loader import builtin_scene_names
+from .camera_control import CameraControl
+from .input import InputRouter
 from .param_widgets import group_widgets
+from .progressive import Progressive
+from .state import ViewState
+from .window import Window
 
-if TYPE_CHECKING:
-    from ..app import App
+
+class PanelHost(Protocol):
+    """What the panel reads and calls on the viewer (viewer.app.App), which imports this
+    module: the panel never imports the app."""
+    state: ViewState
+    window: Window
+    camera: CameraControl
+    router: InputRouter
+    progressive: Progressive
+    recorder: object | None                 # the open recording, if any
+    shown_name: str
+    shown_kind: str
+
+    def screenshot(self): ...
+    def toggle_record(self, path=None): ...
+    def open_scene(self, source: str): ...
+    def set_mode(self, mode: str): ...
+    def set_view(self, name: str): ...
+    def is_progressive(self) -> bool: ...
+    def output_name(self) -> str: ...
+    def buffer_names(self) -> tuple[list[str], list[str]]: ...
 
 MAX_WIDTH = 320              # px, at window widths from 1280
 MIN_WIDTH = 190              # px: narrower and the widgets lose their labels
@@ -32,7 +56,7 @@ def panel_width(window_width: int) -> int:
     return int(min(MAX_WIDTH, max(MIN_WIDTH, round(WIDTH_FRACTION * window_width))))
 
 
-def draw_panel(app: "App") -> tuple[float, float, float, float]:
+def draw_panel(app: PanelHost) -> tuple[float, float, float, float]:
     """Draw the panel along the window's left edge (collapsible by its title bar's arrow,
     hidden by H); returns its rectangle (x, y, w, h)."""
     s = app.state

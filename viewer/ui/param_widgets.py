@@ -8,7 +8,7 @@ import dataclasses
 
 from imgui_bundle import imgui
 
-from ..errors import UserError
+from world.errors import UserError
 from ..params import ParamSet
 
 DRAG_SPEED = 0.01

@@ -28,7 +28,7 @@ import shlex
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import UserError
+from world.errors import UserError
 
 # name: (number of arguments, what they are)
 ACTIONS = {
@@ -135,7 +135,7 @@ def _check_args(a: Action):
     elif name == "subframes":
         _integer(a, args[0], 1)
     elif name == "open":
-        from ..scene_loader import builtin_scene_names
+        from world.loader import builtin_scene_names
         if not Path(args[0]).is_file() and args[0] not in builtin_scene_names():
             a.fail(f"a scene file or built-in name ({', '.join(builtin_scene_names())}), "
                    f"got {args[0]!r}")

@@ -9,7 +9,7 @@ from ..cmd_shot import camera_dict
 from ..params import ParamSet
 from ..render.debug_view import ViewSettings
 from ..render.modes import MODE_GROUPS
-from ..scene import Scene
+from world.scene import Scene
 
 FIXED_STEP = 1.0 / 60.0          # seconds per frame when playing a scripted run
 

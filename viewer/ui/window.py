@@ -11,7 +11,7 @@ import moderngl
 from imgui_bundle import imgui
 from imgui_bundle.python_backends.glfw_backend import GlfwRenderer
 
-from ..errors import UserError
+from world.errors import UserError
 from .input import InputRouter
 
 NO_DISPLAY = "no display: install xvfb and run under xvfb-run, or set DISPLAY"

@@ -29,19 +29,20 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from raytrace import RayScene, kernels
-from raytrace.reveal import primary_view
+from raytrace import RayScene
+from raytrace.reveal import primary_view, reveal
 
-from ..conventions import flip_row
-from .frame import Frame
-from .gbuffer import GBufferPass
-from .gpu_scene import TEX_KINDS, set_uniform
-from .host import HostResource
-from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
-from .kept import KeptSlot
-from .passes import FullscreenPass, Pass
-from .pool import TexSpec
-from .tile_lists import TileList, clear_outside
+from world.conventions import flip_row
+from ..frame import Frame
+from ..gbuffer import GBufferPass
+from ..gpu_scene import TEX_KINDS, set_uniform
+from ..host import HostResource
+from .params import HybridParams  # noqa: F401  (registers the "hybrid" group)
+from ..kept import KeptSlot
+from ..passes import FullscreenPass, Pass
+from ..pool import TexSpec
+from . import reveal_kernels as kernels
+from ..tile_lists import TileList, clear_outside
 
 PACKED = TexSpec(4, "f4")
 STATIC_PREFIX = "static_"     # the static objects' raster: static_color, static_hybrid_front
@@ -285,7 +286,7 @@ def layer_hits(pixels: np.ndarray, layer, height: int, static_key: int | None = 
     id, or static_key where given for the hits the static layer holds (layer.static_view),
     one SHADE_TILE x SHADE_TILE block per (key, screen tile) holding its pixels, blocks in
     rows of BLOCKS_PER_ROW, sorted by key: each key's draw covers only its own run of
-    tiles (raytrace.kernels.pack_blocks); None when nothing was traced."""
+    tiles (reveal_kernels.pack_blocks); None when nothing was traced."""
     every = bool(layer.traced.all())          # layer 1: no gather needed
     rows = None if every else np.flatnonzero(layer.traced)
     if not len(pixels) or rows is not None and not len(rows):
@@ -317,9 +318,9 @@ class RevealTrace(Pass):
         t1 = time.perf_counter()
         result = None
         if len(pixels) and p.trace:
-            result = st.rays.reveal(frame.camera, frame.time, pixels, own, layers=1,
-                                    max_depth=p.max_depth, threads=p.threads or None,
-                                    matrices=frame_models(frame, st.rays.moving))
+            result = reveal(st.rays, frame.camera, frame.time, pixels, own, layers=1,
+                            max_depth=p.max_depth, threads=p.threads or None,
+                            matrices=frame_models(frame, st.rays.moving))
         t2 = time.perf_counter()
         hits = (layer_hits(pixels, result.layers[0], frame.size[1], st.static_key)
                 if result else None)

@@ -7,28 +7,28 @@ background behind them, shades it like the raster layer, and resolves both layer
   gbuffer (colour, hybrid_front = D, depth, id; + normal for the range check)
           -> motion_tiles -> select_tiles
           (host: which tiles move, which any motion reaches) (viewer/render/tile_lists.py)
-          -> hybrid tiles (+ NeighborMax read back)      (viewer/render/hybrid_composite.py)
+          -> hybrid tiles (+ NeighborMax read back)      (viewer/render/hybrid/composite.py)
           -> mask_displacement (+ the edge test) -> mask_edge tiles -> ray_mask (+ tiles),
-          on the moving tiles                                (viewer/render/raymask.py)
+          on the moving tiles                                (viewer/render/hybrid/mask.py)
           -> reveal (CPU rays) -> reveal_shade (hybrid_back*: packed D, depth, id, colour)
-                                                             (viewer/render/reveal_pass.py)
+                                                             (viewer/render/hybrid/reveal.py)
           -> hybrid_composite (bucketed; time-sampled or split by setting), on the
           active tiles
-                                                             (viewer/render/hybrid_composite.py)
+                                                             (viewer/render/hybrid/composite.py)
 
-Parameters: the `hybrid` group (viewer/render/hybrid_params.py) and the shared `blur` limit.
+Parameters: the `hybrid` group (viewer/render/hybrid/params.py) and the shared `blur` limit.
 Stats: masked_pixels, rays, revealed_pixels, reveal_ms (host work) and its parts.
 """
 from __future__ import annotations
 
-from .gbuffer import SEGMENT_CHOICES, GBufferPass
-from .hybrid_composite import Composite, composite_tile_passes
-from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
-from .modes import mode
-from .passes import Pipeline
-from .raymask import raymask_passes
-from .reveal_pass import reveal_passes
-from .tile_lists import selection_passes
+from ..gbuffer import SEGMENT_CHOICES, GBufferPass
+from .composite import Composite, composite_tile_passes
+from .params import HybridParams  # noqa: F401  (registers the "hybrid" group)
+from ..registry import mode
+from ..passes import Pipeline
+from .mask import raymask_passes
+from .reveal import reveal_passes
+from ..tile_lists import selection_passes
 
 
 def hybrid_passes() -> list:

@@ -1,6 +1,6 @@
 """The scene model: what a scene file describes, after loading and validation.
 
-`viewer.scene_loader.load_scene` builds these from TOML (docs/scene-format.md). Everything here
+`world.loader.load_scene` builds these from TOML (docs/scene-format.md). Everything here
 is plain numpy (float64) so the rasteriser, the ray tracer and the tests share one truth
 for transforms and motion.
 """
@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import conventions
-from . import transforms as tf
+from world import conventions
+from world import transforms as tf
 
 
 @dataclass
@@ -314,7 +314,7 @@ class CameraSpec:
 
     def to_dict(self) -> dict:
         """The camera as a scene file's [camera] table (JSON types): what an image's sidecar
-        records, read back by scene_loader.check_camera."""
+        records, read back by world.loader.check_camera."""
         d = {"fov_y": self.fov_y, "up": self.up.tolist(), "near": self.near, "far": self.far,
              "shutter": self.shutter}
         if self.keys is not None:

@@ -1,4 +1,4 @@
-"""Scene files (docs/scene-format.md) -> `viewer.scene.Scene`, with every mistake a SceneError.
+"""Scene files (docs/scene-format.md) -> `world.scene.Scene`, with every mistake a SceneError.
 
 `load_scene` takes a path to a TOML file or the name of a built-in scene in `scenes/`.
 Validation is strict and happens here, once: the renderers may trust a loaded Scene.
@@ -25,8 +25,8 @@ from PIL import Image
 
 import scenes
 
-from .errors import SceneError
-from .scene import (INTERPOLATIONS, CameraKeys, CameraSpec, Light, Material, Mesh, ObjectKeys,
+from world.errors import SceneError
+from world.scene import (INTERPOLATIONS, CameraKeys, CameraSpec, Light, Material, Mesh, ObjectKeys,
                     RenderDefaults, Scene, SceneObject, Texture)
 
 PRIMITIVES = ("box", "sphere", "cylinder", "revolve")

@@ -19,19 +19,17 @@ import math
 
 import numpy as np
 
-from raytrace import kernels
-
-from .blur_common import max_radius_px
-from .frame import Frame
-from .host import HostResource
-from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
-from .passes import FullscreenPass, Pass
-from .pool import TexSpec
-from .reveal_pass import MASKED_PIXELS
-from .tile_kernels import outlines_along, pixel_tiles, square_max
-from .tile_lists import (FINE, TILE_LISTS, moving_strips, path_textures, segments,
+from ..blur_common import max_radius_px
+from ..frame import Frame
+from ..host import HostResource
+from .params import HybridParams  # noqa: F401  (registers the "hybrid" group)
+from ..passes import FullscreenPass, Pass
+from ..pool import TexSpec
+from .reveal import MASKED_PIXELS
+from ..tile_kernels import mark_tiles, outlines_along, pixel_tiles, square_max
+from ..tile_lists import (FINE, TILE_LISTS, moving_strips, path_textures, segments,
                          tile_coords, tile_list, within_reach)
-from .tiles import tile_passes
+from ..tiles import tile_passes
 
 # Which noise stream of glsl/noise.glsl's hash01 jitters the time samples or taps.
 JITTER_STREAM = 2
@@ -151,7 +149,7 @@ def mask_tiles(pixels: np.ndarray, size: tuple[int, int], tile: int) -> np.ndarr
     """Per tile x tile tile (image orientation), (0, 1 if it holds a masked pixel): the
     ray mask's tile summary, for the time-sampled composite."""
     w, h = size
-    return kernels.mark_tiles(pixels, -(-h // tile), -(-w // tile), tile)
+    return mark_tiles(pixels, -(-h // tile), -(-w // tile), tile)
 
 
 def write_mask_tiles(frame: Frame):

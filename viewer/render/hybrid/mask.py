@@ -33,15 +33,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from .blur_common import max_radius_px
-from .frame import Frame
-from .host import HostResource
-from .hybrid_params import HybridParams  # noqa: F401  (registers the "hybrid" group)
-from .passes import FullscreenPass
-from .pool import TexSpec
-from .tile_lists import (FINE, TILE_LISTS, path_textures, segments, tile_coords, tile_list,
+from ..blur_common import max_radius_px
+from ..frame import Frame
+from ..host import HostResource
+from .params import HybridParams  # noqa: F401  (registers the "hybrid" group)
+from ..passes import FullscreenPass
+from ..pool import TexSpec
+from ..tile_lists import (FINE, TILE_LISTS, path_textures, segments, tile_coords, tile_list,
                          tile_strips, within_reach)
-from .tiles import StripSpec
+from ..tiles import StripSpec
 
 MASK = TexSpec(1, "u1")
 RAY_MASK = TexSpec(1, "u4")         # own object id where masked

@@ -3,8 +3,8 @@ mask, the reveal and the composite passes (each module imports it, so a ParamSet
 importing any of them has the group)."""
 from __future__ import annotations
 
-from ..params import group, param
-from .gbuffer import SEGMENT_CHOICES
+from ...params import group, param
+from ..gbuffer import SEGMENT_CHOICES
 
 COMPOSITES = ("bucket", "split", "time")
 
@@ -18,7 +18,7 @@ class HybridParams:
                                "tiles, ray mask and composite follow the path (rotation, "
                                "approach, a reversal); 1 = the chord alone (the paper); 4 "
                                "is best on keyed arcs and bounces, worse on fast spins")
-    # ---- ray mask (viewer/render/raymask.py)
+    # ---- ray mask (viewer/render/hybrid/mask.py)
     min_speed: float = param(1.0, unit="px", lo=0.0, hi=64.0,
                              help="displacement over the exposure (px) below which a pixel "
                                   "counts as still and is never masked")
@@ -45,7 +45,7 @@ class HybridParams:
                                   help="range check: search this many half displacements "
                                        "along the velocity (> 1 finds the wider band that "
                                        "opens when the background moves the other way)")
-    # ---- ray reveal (viewer/render/reveal_pass.py)
+    # ---- ray reveal (viewer/render/hybrid/reveal.py)
     trace: bool = param(True, help="cast the masked pixels' rays; off leaves the revealed "
                                    "layer empty (the composite alone, for comparison)")
     max_depth: int = param(8, unit="restarts", lo=0, hi=64,
@@ -53,7 +53,7 @@ class HybridParams:
                                 "object (recursion depth of the reveal)")
     threads: int = param(0, unit="threads", lo=0, hi=64,
                          help="ray-tracing threads for large batches (0 = CPU count)")
-    # ---- composite (viewer/render/hybrid_composite.py)
+    # ---- composite (viewer/render/hybrid/composite.py)
     composite: str = param("bucket", choices=COMPOSITES, effect="recompile",
                            help="bucket: fragments gathered along lines, sorted by object "
                                 "and depth, combined front to back, background taps paired "

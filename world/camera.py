@@ -6,10 +6,10 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from . import jit_notice
-from . import transforms as tf
-from .conventions import pixel_centres_ndc
-from .scene import CameraSpec
+from world import jit_notice
+from world import transforms as tf
+from world.conventions import pixel_centres_ndc
+from world.scene import CameraSpec
 
 jit_notice.install()
 
