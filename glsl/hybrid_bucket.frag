@@ -1,5 +1,5 @@
 #version 330 core
-// The hybrid mode's bucketed composite (ALGORITHMS.md 4.3), a gather: fragments found along
+// The hybrid mode's bucketed composite (docs/algorithms.md 4.3), a gather: fragments found along
 // sampling lines through the pixel are sorted into buckets, each weighted by the exact
 // share of the exposure during which its piece of surface covers the pixel, and the
 // buckets are combined front to back with "over":

@@ -1,5 +1,5 @@
 #version 330 core
-// The hybrid mode's time-sampled composite (ALGORITHMS.md 4.3), the paper's "target pixel
+// The hybrid mode's time-sampled composite (docs/algorithms.md 4.3), the paper's "target pixel
 // at the end of its sampling range" generalised to a centred exposure. For n stratified
 // times u in the exposure (u in [-1/2, 1/2] of the shutter), find which surface lies on
 // this pixel: on each layer, map the pixel back to the frame time along that layer's own

@@ -1,5 +1,5 @@
 #version 330 core
-// McGuire, Hennessy, Bukowski, Osman 2012 reconstruction (ALGORITHMS.md 1.4), restated
+// McGuire, Hennessy, Bukowski, Osman 2012 reconstruction (docs/algorithms.md 1.4), restated
 // for positive linear depth. S taps along the neighbourhood's dominant half vector vN,
 // jittered per pixel, rounded to pixel centres and clamped to the screen; each tap is
 // weighted by the three cases of the paper: a blurry tap in front of X (its cone), a tap

@@ -1,5 +1,5 @@
 #version 330 core
-// McGuire 2012 velocity setup (ALGORITHMS.md 1.1): the half vector v = D/2 of the
+// McGuire 2012 velocity setup (docs/algorithms.md 1.1): the half vector v = D/2 of the
 // G-buffer's full displacement D, its magnitude clamped to [0.5, k] px. Exactly zero stays
 // zero; any motion at all gets a PSF radius of at least half a pixel.
 uniform sampler2D u_displacement;

@@ -1,5 +1,5 @@
 #version 330 core
-// Ray mask, step 1: the displacement test (ALGORITHMS.md 4.1-4.2), for a centred exposure.
+// Ray mask, step 1: the displacement test (docs/algorithms.md 4.1-4.2), for a centred exposure.
 // A moving pixel X of object I with displacement D is uncovered at shutter open if the
 // point at X + D/2 lies off I, and at shutter close if X - D/2 does; it is kept when that
 // probe sees a different object farther than X (by a relative threshold). Both ways.

@@ -1,4 +1,4 @@
-// Surface shading of SCENE_FORMAT.md, shared by the raster G-buffer pass and the shading of
+// Surface shading of docs/scene-format.md, shared by the raster G-buffer pass and the shading of
 // ray-revealed surfaces, so both layers are lit identically.
 // Needs MAX_LIGHTS, LIGHTS_TEXTURE, LIGHTS_PER_ROW and the texture kinds TEX_CHECKER,
 // TEX_STRIPES, TEX_IMAGE defined (GpuScene.light_defines).

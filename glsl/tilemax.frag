@@ -1,5 +1,5 @@
 #version 330 core
-// One separable TileMax step (ALGORITHMS.md 1.2): the velocity of largest magnitude over
+// One separable TileMax step (docs/algorithms.md 1.2): the velocity of largest magnitude over
 // u_tile texels of the source along u_axis, starting at this texel's tile. Texels past the
 // source's edge (a partial last tile) are skipped. Ties keep the first texel in scan order.
 // With a path (SEGMENTS > 1, glsl/path.glsl: u_path0/u_path1 the full-size path targets or

@@ -1,5 +1,5 @@
 #version 330 core
-// Dilation by swept quads (ALGORITHMS.md 3.2 b), as a gather: tile n covers this tile m
+// Dilation by swept quads (docs/algorithms.md 3.2 b), as a gather: tile n covers this tile m
 // when m lies in the quad swept by n's max velocity (in tiles) along its direction, with
 // half-length |v_t| + e and half-width e, e = 0.99 (|dir.x| + |dir.y|); a tile slower than
 // half a pixel covers only itself. Covered tiles merge min-of-mins and max-of-maxes.

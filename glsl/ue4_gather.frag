@@ -1,5 +1,5 @@
 #version 330 core
-// UE4-style gather (Jimenez 2014; ALGORITHMS.md 3.2 c, 3.4). Taps come in pairs at
+// UE4-style gather (Jimenez 2014; docs/algorithms.md 3.2 c, 3.4). Taps come in pairs at
 // X + o+/K vmax and X - o-/K vmax with opposite jitter; each tap is weighted by a depth
 // compare (background taps use the centre's spread, foreground taps their own) and a box
 // spread compare with a one-step edge; the mirror rule exchanges weights within a pair; the

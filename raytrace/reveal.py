@@ -1,4 +1,4 @@
-"""Ray reveal (ALGORITHMS.md 4): the surface hidden behind each masked pixel's own object.
+"""Ray reveal (docs/algorithms.md 4): the surface hidden behind each masked pixel's own object.
 
 One primary ray per pixel through its centre, from the camera at time t (Camera.rays).
 Layer 1 is the first hit on an object other than the pixel's own (object identity, not

@@ -31,6 +31,8 @@ SCENES = [("living_room", "living_room"), ("spinner", "spinner"), ("thin", "thin
 # Curved motion: the hybrid with one path segment (the chord), its default, and every
 # real-time mode with 4 sub-exposure steps, on the scenes whose motion bends.
 CURVED_SCENES = ("spinner", "wheel", "keys_arc")
+ORDER = ("off", "mcguire", "ue4", "guertin", "hybrid")
+LABELS = {"mcguire": "McGuire 2012", "ue4": "UE4-style", "guertin": "Guertin 2014"}
 VARIANTS = {"one segment": ("seg1", ["--modes", "hybrid", "--set", "hybrid.segments=1"]),
             "4 steps": ("steps4", ["--set", "motion.steps=4"])}
 
@@ -56,8 +58,10 @@ def cell(m: dict) -> str:
 
 def modes_table() -> str:
     first = metrics(OUT / SCENES[0][0])
-    modes = [m for m in first if m != "reference"]
-    lines = ["| scene | " + " | ".join(modes) + " |", "|---|" + "---|" * len(modes)]
+    modes = sorted((m for m in first if m != "reference"),
+                   key=lambda m: ORDER.index(m) if m in ORDER else len(ORDER))
+    lines = ["| scene | " + " | ".join(LABELS.get(m, m) for m in modes) + " |",
+             "|---|" + "---|" * len(modes)]
     for label, _ in SCENES:
         m = metrics(OUT / label)
         lines.append(f"| {label} | " + " | ".join(cell(m[k]) if k in m else "-" for k in modes) + " |")
@@ -66,7 +70,7 @@ def modes_table() -> str:
 
 def curved_table() -> str:
     lines = ["| scene | hybrid, one segment | hybrid (default) | McGuire, 4 steps | "
-             "UE4-style, 4 steps | hybrid, 4 steps |", "|---|---|---|---|---|---|"]
+             "UE4-style, 4 steps | hybrid (default), 4 steps |", "|---|---|---|---|---|---|"]
     for label in CURVED_SCENES:
         seg1 = metrics(OUT / f"{label}_seg1")["hybrid"]
         default = metrics(OUT / label)["hybrid"]

@@ -1,4 +1,4 @@
-"""A numpy statement of McGuire et al. 2012 (ALGORITHMS.md 1.1-1.4), the oracle for the GLSL
+"""A numpy statement of McGuire et al. 2012 (docs/algorithms.md 1.1-1.4), the oracle for the GLSL
 passes.
 
 Arrays are in GL orientation: row 0 is the BOTTOM row, index [y, x], velocities in GL

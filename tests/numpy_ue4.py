@@ -1,4 +1,4 @@
-"""Numpy reference of the UE4-style motion blur, written from ALGORITHMS.md 3.2 and 3.4 (not
+"""Numpy reference of the UE4-style motion blur, written from docs/algorithms.md 3.2 and 3.4 (not
 from the shaders), for tests/test_ue4.py.
 
 Arrays are in GL orientation: a[y, x] with row 0 at the BOTTOM, so that velocities (y up)
@@ -114,7 +114,7 @@ def gather(color, flat, dilated, tile: int, taps: int = 8, depth_scale: float = 
            tile_jitter: float = 0.25, tap_jitter: float = 1.0, fast_path: bool = True,
            fast_ratio: float = 0.4, mirror: bool = True, bilinear_taps: bool = True,
            seed: int = 0) -> np.ndarray:
-    """The gather of ALGORITHMS.md 3.2(c) at every pixel, vectorised over pixels."""
+    """The gather of docs/algorithms.md 3.2(c) at every pixel, vectorised over pixels."""
     color = np.asarray(color, F)[..., :3]
     h, w = color.shape[:2]
     th, tw = dilated.shape[:2]

@@ -570,7 +570,7 @@ def test_reveal_checks_its_arguments():
 # ---------------------------------------------------------------- conformance
 
 def basic_scene() -> Scene:
-    """tests/conformance/basic.toml, built by hand with the trimesh calls of SCENE_FORMAT."""
+    """tests/conformance/basic.toml, built by hand with the trimesh calls of docs/scene-format.md."""
     sphere = mesh_of(trimesh.creation.icosphere(subdivisions=3, radius=0.35))
     objects = [
         obj(1, box([6.1, 0.1, 6.1]), position=[0.0, -0.05, 0.0]),
@@ -629,7 +629,7 @@ def test_conformance_loaded_scenes_match_ids_and_depths(name):
 
 
 def test_reveal_equals_casting_the_scene_without_the_own_object():
-    """The oracle of ALGORITHMS 4.2: for primary rays, passing the own object is the same
+    """The oracle of docs/algorithms.md 4.2: for primary rays, passing the own object is the same
     as removing it. Every pixel of basic, own = its own object, static ones included."""
     s = loaded("basic")
     w, h, t = 160, 90, 0.01

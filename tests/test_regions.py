@@ -2,7 +2,7 @@
 
 The conformance npz files hold the region map but not the per-sample visibility it came
 from, so this file carries its own small Embree ray caster (independent of the project's
-scene loader and camera) that follows SCENE_FORMAT.md and recomputes ids and depths at
+scene loader and camera) that follows docs/scene-format.md and recomputes ids and depths at
 every sample time.
 """
 import tomllib

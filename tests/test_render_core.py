@@ -335,7 +335,7 @@ def test_pass_timer_splits_host_cpu_from_waiting(monkeypatch):
 
 @pytest.mark.parametrize("mode", ["off", "hybrid"])
 def test_any_number_of_lights_adds_up_light_by_light(ctx, tmp_path, mode):
-    """SCENE_FORMAT.md: any number of lights. Shading is linear in them, and so is every
+    """docs/scene-format.md: any number of lights. Shading is linear in them, and so is every
     blur of it: the frame lit by 20 lights (more than one shader array of 16) is the sum
     of the frames lit by each alone, plus the ambient term (the background black: it is
     in every frame), on every object pixel (the hybrid's revealed surfaces lit by all 20

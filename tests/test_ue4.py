@@ -1,6 +1,6 @@
 """UE4-style motion blur (viewer/render/ue4.py): each pass on tiny synthetic buffers against
 the numpy reference in tests/numpy_ue4.py (itself checked on hand-computed cases first), the
-behaviour ALGORITHMS.md 3.4/3.5 promises (linear ramps, mirrored inner background, fast path,
+behaviour docs/algorithms.md 3.2, 3.4 promises (linear ramps, mirrored inner background, fast path,
 static scenes unchanged) and the whole mode against the reference on a conformance scene.
 
 Synthetic arrays are built in GL orientation (row 0 at the bottom, velocity y up) and

@@ -1,6 +1,6 @@
 """sRGB encoding and atomic, deterministic file output.
 
-Encoding (SCENE_FORMAT.md): linear colour is clamped to [0, 1] once, passed through the
+Encoding (docs/scene-format.md): linear colour is clamped to [0, 1] once, passed through the
 standard sRGB transfer function in float64, and stored as `floor(255 * srgb + 0.5)`.
 Non-finite input is mapped before the clamp: NaN -> 0, +inf -> 1, -inf -> 0, so a bad
 pixel shows up black instead of poisoning the encoder (numpy would cast NaN to 0 anyway,

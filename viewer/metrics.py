@@ -1,4 +1,4 @@
-"""Image quality of a test frame against the reference, per blur region (ALGORITHMS.md 5.3).
+"""Image quality of a test frame against the reference, per blur region (docs/algorithms.md 5.3).
 
 Space: every metric is computed on sRGB values in [0, 1]. By default (quantize=True)
 these are the 8-bit codes the PNG files hold, divided by 255, so the numbers can be
@@ -29,7 +29,7 @@ SSIM_WIN = 7
 SSIM_PAD = (SSIM_WIN - 1) // 2
 METRICS = ("psnr", "ssim", "flip")
 # The space of image_metrics' numbers (quantize=True), as `hmblur compare` states it beside
-# them (ALGORITHMS.md 5.3: each metric with its space).
+# them (docs/algorithms.md 5.3: each metric with its space).
 SPACE = ("sRGB, the written PNGs' 8-bit codes / 255; PSNR peak 1.0 over every channel; "
          "SSIM scikit-image, 7x7 uniform window, data_range 1, channels averaged, pixels "
          "3 px or more from the border; FLIP flip-evaluator LDR, 67 pixels per degree")

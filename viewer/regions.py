@@ -1,4 +1,4 @@
-"""Blur regions of a frame from the reference's per-sample visibility (ALGORITHMS.md 5.3).
+"""Blur regions of a frame from the reference's per-sample visibility (docs/algorithms.md 5.3).
 
 For each pixel, compare what the reference sees at every exposure sample (object id and
 view depth) with what the sharp frame sees at the frame time (the "centre"):

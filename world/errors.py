@@ -6,7 +6,7 @@ class UserError(Exception):
 
 
 class SceneError(UserError):
-    """A scene file that does not follow SCENE_FORMAT.md. The message names file and key."""
+    """A scene file that does not follow docs/scene-format.md. The message names file and key."""
 
     def __init__(self, path, key: str, expected: str):
         self.path, self.key, self.expected = str(path), key, expected

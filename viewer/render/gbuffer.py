@@ -1,4 +1,4 @@
-"""The G-buffer pass: linear colour shaded per SCENE_FORMAT.md, linear view depth, world
+"""The G-buffer pass: linear colour shaded per docs/scene-format.md, linear view depth, world
 normal, object id and the screen-space displacement over the exposure; for the hybrid's
 curved motion also each pixel's path over the exposure (glsl/path.glsl)."""
 from __future__ import annotations

@@ -71,7 +71,7 @@ def light_slots(ctx: moderngl.Context, scene: Scene) -> int:
     rounded up to LIGHT_SLOTS, as long as the driver's uniform storage holds them (two
     vec3 arrays: 2016 lights on llvmpipe, 480 where it holds 1024 vectors, 96 at GL's
     least, 256); 0 beyond that: the lights then go in a texture (light_texture), any
-    number of them (SCENE_FORMAT.md), up to LIGHTS_PER_ROW times the texture height limit."""
+    number of them (docs/scene-format.md), up to LIGHTS_PER_ROW times the texture height limit."""
     n = len(scene.lights)
     slots = max(LIGHT_SLOTS, -(-n // LIGHT_SLOTS) * LIGHT_SLOTS)
     vectors = int(ctx.info.get("GL_MAX_FRAGMENT_UNIFORM_VECTORS") or 256)

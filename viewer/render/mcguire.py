@@ -1,5 +1,5 @@
 """Mode `mcguire`: McGuire, Hennessy, Bukowski, Osman 2012, "A Reconstruction Filter for
-Plausible Motion Blur" (ALGORITHMS.md section 1), as fragment passes:
+Plausible Motion Blur" (docs/algorithms.md section 1), as fragment passes:
 
   gbuffer -> mcguire_velocity (half vector, clamped to [0.5, k] px)
           -> mcguire_tilemax_x -> mcguire_tilemax -> mcguire_neighbormax (viewer/render/tiles.py)

@@ -50,7 +50,7 @@ class ReferencePass(Pass):
         fbo = frame.pool.framebuffer(("reference",))
         fbo.use()
         fbo.clear(0.0, 0.0, 0.0, 0.0)
-        # Regions (ALGORITHMS.md 5.3) from every sub-frame's visibility against the frame
+        # Regions (docs/algorithms.md 5.3) from every sub-frame's visibility against the frame
         # time's G-buffer, streamed so no stack of N id buffers is kept.
         regions = (RegionAccumulator(frame.read("id"), frame.read("depth"))
                    if frame.record_visibility else None)

@@ -1,4 +1,4 @@
-"""Tile reductions of a velocity buffer (ALGORITHMS.md 1.2, 1.3), shared by the blur modes.
+"""Tile reductions of a velocity buffer (docs/algorithms.md 1.2, 1.3), shared by the blur modes.
 
 TileMax keeps, per k x k tile, the velocity vector of largest magnitude; it runs as two
 separable passes (k x 1 into a strip texture of ceil(W/k) x H, then 1 x k). NeighborMax

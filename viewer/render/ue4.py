@@ -1,4 +1,4 @@
-"""Mode `ue4`: UE4-style post-process motion blur after Jimenez 2014 (ALGORITHMS.md 3.2, 3.5).
+"""Mode `ue4`: UE4-style post-process motion blur after Jimenez 2014 (docs/algorithms.md 3.2).
 
 G-buffer -> flatten (half vector v = D/2 clamped to the shared blur limit, packed with depth)
 -> per-tile min and max velocity -> dilation by swept tile quads -> gather with paired,
@@ -50,7 +50,7 @@ class UE4Params:
     fast_path: bool = param(True, help="plain average where the neighbourhood moves uniformly")
     fast_ratio: float = param(0.4, unit="ratio of squared lengths", lo=0.0, hi=1.0,
                               help="fast path when |vmin|^2 > fast_ratio * |vmax|^2")
-    mirror: bool = param(True, help="exchange weights within a tap pair (ALGORITHMS.md 3.4)")
+    mirror: bool = param(True, help="exchange weights within a tap pair (docs/algorithms.md 3.4)")
     bilinear: bool = param(True, help="bilinear colour taps (UE); off: the colour of the texel "
                                       "whose depth and velocity weigh the tap")
     fast_path_guard: bool = param(False,

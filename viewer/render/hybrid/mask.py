@@ -1,4 +1,4 @@
-"""The hybrid mode's ray mask (ALGORITHMS.md 4.1-4.2): which pixels get a ray.
+"""The hybrid mode's ray mask (docs/algorithms.md 4.1-4.2): which pixels get a ray.
 
 By default (hybrid.range_check off) the mask is the pixels whose hidden background shows
 at some time of the exposure, written as ray_mask by the displacement test's pass alone

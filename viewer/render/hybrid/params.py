@@ -1,4 +1,4 @@
-"""Parameters of the hybrid mode (ALGORITHMS.md 4), one `@group("hybrid")` shared by the ray
+"""Parameters of the hybrid mode (docs/algorithms.md 4), one `@group("hybrid")` shared by the ray
 mask, the reveal and the composite passes (each module imports it, so a ParamSet made after
 importing any of them has the group)."""
 from __future__ import annotations
@@ -57,7 +57,7 @@ class HybridParams:
     composite: str = param("bucket", choices=COMPOSITES, effect="recompile",
                            help="bucket: fragments gathered along lines, sorted by object "
                                 "and depth, combined front to back, background taps paired "
-                                "with their times (ALGORITHMS.md 4.3; as cheap as McGuire's "
+                                "with their times (docs/algorithms.md 4.3; as cheap as McGuire's "
                                 "gather); time: per-pixel time samples resolve visibility "
                                 "between the raster and revealed layers (best, 8-10x "
                                 "costlier); split: time near the ray mask, bucket elsewhere "

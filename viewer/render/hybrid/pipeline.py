@@ -1,4 +1,4 @@
-"""Mode `hybrid`: Hybrid MBlur (Tan, Cui, Bhojan, SIGGRAPH 2020 poster; ALGORITHMS.md 4).
+"""Mode `hybrid`: Hybrid MBlur (Tan, Cui, Bhojan, SIGGRAPH 2020 poster; docs/algorithms.md 4).
 
 Post-process blur cannot know the background a moving object hides, which its blur
 partly uncovers (inner blur). The hybrid mode finds those pixels, ray-traces the true

@@ -1,4 +1,4 @@
-"""The hybrid mode's ray reveal (ALGORITHMS.md 4.2): trace the masked pixels on the CPU,
+"""The hybrid mode's ray reveal (docs/algorithms.md 4.2): trace the masked pixels on the CPU,
 shade what they reveal on the GPU exactly as the raster layer is shaded.
 
   reveal (host): read `ray_mask` back within the bounding box of its non-empty tiles (one
