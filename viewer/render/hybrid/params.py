@@ -12,12 +12,15 @@ COMPOSITES = ("bucket", "split", "time")
 @group("hybrid")
 class HybridParams:
     # ---- motion (viewer/render/gbuffer.py, glsl/path.glsl)
-    segments: int = param(2, unit="segments", choices=SEGMENT_CHOICES, effect="recompile",
+    # 1 by default: 2 segments cut whole-image FLIP to 0.70-0.96x on bending motion but
+    # double the composite (frame 1.5-2.75x McGuire's against 0.92-1.24x; docs/quality.md)
+    segments: int = param(1, unit="segments", choices=SEGMENT_CHOICES, effect="recompile",
                           help="linear pieces of each pixel's screen path over the "
                                "exposure (its points projected at evenly spaced times): "
                                "tiles, ray mask and composite follow the path (rotation, "
-                               "approach, a reversal); 1 = the chord alone (the paper); 4 "
-                               "is best on keyed arcs and bounces, worse on fast spins")
+                               "approach, a reversal); 1 = the chord alone (the paper); 2 "
+                               "is best on spins, 4 on keyed arcs and bounces; each "
+                               "about doubles the composite")
     # ---- ray mask (viewer/render/hybrid/mask.py)
     min_speed: float = param(1.0, unit="px", lo=0.0, hi=64.0,
                              help="displacement over the exposure (px) below which a pixel "
