@@ -43,6 +43,15 @@ def ctx():
     assert c.error == "GL_NO_ERROR"
 
 
+def scene_from(tmp_path, text, name="s"):
+    """A scene loaded from TOML text (indented as a triple-quoted string in a test)."""
+    import textwrap
+    from world.loader import load_scene
+    p = tmp_path / f"{name}.toml"
+    p.write_text(textwrap.dedent(text))
+    return load_scene(p)
+
+
 def empty_scene(shutter: float = 0.04):
     from world.scene import CameraSpec, Scene
     cam = CameraSpec(position=np.array([0.0, 0.0, 5.0]), look_at=np.zeros(3), fov_y=45.0,

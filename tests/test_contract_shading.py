@@ -2,22 +2,16 @@
 the contract's formulas (independent of the code under test): normals through the inverse
 transpose of M's upper 3x3 under a non-uniform scale; the reference averaging unclamped
 sub-frames at the stratified times t - s/2 + (k + 0.5) s / N and clamping once."""
-import textwrap
 
 import numpy as np
 
 from viewer.imageio import linear_to_srgb8
 from viewer.params import ParamSet
 from viewer.render.renderer import Renderer
-from world.loader import load_scene
+
+from conftest import scene_from
 
 W, H = 96, 64
-
-
-def scene_from(tmp_path, text, name="s"):
-    p = tmp_path / f"{name}.toml"
-    p.write_text(textwrap.dedent(text))
-    return load_scene(p)
 
 
 ELLIPSOID = """

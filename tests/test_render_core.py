@@ -1,24 +1,17 @@
 """The G-buffer and the `off` / `reference` modes against numpy, analytic cases and an
 independent ray cast."""
 import dataclasses
-import textwrap
 
 import numpy as np
 import pytest
 
-from conftest import CONFORMANCE
+from conftest import CONFORMANCE, scene_from
 from world.camera import Camera
 from world.conventions import BACKGROUND_DEPTH
 from viewer.imageio import linear_to_srgb8
 from viewer.params import ParamSet
 from viewer.render.renderer import Renderer
 from world.loader import load_scene
-
-
-def scene_from(tmp_path, text, name="s"):
-    p = tmp_path / f"{name}.toml"
-    p.write_text(textwrap.dedent(text))
-    return load_scene(p)
 
 
 TWO_BOXES = """

@@ -38,23 +38,23 @@ TAP_STREAM, TILE_STREAM_X, TILE_STREAM_Y = 3, 4, 5
 
 @group("guertin")
 class GuertinParams:
-    samples: int = param(15, lo=2, hi=63,
+    samples: int = param(15, unit="taps", lo=2, hi=63,
                          help="taps N, alternating between the pixel's and the "
                               "neighbourhood's direction (G3D: 27)")
-    gamma: float = param(1.5, lo=0.01, hi=20.0,
+    gamma: float = param(1.5, unit="px", lo=0.01, hi=20.0,
                          help="px over the 0.5 px floor at which the centre direction is "
                               "the pixel's own; slower pixels sample toward the "
                               "perpendicular of the dominant motion")
     kappa: float = param(40.0, lo=1.0, hi=1000.0,
                          help="centre weight N / (kappa |vC|): larger lets more of the "
                               "neighbours in")
-    eta: float = param(0.95, lo=0.0, hi=1.0,
+    eta: float = param(0.95, unit="fraction of a tap spacing", lo=0.0, hi=1.0,
                        help="tap jitter scale: 0 = fixed taps (banding), up to 1 = a "
                             "whole tap spacing (noise)")
-    tile_jitter: float = param(0.25, lo=0.0, hi=0.5,
+    tile_jitter: float = param(0.25, unit="tiles", lo=0.0, hi=0.5,
                                help="largest NeighborMax lookup offset per axis, in tiles "
                                     "(hides tile seams as noise)")
-    z_scale: float = param(1.0, lo=0.01, hi=10.0,
+    z_scale: float = param(1.0, unit="fraction of the nearer depth", lo=0.01, hi=10.0,
                            help="depth compare extent as a fraction of the nearer depth: "
                                 "a tap that far behind counts as wholly behind")
     segments: int = segments_param()
