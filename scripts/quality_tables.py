@@ -28,12 +28,15 @@ SCENES = [("living_room", "living_room"), ("spinner", "spinner"), ("thin", "thin
           ("vase_pan", str(CONFORMANCE / "vase_pan.toml")),
           ("keys_arc", str(CONFORMANCE / "keys_arc.toml")),
           ("shapes", str(CONFORMANCE / "shapes.toml"))]
-# Curved motion: the hybrid's default (one path segment: the chord), with 2 segments, and
-# every real-time mode with 4 sub-exposure steps, on the scenes whose motion bends.
+# Curved motion, on the scenes whose motion bends: the hybrid's default (curve steps:
+# 2 sub-frames where the paths bend), the linear hybrid (one chord, one frame), the
+# linear hybrid with 2 path segments, and every real-time mode with 4 sub-exposure steps.
 CURVED_SCENES = ("spinner", "wheel", "keys_arc")
 ORDER = ("off", "mcguire", "ue4", "guertin", "hybrid")
 LABELS = {"mcguire": "McGuire 2012", "ue4": "UE4-style", "guertin": "Guertin 2014"}
-VARIANTS = {"2 segments": ("seg2", ["--modes", "hybrid", "--set", "hybrid.segments=2"]),
+LINEAR = ["--set", "hybrid.curve_steps=1"]
+VARIANTS = {"linear": ("linear", ["--modes", "hybrid", *LINEAR]),
+            "2 segments": ("seg2", ["--modes", "hybrid", "--set", "hybrid.segments=2", *LINEAR]),
             "4 steps": ("steps4", ["--set", "motion.steps=4"])}
 
 
@@ -69,14 +72,16 @@ def modes_table() -> str:
 
 
 def curved_table() -> str:
-    lines = ["| scene | hybrid (default: one segment) | hybrid, 2 segments | McGuire, 4 steps | "
-             "UE4-style, 4 steps | hybrid, 4 steps |", "|---|---|---|---|---|---|"]
+    lines = ["| scene | hybrid, linear (one chord) | hybrid (default: curve steps) | "
+             "hybrid, linear, 2 segments | McGuire, 4 steps | UE4-style, 4 steps | "
+             "hybrid, 4 steps |", "|---|---|---|---|---|---|---|"]
     for label in CURVED_SCENES:
         default = metrics(OUT / label)["hybrid"]
+        linear = metrics(OUT / f"{label}_linear")["hybrid"]
         seg2 = metrics(OUT / f"{label}_seg2")["hybrid"]
         steps = metrics(OUT / f"{label}_steps4")
-        lines.append(f"| {label} | {cell(default)} | {cell(seg2)} | {cell(steps['mcguire'])} | "
-                     f"{cell(steps['ue4'])} | {cell(steps['hybrid'])} |")
+        lines.append(f"| {label} | {cell(linear)} | {cell(default)} | {cell(seg2)} | "
+                     f"{cell(steps['mcguire'])} | {cell(steps['ue4'])} | {cell(steps['hybrid'])} |")
     return "\n".join(lines)
 
 

@@ -57,7 +57,8 @@ def test_steps_reach_the_sidecar(tmp_path, capsys):
     assert main(["shot", str(CONFORMANCE / "basic.toml"), "--size", "16x9", "--mode",
                  "mcguire", "--set", "motion.steps=2", "--out", str(out)]) == 0
     side = json.loads(out.with_suffix(".json").read_text())
-    assert side["params"]["motion"] == {"steps": 2}
+    assert side["params"]["motion"] == {"steps": 2, "curve_px": 1.0}
+    assert side["params"]["mcguire"]["curve_steps"] == 1
     assert main(["shot", str(CONFORMANCE / "basic.toml"), "--size", "16x9", "--mode", "off",
                  "--out", str(out)]) == 0
     assert "motion" not in json.loads(out.with_suffix(".json").read_text())["params"]

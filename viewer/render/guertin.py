@@ -25,6 +25,7 @@ from .blur_common import max_radius_px
 from .frame import Frame
 from .gather_tiles import draw_gather, gather_tiles, jitter_reach
 from .gbuffer import GBufferPass, segments_in, segments_param
+from .motion_params import curve_steps_param
 from .half_velocity import EARLY_OUT_PX, GBUFFER_PATHS, VelocityPrep, path_bindings
 from .registry import mode
 from .passes import FullscreenPass, Pipeline
@@ -58,6 +59,7 @@ class GuertinParams:
                            help="depth compare extent as a fraction of the nearer depth: "
                                 "a tap that far behind counts as wholly behind")
     segments: int = segments_param()
+    curve_steps: int = curve_steps_param(1)     # the published linear blur by default
 
 
 segments = segments_in("guertin")

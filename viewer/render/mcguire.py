@@ -17,6 +17,7 @@ from .blur_common import max_radius_px
 from .frame import Frame
 from .gather_tiles import draw_gather, gather_tiles
 from .gbuffer import GBufferPass, segments_in, segments_param
+from .motion_params import curve_steps_param
 from .half_velocity import EARLY_OUT_PX, GBUFFER_PATHS, VelocityPrep, path_bindings
 from .registry import mode
 from .passes import FullscreenPass, Pipeline
@@ -42,6 +43,7 @@ class McGuireParams:
                                 help="0: the paper's centre weight 1/|V|; > 0: the authors' "
                                      "later S/(kappa |V|) (40 in G3D)")
     segments: int = segments_param()
+    curve_steps: int = curve_steps_param(1)     # the published linear blur by default
 
 
 segments = segments_in("mcguire")

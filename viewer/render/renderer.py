@@ -2,12 +2,14 @@
 buffers out. The caller owns the context (EGL for the CLI and tests, GLFW for the viewer)."""
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 
 import moderngl
 import numpy as np
 
 from world.camera import Camera
+from world.path_bend import screen_bend
 from world.errors import UserError
 from ..params import ParamSet
 from world.scene import Scene
@@ -81,8 +83,21 @@ class Renderer:
         `make_frame(time, shutter, seed)` makes each sub-frame, Pipeline.run runs the
         mode's passes on it, each inside `measure(frame, name)`, and the accumulation."""
         shutter = float(self.scene.camera.shutter)
-        n = step_count(mode, params, shutter)
-        return run_steps(make_frame, self.pipeline(mode), float(t), shutter, seed, n, measure)
+        bend = {}
+
+        def measure_bend() -> float:
+            t0, c0 = time.perf_counter(), time.thread_time()
+            bend["px"] = screen_bend(self.scene, self.camera, float(t), shutter)
+            bend["ms"] = (time.perf_counter() - t0) * 1e3
+            bend["cpu_ms"] = (time.thread_time() - c0) * 1e3
+            return bend["px"]
+        n = step_count(mode, params, shutter, measure_bend)
+        frame = run_steps(make_frame, self.pipeline(mode), float(t), shutter, seed, n, measure)
+        if bend:         # (host work before the first pass: reported as one of them)
+            frame.stats["bend_px"] = bend["px"]
+            frame.pass_ms["motion_bend"] = bend["ms"]
+            frame.pass_cpu_ms["motion_bend"] = bend["cpu_ms"]
+        return frame
 
     def render(self, mode: str, t: float, params: ParamSet | None = None, seed: int = 0,
                timing: bool = False, record_visibility: bool = False,

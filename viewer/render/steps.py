@@ -34,6 +34,7 @@ sub-frames at other times and shutters find it correct: a sub-frame is a frame.
 from __future__ import annotations
 
 import dataclasses
+import math
 import numbers
 from contextlib import AbstractContextManager
 from typing import Callable
@@ -59,11 +60,27 @@ class Accumulate(FullscreenPass):
 _ACC = Accumulate()
 
 
-def step_count(mode: str, params: ParamSet, shutter: float) -> int:
-    """How many sub-frames `mode` renders under `params` for an exposure of `shutter`."""
+def curve_steps(bend_px: float, curve_px: float, most: int) -> int:
+    """Sub-frames for a path that strays `bend_px` from its chord: 1 within `curve_px`,
+    else enough that each sub-exposure strays about curve_px (1/N^2 of the bend:
+    world/path_bend.py), at least 2 and at most `most`."""
+    if most <= 1 or bend_px <= curve_px:
+        return 1
+    return int(min(most, max(2, math.ceil(math.sqrt(bend_px / curve_px)))))
+
+
+def step_count(mode: str, params: ParamSet, shutter: float,
+               bend: Callable[[], float] = lambda: 0.0) -> int:
+    """How many sub-frames `mode` renders under `params` for an exposure of `shutter`:
+    motion.steps, or the mode's curve_steps where the motion bends, whichever is more.
+    `bend()` is the frame's screen_bend (px), asked for only where it can matter."""
     if GROUP not in MODE_GROUPS.get(mode, ()) or shutter == 0:
         return 1
-    return int(params[GROUP].steps)
+    n = int(params[GROUP].steps)
+    most = int(getattr(params[mode], "curve_steps", 1)) if mode in MODE_GROUPS[mode] else 1
+    if most > n:
+        n = max(n, curve_steps(bend(), float(params[GROUP].curve_px), most))
+    return n
 
 
 def step_seed(seed: int, n: int, k: int) -> int:

@@ -26,6 +26,7 @@ from .blur_common import max_radius_px
 from .frame import Frame
 from .gather_tiles import draw_gather, gather_tiles, jitter_reach
 from .gbuffer import GBufferPass, segments_in, segments_param
+from .motion_params import curve_steps_param
 from .half_velocity import GBUFFER_PATHS, path_bindings
 from .registry import mode
 from .passes import FullscreenPass, Pipeline
@@ -58,6 +59,7 @@ class UE4Params:
                                        "read, so a moving neighbourhood beside a screen-static "
                                        "object takes the full path (UE: covering tiles only)")
     segments: int = segments_param()
+    curve_steps: int = curve_steps_param(1)     # the published linear blur by default
 
 
 segments = segments_in("ue4")

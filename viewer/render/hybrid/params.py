@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from ...params import group, param
 from ..gbuffer import SEGMENT_CHOICES
+from ..motion_params import curve_steps_param
 
 COMPOSITES = ("bucket", "split", "time")
 
@@ -21,6 +22,10 @@ class HybridParams:
                                "approach, a reversal); 1 = the chord alone (the paper); 2 "
                                "is best on spins, 4 on keyed arcs and bounces; each "
                                "about doubles the composite")
+    # 2 where the motion bends (viewer/render/steps.py): on spinner, wheel and keys_arc
+    # whole-image FLIP 0.27-0.52x the linear blur's, outer blur 0.29-0.43x, where 2 path
+    # segments reach 0.70-0.96x (docs/quality.md); straight motion stays one frame.
+    curve_steps: int = curve_steps_param(2)
     # ---- ray mask (viewer/render/hybrid/mask.py)
     min_speed: float = param(1.0, unit="px", lo=0.0, hi=64.0,
                              help="displacement over the exposure (px) below which a pixel "
