@@ -286,6 +286,16 @@ def format_report(rep: dict) -> str:
         lines.append(f"| {m} | {r['frame_ms']:.1f} | {r['frame']['p10']:.1f}-{r['frame']['p90']:.1f}"
                      f" | {cpu} | {passes} |")
     lines += ["", *textwrap.wrap(MEDIANS_NOTE.format(timing=rep["pass_timing"]), 92)]
+    stepped = [(m, r.get("stats", {})) for m, r in rep["modes"].items()
+               if r.get("stats", {}).get("steps", 1) > 1
+               or "bend_px" in r.get("stats", {})]
+    if stepped:
+        text = ("sub-frames a frame (motion.steps, or curve steps where screen paths bend "
+                "more than motion.curve_px): " + ", ".join(
+                    f"{m} {st.get('steps', 1):g}" + (f" (bend {st['bend_px']:.1f} px)"
+                                                     if "bend_px" in st else "")
+                    for m, st in stepped))
+        lines += ["", *textwrap.wrap(text, 92)]
     if rep["ratios"]:
         lines += ["", "frame time ratios: " + ", ".join(f"{k} {v:.2f}x"
                                                         for k, v in rep["ratios"].items())]
