@@ -46,9 +46,12 @@ class FullscreenPass(Pass):
                                   {**glsl_defines(), **self.defines(frame), **(defines or {})})
 
     def draw(self, frame: Frame, outputs: tuple[str, ...], textures: dict[str, str],
-             uniforms: dict | None = None, blend: bool = False, tiles=None,
+             uniforms: dict | None = None, blend: bool | tuple = False, tiles=None,
              clear: bool = True, defines: dict | None = None, fragment: str | None = None):
         """Bind pool textures to sampler uniforms, set uniforms, draw into `outputs`.
+
+        blend: True adds the output to the target (ONE, ONE); a tuple gives the blend
+        factors (moderngl's blend_func: 2 or 4 of them).
 
         defines, fragment: this draw's shader variant (added to defines(frame); instead of
         the pass's fragment): program() with the same arguments gives the program drawn
@@ -84,7 +87,7 @@ class FullscreenPass(Pass):
         frame.pool.mark_written(outputs, None if tiles is None else tiles.box)
         if blend:
             ctx.enable(moderngl.BLEND)
-            ctx.blend_func = moderngl.ONE, moderngl.ONE
+            ctx.blend_func = blend if isinstance(blend, tuple) else (moderngl.ONE, moderngl.ONE)
         if tiles is None:
             frame.programs.empty_vao(prog).render(moderngl.TRIANGLES, vertices=3)
         else:

@@ -4,9 +4,9 @@ The frame at time t with shutter s is rendered as N sub-frames, sub-frame k at t
 t_k = t - s/2 + (k + 0.5) s/N of the k-th of N equal parts of the exposure
 (conventions.sample_times), each a whole run of the mode's pipeline on a Frame whose
 shutter is s/N, so that the mode blurs over its part only; the N images are averaged in
-linear light, unclamped (an f4 sum of image_k * (1/N), added in k order by the GPU's
-blending), and the mean is written back into the pipeline's output texture, where every
-reader (the CLI, the viewer, `--buffers`) finds the image as usual. Each linear blur then
+linear light, unclamped (an f4 sum of the first N - 1 images, added in k order by the
+GPU's blending, then (1/N) (sum + image_N-1) blended into the pipeline's output texture),
+where every reader (the CLI, the viewer, `--buffers`) finds the image as usual. Each linear blur then
 follows one N-th of the path, so motion that bends, turns or speeds up within the
 exposure is followed by N chords instead of one.
 
@@ -39,6 +39,8 @@ import numbers
 from contextlib import AbstractContextManager
 from typing import Callable
 
+import moderngl
+
 from world import conventions
 from ..params import ParamSet
 from .frame import Frame, PassTimer
@@ -57,7 +59,15 @@ class Accumulate(FullscreenPass):
     fragment = "accumulate.frag"       # target += weight * source (with additive blending)
 
 
+class Mean(FullscreenPass):
+    name = PASS_NAME
+    fragment = "steps_mean.frag"       # target = weight * (source + target), blended
+
+
 _ACC = Accumulate()
+_MEAN = Mean()
+# rgb: src + dst * src.a (the shader's alpha is the weight); alpha: the target's kept
+MEAN_BLEND = (moderngl.ONE, moderngl.SRC_ALPHA, moderngl.ZERO, moderngl.ONE)
 
 
 def curve_steps(bend_px: float, curve_px: float, most: int) -> int:
@@ -120,12 +130,19 @@ def run_steps(make_frame: MakeFrame, pipeline: Pipeline, t: float, shutter: floa
         frame = make_frame(tk, sk, seed_k)
         pipeline.run(frame, measure=measure)
         with measure(frame, PASS_NAME):
+            # SUM = o_0 + ... + o_{n-2} (the first copied, the others added by blending);
+            # the last sub-frame's output then becomes w SUM + w o_{n-1} in place, by
+            # blending: one full-screen draw a sub-frame (n = 2: a copy and one draw).
             if k == 0:
                 frame.pool.texture(SUM, TexSpec(4, "f4"))
-            # The first sub-frame written (0 + x w is x w), the others added by blending.
-            _ACC.draw(frame, (SUM,), {"u_src": output}, {"u_weight": weight}, blend=k > 0)
-            if k == n - 1:
-                _ACC.draw(frame, (output,), {"u_src": SUM}, {"u_weight": 1.0})
+                frame.ctx.copy_framebuffer(frame.pool.framebuffer((SUM,)),
+                                           frame.pool.framebuffer((output,)))
+                frame.pool.mark_written((SUM,), None)
+            elif k < n - 1:
+                _ACC.draw(frame, (SUM,), {"u_src": output}, {"u_weight": 1.0}, blend=True)
+            else:
+                _MEAN.draw(frame, (output,), {"u_src": SUM}, {"u_weight": weight},
+                           blend=MEAN_BLEND)
         _add(stats, frame.stats)
         _add(pass_ms, frame.pass_ms)
         _add(pass_cpu_ms, frame.pass_cpu_ms)
