@@ -2,15 +2,23 @@
 // Guertin, McGuire, Nowrouzezahrai 2014, "A Fast and Stable Feature-Aware Motion Blur
 // Filter" (HPG 2014), the reconstruction of its Appendix A, restated for positive linear
 // depth. Against McGuire 2012:
-//  - NeighborMax is read at a jittered pixel (up to u_tile_jitter tiles per axis), which
-//    turns tile seams into noise;
-//  - taps alternate between the neighbourhood direction wN and a centre direction wC,
-//    the pixel's own direction blended toward the perpendicular of wN as the pixel slows
-//    (below 0.5 + gamma px): slow and static detail is sampled across the dominant motion
-//    and stays sharp (the "feature-aware" part);
+//  - NeighborMax is read at a pixel offset along one axis (chosen per pixel) by up to
+//    u_tile_jitter tiles, never into a diagonal tile: tile seams turn into noise, and the
+//    tile read, an axis neighbour at most, still counts this pixel's own tile, so |vN| is
+//    at least |vC| (a diagonal tile's NeighborMax may have dropped it by the diagonal rule);
+//  - taps alternate between the neighbourhood direction wN (even taps, the outermost
+//    two among them) and a centre direction wC (odd taps), the pixel's own direction
+//    blended toward the perpendicular of wN as the pixel slows (below 0.5 + gamma px):
+//    slow and static detail is sampled across the dominant motion and stays sharp (the
+//    "feature-aware" part); every tap lies t |vN| from X and is weighed at that
+//    unrounded distance T, as in the paper;
+//  - one low-discrepancy jitter per pixel (interleaved gradient noise) shifts every tap
+//    by up to eta * phi / N tap spacings;
 //  - each case of the weight is scaled by how well the tap's direction matches the
 //    velocity whose spread it uses;
 //  - the centre weight is N / (kappa |vC|), so a fast thin object does not turn opaque;
+//    with u_skip_middle (odd N) the middle tap, about X itself, is left to it, as McGuire
+//    2012 and McGuire's G3D gather do;
 //  - the depth compare is relative to the nearer depth instead of a fixed extent.
 // With a path (SEGMENTS > 1, glsl/path.glsl), the neighbourhood taps follow the
 // NeighborMax winner's path as in glsl/mcguire_gather.frag: tap t at time u = -t/2, at
@@ -35,7 +43,9 @@ uniform int u_samples;             // N
 uniform float u_gamma;             // px over 0.5 where the centre direction is the pixel's own
 uniform float u_kappa;             // centre weight divisor
 uniform float u_eta;               // tap jitter scale
-uniform float u_tile_jitter;       // largest NeighborMax lookup offset per axis, in tiles
+uniform float u_phi;               // tap count at which the jitter spans eta tap spacings
+uniform bool u_skip_middle;        // leave the middle tap (odd N) to the centre weight
+uniform float u_tile_jitter;       // largest NeighborMax lookup offset, in tiles
 uniform float u_z_scale;           // depth compare extent, as a fraction of the nearer depth
 out vec4 out_color;
 
@@ -58,8 +68,8 @@ void main() {
     ivec2 x = ivec2(gl_FragCoord.xy);
     ivec2 size = textureSize(u_color, 0);
     vec4 cx = texelFetch(u_color, x, 0);
-    vec2 offset = u_tile_jitter * float(u_tile) *
-                  (2.0 * vec2(hash01(x, TILE_STREAM_X), hash01(x, TILE_STREAM_Y)) - 1.0);
+    float shift = u_tile_jitter * float(u_tile) * (2.0 * hash01(x, TILE_STREAM_X) - 1.0);
+    vec2 offset = hash01(x, TILE_STREAM_Y) < 0.5 ? vec2(shift, 0.0) : vec2(0.0, shift);
     ivec2 q = clamp(ivec2(floor(vec2(x) + 0.5 + offset)), ivec2(0), size - 1);
 #if SEGMENTS > 1
     vec2 on[PATH_POINTS], ox[PATH_POINTS], os[PATH_POINTS];
@@ -101,26 +111,26 @@ void main() {
 #endif
     float total = float(u_samples) / (u_kappa * rc);
     vec3 sum = total * cx.rgb;
-    float j = 2.0 * hash01(x, TAP_STREAM) - 1.0;
+    float j = u_eta * u_phi / float(u_samples) * (2.0 * ign(vec2(x), TAP_NOISE) - 1.0);
+    int middle = u_skip_middle && u_samples % 2 == 1 ? (u_samples - 1) / 2 : -1;
     for (int i = 0; i < u_samples; ++i) {
-        float t = -1.0 + 2.0 * (float(i) + 1.0 + u_eta * j) / float(u_samples + 1);
-        vec2 d = (i % 2 == 0) ? wc : wn;
+        if (i == middle) continue;
+        float t = -1.0 + 2.0 * (float(i) + 1.0 + j) / float(u_samples + 1);
+        bool along_n = i % 2 == 0;
+        vec2 d = along_n ? wn : wc;
         ivec2 s = clamp(ivec2(floor(vec2(x) + 0.5 + (t * ln) * d)), ivec2(0), size - 1);
-        // The distance of the pixel read, as in McGuire 2012, not the unrounded |t| |vN|:
-        // a tap 0.5 px out that rounds onto a neighbour would take the cylinder's soft
-        // edge at r = 0.5 and smear still detail.
-        float dist = length(vec2(s - x));
+        float dist = abs(t) * ln;
         vec2 vs = texelFetch(u_velocity, s, 0).xy;
         float rs = radius(vs);
         float rcs = rc;
         vec2 ws = direction(vs);
 #if SEGMENTS > 1
-        if (i % 2 == 1 || own_path) {  // along the neighbourhood's or the pixel's path
+        if (along_n || own_path) {     // along the neighbourhood's or the pixel's path
             float u = -0.5 * t;
             int k = path_segment(u);
-            float scale = i % 2 == 1 ? 1.0 : ln / hx;
-            vec2 piece = (i % 2 == 1 ? on[k + 1] - on[k] : ox[k + 1] - ox[k]) * scale;
-            vec2 at = (i % 2 == 1 ? path_at(on, u) : path_at(ox, u)) * scale;
+            float scale = along_n ? 1.0 : ln / hx;
+            vec2 piece = (along_n ? on[k + 1] - on[k] : ox[k + 1] - ox[k]) * scale;
+            vec2 at = (along_n ? path_at(on, u) : path_at(ox, u)) * scale;
             d = direction(piece);
             s = clamp(ivec2(floor(vec2(x) + 0.5 - at)), ivec2(0), size - 1);
             dist = abs(u) * float(SEGMENTS) * length(piece);

@@ -11,6 +11,7 @@ import numpy as np
 
 import numpy_mcguire as nm
 from numpy_mcguire import F32, cone, cylinder, hash01, radius
+from numpy_ue4 import ign
 
 
 # ---- NeighborMax with the diagonal rule --------------------------------------------------------
@@ -50,24 +51,53 @@ def centre_direction(vn, vc, gamma):
     return direction(wp + s * (direction(vc) - wp))
 
 
+def lookup_offset(xs, ys, k, tile_jitter, seed, streams):
+    """The NeighborMax lookup offset (ox, oy) in px, float32: a shift of up to tile_jitter
+    * k px (stream streams[0]) along x or along y (stream streams[1] below 1/2: x), never
+    both, so the tile read is this pixel's or an axis neighbour, never a diagonal one."""
+    shift = (F32(tile_jitter) * F32(k)
+             * (F32(2.0) * hash01(xs, ys, seed, streams[0]).astype(F32) - F32(1.0))).astype(F32)
+    along_x = hash01(xs, ys, seed, streams[1]) < 0.5
+    zero = np.zeros_like(shift)
+    return np.where(along_x, shift, zero), np.where(along_x, zero, shift)
+
+
 def lookup_tiles(xs, ys, w, h, k, tile_jitter, seed, streams):
-    """The tile each pixel reads NeighborMax from: the pixel offset by up to tile_jitter *
-    k px per axis, clamped to the screen, integer-divided by k. Also `ambiguous`, where the
-    offset pixel lies within 1e-4 px of a pixel boundary."""
-    off = [F32(tile_jitter) * F32(k) * (F32(2.0) * hash01(xs, ys, seed, s).astype(F32) - F32(1.0))
-           for s in streams]
-    px = xs.astype(F32) + F32(0.5) + off[0].astype(F32)
-    py = ys.astype(F32) + F32(0.5) + off[1].astype(F32)
+    """The tile each pixel reads NeighborMax from: the pixel offset by lookup_offset,
+    clamped to the screen, integer-divided by k. Also `ambiguous`, where the offset pixel
+    lies within 1e-4 px of a pixel boundary."""
+    ox, oy = lookup_offset(xs, ys, k, tile_jitter, seed, streams)
+    px = xs.astype(F32) + F32(0.5) + ox
+    py = ys.astype(F32) + F32(0.5) + oy
     amb = np.zeros(xs.shape, bool)
     qx, qy = nm.tap_pixel(px, py, w, h, amb, np.bool_(tile_jitter > 0), margin=1e-4)
     return qx // k, qy // k, amb
 
 
+def tap_jitter(xs, ys, samples, eta, phi, seed, noise):
+    """The per-pixel tap shift in tap spacings, float32: eta * phi / N * (2 ign - 1)."""
+    j = F32(2.0) * ign(xs, ys, noise, seed) - F32(1.0)
+    return (F32(eta) * F32(phi) / F32(samples) * j).astype(F32)
+
+
+def tap_t(i: int, samples: int, j):
+    """Tap i's t in (-1, 1) (beyond it where the jitter passes a spacing), float32."""
+    return (F32(-1.0) + F32(2.0) * (F32(i) + F32(1.0) + j) / F32(samples + 1)).astype(F32)
+
+
+def taps(samples: int, skip_middle: bool):
+    """(i, along wN) per tap: even taps along the neighbourhood direction, odd ones along
+    the centre direction (Appendix A); the middle one left out where skip_middle, N odd."""
+    middle = (samples - 1) // 2 if skip_middle and samples % 2 else -1
+    return [(i, i % 2 == 0) for i in range(samples) if i != middle]
+
+
 def gather(color, depth, v, nmax, k: int, samples=15, gamma=1.5, kappa=40.0, eta=0.95,
-           tile_jitter=0.25, z_scale=1.0, seed=0, streams=(3, 4, 5),
-           early_out=0.5 + 1e-3):
+           phi=15.0, skip_middle=True, tile_jitter=0.25, z_scale=1.0, seed=0,
+           streams=(3.0, 4, 5), early_out=0.5 + 1e-3):
     """The reconstruction at every pixel: (out (H, W, 3) float64, ambiguous (H, W) bool),
-    ambiguous where a tap or the lookup lies within 1e-3 px of a rounding boundary."""
+    ambiguous where a tap or the lookup lies within 1e-3 px of a rounding boundary.
+    streams: the tap jitter's noise offset, the lookup shift's and its axis's streams."""
     color = np.asarray(color, np.float64)[..., :3]
     h, w = depth.shape
     ys, xs = np.mgrid[0:h, 0:w]
@@ -83,17 +113,17 @@ def gather(color, depth, v, nmax, k: int, samples=15, gamma=1.5, kappa=40.0, eta
     zc = depth.astype(np.float64)
     total = samples / (kappa * rc)
     acc = total[..., None] * color
-    j = (F32(2.0) * hash01(xs, ys, seed, streams[0]).astype(F32) - F32(1.0)).astype(F32)
+    j = tap_jitter(xs, ys, samples, eta, phi, seed, streams[0])
     vdir = direction(v.astype(np.float64))
-    for i in range(samples):
-        t = (F32(-1.0) + F32(2.0) * (F32(i) + F32(1.0) + F32(eta) * j) / F32(samples + 1)).astype(F32)
-        d = wc if i % 2 == 0 else wn
+    for i, along_n in taps(samples, skip_middle):
+        t = tap_t(i, samples, j)
+        d = wn if along_n else wc
         d32 = d.astype(F32)
         step = (t * ln32).astype(F32)
         px = xs.astype(F32) + F32(0.5) + step * d32[..., 0]
         py = ys.astype(F32) + F32(0.5) + step * d32[..., 1]
         sx, sy = nm.tap_pixel(px, py, w, h, ambiguous, ~still)
-        dist = np.hypot(sx - xs, sy - ys)        # of the pixel read (see the shader)
+        dist = np.abs(t.astype(np.float64)) * ln32   # T = |t| |vN|, unrounded (the paper's)
         rs = rc[sy, sx]
         zs = zc[sy, sx]
         wa = np.abs((wc * d).sum(-1))

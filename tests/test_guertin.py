@@ -12,18 +12,19 @@ import pytest
 
 import numpy_guertin as ng
 import numpy_mcguire as nm
+from numpy_ue4 import ign
 from test_mcguire import (assert_still_scene_unchanged, download, images_per_seed,
                           random_velocities, render_basic, two_layer_scene, upload)
 from test_mcguire import params as mcguire_params
 from viewer.render.blur_common import max_radius_px
-from viewer.render.guertin import EARLY_OUT_PX, TAP_STREAM, TILE_STREAM_X, TILE_STREAM_Y, \
+from viewer.render.guertin import EARLY_OUT_PX, TAP_NOISE, TILE_STREAM_X, TILE_STREAM_Y, \
     guertin_passes
 from viewer.render.mcguire import mcguire_passes
 from viewer.render.reference import REGIONS
 from viewer.render.ue4 import ue4_passes
 
 SIZE = (32, 16)
-STREAMS = (TAP_STREAM, TILE_STREAM_X, TILE_STREAM_Y)
+STREAMS = (TAP_NOISE, TILE_STREAM_X, TILE_STREAM_Y)
 
 
 def params(max_radius=None, group="guertin", **kw):
@@ -39,9 +40,9 @@ def run(frame, passes=None, output="guertin"):
 
 def reference(frame, color, depth, disp, **kw):
     g = frame.params["guertin"]
-    args = dict(samples=g.samples, gamma=g.gamma, kappa=g.kappa, eta=g.eta,
-                tile_jitter=g.tile_jitter, z_scale=g.z_scale, seed=frame.seed,
-                streams=STREAMS, early_out=EARLY_OUT_PX)
+    args = dict(samples=g.samples, gamma=g.gamma, kappa=g.kappa, eta=g.eta, phi=g.phi,
+                skip_middle=g.skip_middle, tile_jitter=g.tile_jitter, z_scale=g.z_scale,
+                seed=frame.seed, streams=STREAMS, early_out=EARLY_OUT_PX)
     return ng.guertin(color, depth, disp, max_radius_px(frame), **{**args, **kw})
 
 
@@ -71,26 +72,75 @@ def test_reference_by_hand():
 
 
 def test_reference_gather_by_hand():
-    # 5x1, v = (2, 0) everywhere, N = 2, no jitter: taps t = -1/3, +1/3 along wC = wN =
-    # (1, 0) read x -+ 1, 1 px away; same depth: cone(1, 2) = 1/2 twice, and 2 cyl = 2,
-    # all direction weights 1: a = 3. Centre weight N / (kappa |vC|) = 1/40.
+    # 5x1, v = (2, 0) everywhere, N = 2, no jitter: t = -1/3 (tap 0, even: along wN) and
+    # +1/3 (tap 1, odd: along wC; wC = wN = (1, 0)), read at x = 1 and 3 and weighed at
+    # the unrounded T = |t| |vN| = 2/3 px (not the 1 px of the pixel read): same depth,
+    # cone(2/3, 2) = 2/3 twice and 2 cyl = 2, direction weights 1: a = 10/3. Centre weight
+    # N / (kappa |vC|) = 1/40.
     c = (np.arange(15, dtype=float) ** 2).reshape(1, 5, 3)
     v = np.tile(np.float32([2.0, 0.0]), (1, 5, 1))
-    out, amb = ng.gather(c, np.ones((1, 5)), v, v[:, :1], k=5, samples=2, eta=0.0,
-                         tile_jitter=0.0)
-    expect = (c[0, 2] / 40 + 3 * (c[0, 1] + c[0, 3])) / (1 / 40 + 6)
+    kw = dict(k=5, kappa=40.0, eta=0.0, tile_jitter=0.0)
+    out, amb = ng.gather(c, np.ones((1, 5)), v, v[:, :1], samples=2, **kw)
+    expect = (c[0, 2] / 40 + 10 / 3 * (c[0, 1] + c[0, 3])) / (1 / 40 + 20 / 3)
     np.testing.assert_allclose(out[0, 2], expect, rtol=1e-6)    # (t in float32)
     assert not amb[0, 2]
     # a still pixel X = 2 under vN = (2, 0): wC = (0, 1), the perpendicular; its centre
-    # weight is 2 / (40 * 0.5) = 1/10. Tap 0 (along wC) clamps back onto X (one row),
-    # 0 px away: "behind" cone(0, 0.5) = 1 along wC, and 2 cyl(0, 0.5) = 2 (its own
-    # direction weight 0, X's 1): a = 3. Tap 1 (along wN) reads x = 3, 1 px away: in
-    # front (same depth) with cone(1, 2) = 1/2 aligned with wN; X's terms weigh 0
-    # (wA = 0, cyl(1, 0.5) = 0): a = 1/2.
+    # weight is 2 / (40 * 0.5) = 1/10. Tap 0 (along wN) reads x = 1, in front (same
+    # depth), moving along wN: cone(2/3, 2) = 2/3; X's terms weigh 0 (wA = 0, and
+    # cyl(2/3, 0.5) = 0). Tap 1 (along wC) clamps back onto X (one row) but lies 2/3 px
+    # out, past X's 0.5 px spread: a = 0.
     v[0, 2] = 0.0
-    out, _ = ng.gather(c, np.ones((1, 5)), v, np.float32([[[2.0, 0.0]]]), k=5, samples=2,
-                       eta=0.0, tile_jitter=0.0)
-    np.testing.assert_allclose(out[0, 2], (3.1 * c[0, 2] + 0.5 * c[0, 3]) / 3.6, rtol=1e-6)
+    out, _ = ng.gather(c, np.ones((1, 5)), v, np.float32([[[2.0, 0.0]]]), samples=2, **kw)
+    np.testing.assert_allclose(out[0, 2], (0.1 * c[0, 2] + 2 / 3 * c[0, 1]) / (0.1 + 2 / 3),
+                               rtol=1e-6)
+
+
+def test_middle_tap_and_jitter_by_hand():
+    # N = 3, v = (2, 0) everywhere, no jitter: t = -1/2, 0, +1/2. Taps 0 and 2 (along wN)
+    # read x = 1 and 3 at T = 1: cone(1, 2) = 1/2 twice + 2 cyl = 3 each. The middle tap
+    # (1, along wC) reads X itself at T = 0: a = 4, unless skipped. Centre: 3/80.
+    c = (np.arange(15, dtype=float) ** 2).reshape(1, 5, 3)
+    v = np.tile(np.float32([2.0, 0.0]), (1, 5, 1))
+    kw = dict(k=5, samples=3, kappa=40.0, eta=0.0, tile_jitter=0.0)
+    side = 3 * (c[0, 1] + c[0, 3])
+    out, _ = ng.gather(c, np.ones((1, 5)), v, v[:, :1], skip_middle=True, **kw)
+    np.testing.assert_allclose(out[0, 2], (3 / 80 * c[0, 2] + side) / (3 / 80 + 6), rtol=1e-6)
+    out, _ = ng.gather(c, np.ones((1, 5)), v, v[:, :1], skip_middle=False, **kw)
+    np.testing.assert_allclose(out[0, 2], ((3 / 80 + 4) * c[0, 2] + side) / (3 / 80 + 10),
+                               rtol=1e-6)
+    assert ng.taps(3, True) == [(0, True), (2, True)]
+    assert ng.taps(4, True) == [(0, True), (1, False), (2, True), (3, False)]   # no middle
+    # the jitter: one interleaved-gradient value per pixel, eta * phi / N tap spacings
+    ys, xs = np.mgrid[0:4, 0:6]
+    j = ng.tap_jitter(xs, ys, 15, 0.95, 27.0, seed=2, noise=3.0)
+    want = 0.95 * 27 / 15 * (2 * ign(xs, ys, 3.0, 2).astype(np.float64) - 1)
+    np.testing.assert_allclose(j, want, rtol=1e-6, atol=1e-6)
+    assert ng.tap_t(0, 15, np.float32(0.0)) == np.float32(-0.875)
+
+
+def test_lookup_never_reads_a_diagonal_tile():
+    """The NeighborMax lookup moves along one axis only, so the tile read is the pixel's
+    own or an axis neighbour, whose NeighborMax always holds the pixel's own TileMax:
+    |vN| >= |vC| at every pixel, even where the diagonal rule drops a corner tile."""
+    k, w, h = 8, 24, 24
+    ys, xs = np.mgrid[0:h, 0:w]
+    ox, oy = ng.lookup_offset(xs, ys, k, 0.5, seed=1, streams=STREAMS[1:])
+    assert not np.any((ox != 0) & (oy != 0))
+    assert np.abs(ox).max() > 3.5 and np.abs(oy).max() > 3.5 and np.abs(ox).max() <= 4.0
+    tx, ty, _ = ng.lookup_tiles(xs, ys, w, h, k, 0.5, 1, STREAMS[1:])
+    moved = np.abs(tx - xs // k) + np.abs(ty - ys // k)
+    assert moved.max() == 1 and (moved == 1).mean() > 0.1
+    # the bottom-left tile moves down-left, away from its diagonal neighbour (1, 1), whose
+    # NeighborMax drops it; the rest is still. Its pixels near that corner, shifted up and
+    # right at once, would read vN = 0 and stay sharp.
+    v = np.zeros((h, w, 2), np.float32)
+    v[:k, :k] = [-3.0, -3.0]
+    nmax = ng.neighbormax(nm.tilemax(v, k))
+    assert np.array_equal(nmax[1, 1], [0, 0]) and np.array_equal(nmax[1, 0], [-3, -3])
+    for seed in range(8):
+        tx, ty, _ = ng.lookup_tiles(xs, ys, w, h, k, 0.5, seed, STREAMS[1:])
+        vn = nmax[ty, tx]
+        assert np.all(np.hypot(vn[..., 0], vn[..., 1]) >= np.hypot(v[..., 0], v[..., 1]))
 
 
 # ---- the passes against the reference ---------------------------------------------------------
@@ -120,6 +170,7 @@ def test_velocity_tilemax_and_diagonal_neighbormax(synthetic_frame, size, max_ra
     (dict(), 7),                                          # the paper's defaults
     (dict(samples=9, gamma=0.5, kappa=10.0, tile_jitter=0.5, z_scale=0.3), 3),
     (dict(samples=20, eta=0.5), 1),
+    (dict(kappa=40.0, phi=27.0, skip_middle=False), 5),  # the paper's Appendix A
 ])
 def test_gather_matches_reference(synthetic_frame, kw, seed):
     rng = np.random.default_rng(3)
@@ -140,7 +191,8 @@ def test_parameters_change_the_image(synthetic_frame):
     color, depth, disp = two_layer_scene(rng, h, w)
     base = None
     for kw in ({}, dict(samples=9), dict(gamma=5.0), dict(kappa=200.0), dict(eta=0.2),
-               dict(tile_jitter=0.0), dict(z_scale=0.05)):
+               dict(phi=27.0), dict(skip_middle=False), dict(tile_jitter=0.0),
+               dict(z_scale=0.05)):
         frame = synthetic_frame((w, h), params(max_radius=0.0625, **kw), seed=2)
         upload(frame, color, depth, disp)
         out = run(frame)
