@@ -10,4 +10,7 @@ void main() {
     out_path1 = vec4(0.0);
 #endif
 #endif
+#ifdef RANK_LOCATION
+    out_rank = 0u;
+#endif
 }

@@ -17,6 +17,9 @@ in vec4 v_view_path[SEGMENTS];
 
 uniform mat3 u_normal_matrix;   // inverse transpose of M(t)'s upper 3x3
 uniform uint u_object_id;
+#ifdef RANK_LOCATION
+uniform uint u_rank;
+#endif
 
 void main() {
     // (positions relative to the eye: the eye is the origin)
@@ -29,6 +32,9 @@ void main() {
     vec2 velocity = vec2(0.0);
 #endif
     write_gbuffer(color, -v_view.z, n, u_object_id, velocity);
+#ifdef RANK_LOCATION
+    out_rank = u_rank;
+#endif
 #if SEGMENTS > 1
     // The path's points as offsets from this point's own window position now.
     vec2 o[SEGMENTS];

@@ -41,6 +41,11 @@ layout(location = PATH_LOCATION) out vec4 out_path0;
 layout(location = PATH_LOCATION1) out vec4 out_path1;
 #endif
 #endif
+// The static objects' kept raster (viewer/render/static_raster.py) also writes each
+// pixel's static draw rank (1 + its place in the draw order, 0 = background), last.
+#ifdef RANK_LOCATION
+layout(location = RANK_LOCATION) out uint out_rank;
+#endif
 
 void write_gbuffer(vec3 color, float depth, vec3 normal, uint id, vec2 velocity) {
     out_color = vec4(color, 1.0);

@@ -1,13 +1,15 @@
 """The G-buffer pass: linear colour shaded per docs/scene-format.md, linear view depth, world
 normal, object id and the screen-space displacement over the exposure; for the hybrid's
-curved motion also each pixel's path over the exposure (glsl/path.glsl)."""
+curved motion also each pixel's path over the exposure (glsl/path.glsl). Under a camera
+still over the exposure the static objects' pixels come from a raster kept per view
+(static_raster.py) and only the movers are drawn; the targets are the full draw's."""
 from __future__ import annotations
 
 import moderngl
 
 from world.conventions import glsl_defines
 from ..params import param
-from . import depth
+from . import depth, static_raster
 from .frame import Frame
 from .gpu_scene import set_uniform
 from .passes import Pass
@@ -115,41 +117,133 @@ class GBufferPass(Pass):
     def execute(self, frame: Frame, time: float | None = None):
         t = frame.time if time is None else time
         t_open, t_close = frame.exposure_at(t)
-        ctx, cam, gpu = frame.ctx, frame.camera, frame.gpu
         layout = self.layout(frame)
         segments = self.segments(frame)
         names = self.targets(layout, segments)
         for stale in set(self.produces) - set(names):
             frame.pool.discard(stale)      # (written under other parameters: not this frame's)
-        defines = {**glsl_defines(), **gpu.light_defines(), **layout_defines(layout),
+        defines = {**glsl_defines(), **frame.gpu.light_defines(), **layout_defines(layout),
                    "SEGMENTS": segments, "PATH_LOCATION": len(LAYOUTS[layout][1]),
                    "PATH_LOCATION1": len(LAYOUTS[layout][1]) + 1}
         times = path_times(t_open, t_close, segments) if segments > 1 else None
+        draw = _Draw(frame, defines, t, t_open, t_close, times)
+        order = frame.gpu.front_to_back(frame.camera.eye(t), t)
+        if self.static_only:
+            order = [o for o in order if not o.moving]
         fbo = frame.pool.framebuffer(names, depth=True)
+        raster = self._kept_raster(frame, draw, names, order)
+        if raster is None:
+            draw.objects(draw.begin(fbo), order)
+        elif self.static_only:
+            frame.ctx.copy_framebuffer(fbo, raster.exact_fbo)
+        else:
+            self._compose(frame, draw, fbo, raster, order)
+        frame.ctx.disable(moderngl.DEPTH_TEST)
+
+    def _kept_raster(self, frame: Frame, draw: "_Draw", names, order):
+        """The static objects' kept raster for this frame's view (static_raster.py), drawn
+        now where it is wanted and missing; None where there is none."""
+        key = static_raster.still_key(frame, draw.t, draw.exposure_times(), draw.defines)
+        if key is None:
+            return None
+        store = static_raster.rasters(frame)
+        raster = store.find(frame, key)
+        if raster is None and store.wanted(key, now=self.static_only):
+            raster = store.make(frame, key, [GBUFFER[n[len(self.prefix):]] for n in names])
+            if raster is not None:
+                statics = [o for o in order if not o.moving]
+                with_rank = _Draw(frame, {**draw.defines, "RANK_LOCATION": len(names)},
+                                  draw.t, draw.t_open, draw.t_close, draw.times)
+                with_rank.objects(with_rank.begin(raster.draw_fbo), statics, ranks=True)
+                raster.drawn(key)
+        return raster
+
+    @staticmethod
+    def _compose(frame: Frame, draw: "_Draw", fbo, raster, order):
+        """The kept raster copied in, the movers drawn over it (static_raster.py: the
+        statics a mover comes before at one float farther, their depth given back
+        before the next mover after them)."""
+        ctx = frame.ctx
+        plan = static_raster.draw_plan(order)
+        movers = [o for o in plan if not isinstance(o, list)]
+        boxes = static_raster.rasters(frame).movers_boxes(frame, movers, draw.t)
+        first = next((k for k, slot in enumerate(plan) if not isinstance(slot, list)), 0)
+        reach = static_raster.union(boxes)
+        if reach is None or not any(isinstance(slot, list) for slot in plan[first:]):
+            # Nothing reaches the image, or every static comes before every mover.
+            ctx.copy_framebuffer(fbo, raster.exact_fbo)
+            if reach is not None:
+                draw.objects(draw.program(fbo), movers)
+            return
+        raster.prepare(len(order) - len(movers))
+        ctx.copy_framebuffer(fbo, raster.far_fbo)
+        depth_only = frame.pool.framebuffer((), depth=True)
+        prog = draw.program(fbo)
+        run, k = None, 0
+        for slot in plan:
+            if isinstance(slot, list):
+                run = slot
+                continue
+            later = static_raster.union(boxes[k:])    # where this mover or a later draws
+            b = run and later and raster.box(*run, later)
+            if b:
+                raster.restore_depth(frame, depth_only, *run, b)
+                fbo.use()
+            run, k = None, k + 1
+            draw.objects(prog, [slot])
+
+
+class _Draw:
+    """One G-buffer draw's shader variant and times: the background, then objects."""
+
+    def __init__(self, frame: Frame, defines: dict, t: float, t_open: float, t_close: float,
+                 times: list[float] | None):
+        self.frame, self.defines = frame, defines
+        self.t, self.t_open, self.t_close, self.times = t, t_open, t_close, times
+
+    def exposure_times(self) -> list[float]:
+        """Every time other than t that the draw looks at the camera."""
+        return [self.t_open, self.t_close, *(self.times or ())]
+
+    def begin(self, fbo: moderngl.Framebuffer) -> moderngl.Program:
+        """Clear `fbo`, fill it with the background (without depth test: every target
+        where nothing is hit); returns program()."""
+        frame, ctx = self.frame, self.frame.ctx
         fbo.use()
         fbo.viewport = (0, 0) + fbo.size
         fbo.clear(depth=depth.clear_value(ctx))
-        # Background first, without depth test: fills every target where nothing is hit.
-        bg = frame.programs.get("fullscreen.vert", "background.frag", defines)
+        bg = frame.programs.get("fullscreen.vert", "background.frag", self.defines)
         set_uniform(bg, "u_background", frame.scene.background)
         ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE | moderngl.BLEND)
         frame.programs.empty_vao(bg).render(moderngl.TRIANGLES, vertices=3)
+        return self.program(fbo)
 
+    def program(self, fbo: moderngl.Framebuffer) -> moderngl.Program:
+        """The G-buffer program with the camera and lights bound, `fbo` bound, the depth
+        test on."""
+        frame, ctx = self.frame, self.frame.ctx
+        fbo.use()
+        fbo.viewport = (0, 0) + fbo.size
+        ctx.disable(moderngl.CULL_FACE | moderngl.BLEND)
         ctx.enable(moderngl.DEPTH_TEST)
         ctx.depth_func = depth.nearer(ctx)
-        prog = frame.programs.get("gbuffer.vert", "gbuffer.frag", defines)
-        gpu.bind_camera(prog, cam, t, frame.size)
-        gpu.bind_lights(prog)
+        prog = frame.programs.get("gbuffer.vert", "gbuffer.frag", self.defines)
+        frame.gpu.bind_camera(prog, frame.camera, self.t, frame.size)
+        frame.gpu.bind_lights(prog)
+        return prog
+
+    def objects(self, prog: moderngl.Program, objects, ranks: bool = False):
+        """Draw `objects` in order; `ranks`: each writes 1 + its place as its rank."""
+        frame, cam, gpu, t = self.frame, self.frame.camera, self.frame.gpu, self.t
         turn = cam.view(t).copy()
         turn[:3, 3] = 0.0                 # V(t) = turn T(-eye(t)): V M = turn T(-eye) M
-        for obj in gpu.front_to_back(cam.eye(t), t):
-            if self.static_only and obj.moving:
-                continue
-            model_eye = gpu.bind_object(prog, obj, cam, t, t_open, t_close,
+        for k, obj in enumerate(objects):
+            model_eye = gpu.bind_object(prog, obj, cam, t, self.t_open, self.t_close,
                                         frame.object_matrices)[0]
-            if times is not None:
+            if self.times is not None:
                 set_uniform(prog, "u_modelview_path",
-                            gpu.path_matrices(obj, cam, times, frame.object_matrices))
+                            gpu.path_matrices(obj, cam, self.times, frame.object_matrices))
             set_uniform(prog, "u_modelview", turn @ model_eye)
+            if ranks:
+                set_uniform(prog, "u_rank", k + 1)
             gpu.vao(prog, obj).render(moderngl.TRIANGLES)
-        ctx.disable(moderngl.DEPTH_TEST)

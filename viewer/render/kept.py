@@ -1,6 +1,6 @@
 """State kept from frame to frame: what passes build once and reuse (the Embree scene,
-tile lists' vertex buffers, the static layer), in one object that the Renderer owns,
-gives to each of its frames (Frame.kept) and releases with itself.
+tile lists' vertex buffers, the static objects' raster), in one object that the Renderer
+owns, gives to each of its frames (Frame.kept) and releases with itself.
 
 Each piece is a KeptSlot (a name and a type) declared by the module that uses it; a
 value is checked against its slot's type when put. Values are keyed by what they were

@@ -18,7 +18,8 @@ shade what they reveal on the GPU exactly as the raster layer is shaded.
       because each target written costs on llvmpipe).
       Under a still camera, a ray whose hit is the first static surface along its
       primary ray (RayScene.intersect's view) reveals what a raster of the static objects
-      alone shows at its pixel: that layer is rendered once per view (static_layer) and
+      alone shows at its pixel: that layer, the G-buffer's kept static raster
+      (viewer/render/static_raster.py), is blitted in once per view (static_layer) and
       copied there, not shaded again (spinner: 429 of 461 tiles).
 """
 from __future__ import annotations
@@ -169,7 +170,8 @@ class RevealState:
 
     def static_layer(self, frame: Frame) -> tuple[str, str]:
         """The pool names of the static objects' raster (colour, packed front) for the
-        frame's view, rendered when the view (or the textures) changed since the last."""
+        frame's view, copied in (a static-only G-buffer pass: the kept raster) when the
+        view (or the textures) changed since the last."""
         view = primary_view(frame.camera, frame.time)
         if view is None:
             raise ValueError("the static layer needs a still camera's view")
