@@ -81,18 +81,29 @@ void main() {
         clamp_path(oy, 2.0 * limit);
         float ry = piece_radius(oy, s, limit);
         float rxs = piece_radius(ox, s, limit);
+        float zy = texelFetch(u_depth, y, 0).x;
+        vec3 cy = texelFetch(u_color, y, 0).rgb;
 #else
         ivec2 y = clamp(ivec2(floor(vec2(x) + 0.5 + t * vn)), ivec2(0), size - 1);
         float dist = length(vec2(y - x));
-        float ry = radius(texelFetch(u_velocity, y, 0).xy);
         float rxs = rx;
-#endif
+#if CENTRE_ONLY
+        // Drawn only where every tap off the pixel weighs exactly 0 (viewer/render/
+        // gather_reach.py): a tap that lands on the pixel reads the pixel's own values.
+        if (y != x) continue;
+        float ry = rx, zy = zx;
+        vec3 cy = cx.rgb;
+#else
+        float ry = radius(texelFetch(u_velocity, y, 0).xy);
         float zy = texelFetch(u_depth, y, 0).x;
+        vec3 cy = texelFetch(u_color, y, 0).rgb;
+#endif
+#endif
         float a = front(zy, zx) * cone(dist, ry)          // Y in front of X
                 + front(zx, zy) * cone(dist, rxs)         // Y behind a blurry X
                 + 2.0 * cylinder(dist, ry) * cylinder(dist, rxs);
         weight += a;
-        sum += a * texelFetch(u_color, y, 0).rgb;
+        sum += a * cy;
     }
     out_color = vec4(sum / weight, 1.0);
 }
