@@ -69,6 +69,13 @@ void main() {
     vec3 sum = weight * cx.rgb;
     float j = u_jitter * (hash01(x, JITTER_STREAM) - 0.5);
     int middle = (u_samples - 1) / 2;      // ~ the centre, already counted above
+#if CENTRE_ONLY
+    // Drawn only where every tap off the pixel weighs exactly 0 (viewer/render/
+    // gather_reach.py): a tap that lands on the pixel weighs what the loop's terms give
+    // there (Y = X, distance 0), and reads nothing.
+    float own = front(zx, zx) * cone(0.0, rx) + front(zx, zx) * cone(0.0, rx)
+              + 2.0 * cylinder(0.0, rx) * cylinder(0.0, rx);
+#endif
     for (int i = 0; i < u_samples; ++i) {
         if (i == middle) continue;
         float t = -1.0 + 2.0 * (float(i) + j + 1.0) / float(u_samples + 1);
@@ -81,29 +88,25 @@ void main() {
         clamp_path(oy, 2.0 * limit);
         float ry = piece_radius(oy, s, limit);
         float rxs = piece_radius(ox, s, limit);
-        float zy = texelFetch(u_depth, y, 0).x;
-        vec3 cy = texelFetch(u_color, y, 0).rgb;
 #else
         ivec2 y = clamp(ivec2(floor(vec2(x) + 0.5 + t * vn)), ivec2(0), size - 1);
-        float dist = length(vec2(y - x));
-        float rxs = rx;
 #if CENTRE_ONLY
-        // Drawn only where every tap off the pixel weighs exactly 0 (viewer/render/
-        // gather_reach.py): a tap that lands on the pixel reads the pixel's own values.
-        if (y != x) continue;
-        float ry = rx, zy = zx;
-        vec3 cy = cx.rgb;
-#else
+        if (y == x) {
+            weight += own;
+            sum += own * cx.rgb;
+        }
+        continue;
+#endif
+        float dist = length(vec2(y - x));
         float ry = radius(texelFetch(u_velocity, y, 0).xy);
+        float rxs = rx;
+#endif
         float zy = texelFetch(u_depth, y, 0).x;
-        vec3 cy = texelFetch(u_color, y, 0).rgb;
-#endif
-#endif
         float a = front(zy, zx) * cone(dist, ry)          // Y in front of X
                 + front(zx, zy) * cone(dist, rxs)         // Y behind a blurry X
                 + 2.0 * cylinder(dist, ry) * cylinder(dist, rxs);
         weight += a;
-        sum += a * cy;
+        sum += a * texelFetch(u_color, y, 0).rgb;
     }
     out_color = vec4(sum / weight, 1.0);
 }
