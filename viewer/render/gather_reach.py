@@ -13,7 +13,8 @@ the centre weight 1/rX = 2, i.e. mcguire.centre_kappa = 0), while 6c / 6 and the
 round (a byte of the PNG can move). A tap lands on X when |t vN| < 0.5 on both axes, for
 |t| >= (2 - jitter) / (S + 1), or when it is clamped back onto X at the screen's edge. So
 such tiles are either copied (no tap can land on X) or drawn with the CENTRE_ONLY variant,
-which adds the same centre taps without reading the others.
+which adds the same weights for the taps landing on X and reads no tap. (A moving pixel's
+own tile is always drawn: it lies within its own reach.)
 
 UE4 (glsl/ue4_gather.frag). A still pixel (|v| = 0) weighs a tap o steps out by the
 tap's spread, clamp(K |vY| / |vmax| - max(o - 1, 0), 0, 1): nonzero only when the tap
@@ -21,6 +22,10 @@ point lies within |vY| + |vmax| / K of X, the pixel Y holding it a further sqrt(
 away. Where no pixel reaches X that far (a dilation of the tile min/max tiles by their
 longest |v| + k / K + sqrt(1/2)), every weight is 0 and the result is 0 / 2K + (1 - 0) c
 = c exactly; the fast path (a plain average) is drawn wherever a lookup can take it.
+
+Guertin 2014 keeps the lookup tiles: its centre weight N / (kappa rC) (0.75 at the
+defaults) and direction weights round c / (sum of weights) off c even where no tap off X
+weighs anything, so no copy is exact there.
 """
 from __future__ import annotations
 
