@@ -69,6 +69,13 @@ void main() {
     vec3 sum = weight * cx.rgb;
     float j = u_jitter * (hash01(x, JITTER_STREAM) - 0.5);
     int middle = (u_samples - 1) / 2;      // ~ the centre, already counted above
+#if CENTRE_ONLY
+    // Drawn only where every tap off the pixel weighs exactly 0 (viewer/render/
+    // gather_reach.py): a tap that lands on the pixel weighs what the loop's terms give
+    // there (Y = X, distance 0), and reads nothing.
+    float own = front(zx, zx) * cone(0.0, rx) + front(zx, zx) * cone(0.0, rx)
+              + 2.0 * cylinder(0.0, rx) * cylinder(0.0, rx);
+#endif
     for (int i = 0; i < u_samples; ++i) {
         if (i == middle) continue;
         float t = -1.0 + 2.0 * (float(i) + j + 1.0) / float(u_samples + 1);
@@ -83,6 +90,13 @@ void main() {
         float rxs = piece_radius(ox, s, limit);
 #else
         ivec2 y = clamp(ivec2(floor(vec2(x) + 0.5 + t * vn)), ivec2(0), size - 1);
+#if CENTRE_ONLY
+        if (y == x) {
+            weight += own;
+            sum += own * cx.rgb;
+        }
+        continue;
+#endif
         float dist = length(vec2(y - x));
         float ry = radius(texelFetch(u_velocity, y, 0).xy);
         float rxs = rx;

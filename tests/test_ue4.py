@@ -48,8 +48,10 @@ def run(frame, *passes):
 
 
 def run_gather(frame, color, flat, dilated):
+    """The gather alone on these inputs (its tile list reads the tile min/max too)."""
     upload(frame, "color", GBUFFER["color"], np.dstack([color, np.ones(color.shape[:2])]))
     upload(frame, "ue4_flat", TexSpec(4, "f4"), flat)
+    upload(frame, "ue4_tiles", tile_spec(frame), nu.tile_minmax(flat, frame.params["ue4"].tile))
     upload(frame, "ue4_dilated", tile_spec(frame), dilated)
     run(frame, Gather())
     return read_gl(frame, "ue4")[..., :3]

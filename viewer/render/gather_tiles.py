@@ -8,7 +8,9 @@ the tiles whose lookup can pass the early out (or, where the lookup is jittered,
 FINE tiles within the jitter's reach of one), and draws only those, as merged rectangles
 (viewer/render/tile_lists.py TileList), over a copy of the sharp colour: every other
 pixel is the colour its early out would have written, so the image is the same to the
-byte as a full-screen draw.
+byte as a full-screen draw. Guertin's gather and the gathers along a path take these
+tiles; McGuire's and UE4's along a straight motion take finer ones, within the reach of
+a moving pixel (viewer/render/gather_reach.py), drawn the same way.
 """
 from __future__ import annotations
 
@@ -16,6 +18,7 @@ import math
 
 import numpy as np
 
+from . import tile_kernels
 from .frame import Frame
 from .tile_lists import FINE, TileList, kept_tile_list, tile_coords
 
@@ -26,7 +29,7 @@ MARGIN = 1e-4
 
 def moving_lookups(vectors: np.ndarray, early_out_px: float) -> np.ndarray:
     """Lookup tiles (GL rows) whose vector is longer than early_out_px (within MARGIN)."""
-    v = vectors.astype(np.float64)
+    v = np.asarray(vectors, np.float64)
     return np.hypot(v[..., 0], v[..., 1]) > early_out_px * (1.0 - MARGIN)
 
 
@@ -34,20 +37,10 @@ def within_reach(moving: np.ndarray, tile: int, size: tuple[int, int], reach_px:
                  fine: int = FINE) -> np.ndarray:
     """FINE x FINE tiles (GL rows) holding a pixel that can look up a `moving` tile (tile
     x tile px) from up to reach_px px away on either axis: a FINE tile's pixels, grown by
-    reach_px and cut at the screen's edge, meet a moving tile (2-D prefix sums)."""
+    reach_px and cut at the screen's edge, meet a moving tile (tile_kernels.tiles_in_reach)."""
     w, h = size
-
-    def spans(n_px):
-        p0 = np.arange(-(-n_px // fine)) * fine
-        lo = np.clip(p0 - reach_px, 0, n_px - 1) // tile
-        hi = np.clip(np.minimum(p0 + fine, n_px) - 1 + reach_px, 0, n_px - 1) // tile
-        return lo, hi
-
-    (x0, x1), (y0, y1) = spans(w), spans(h)
-    csum = np.zeros((moving.shape[0] + 1, moving.shape[1] + 1), np.int64)
-    csum[1:, 1:] = moving.cumsum(0).cumsum(1)
-    y0, y1, x0, x1 = y0[:, None], y1[:, None] + 1, x0[None, :], x1[None, :] + 1
-    return csum[y1, x1] - csum[y0, x1] - csum[y1, x0] + csum[y0, x0] > 0
+    return tile_kernels.tiles_in_reach(np.ascontiguousarray(moving, np.bool_), tile, w, h,
+                                       reach_px, fine)
 
 
 def half_extents(frame: Frame, paths: tuple[str, ...]) -> np.ndarray:
@@ -64,6 +57,20 @@ def half_extents(frame: Frame, paths: tuple[str, ...]) -> np.ndarray:
     return np.stack([half, np.zeros_like(half)], axis=-1)
 
 
+def read_tiles(frame: Frame, name: str) -> np.ndarray:
+    """A small pool texture read back: (rows, columns, components) float32, GL rows."""
+    tex = frame.pool.get(name)
+    return np.frombuffer(tex.read(), np.float32).reshape(tex.size[1], tex.size[0],
+                                                         tex.components)
+
+
+def tile_list(frame: Frame, name: str, selected: np.ndarray, tile: int) -> TileList:
+    """The tiles of `selected` (GL rows, tile x tile px) as the kept list `name`."""
+    tl = kept_tile_list(frame, f"gather_tiles:{name}")
+    tl.set(tile_coords(selected), tile, frame.size)
+    return tl
+
+
 def gather_tiles(frame: Frame, source: str, components: slice, tile: int,
                  early_out_px: float, reach_px: int,
                  paths: tuple[str, ...] = ()) -> TileList | None:
@@ -72,24 +79,15 @@ def gather_tiles(frame: Frame, source: str, components: slice, tile: int,
     vector the early out tests. The lookup's own tiles where reach_px is 0, FINE tiles
     otherwise (a tile's worth of reach would draw a ring of whole k x k tiles around
     every moving one). `paths`: `source`'s path targets, whose half extent the early out
-    tests instead where given (a gather along a path). None where every pixel may pass the early out (the full-screen
-    triangle then, with no copy of the colour)."""
-    if paths:
-        vectors = half_extents(frame, paths)
-    else:
-        tex = frame.pool.get(source)
-        a = np.frombuffer(tex.read(), np.float32).reshape(tex.size[1], tex.size[0],
-                                                          tex.components)
-        vectors = a[..., components]
+    tests instead where given (a gather along a path). None where every pixel may pass
+    the early out (the full-screen triangle then, with no copy of the colour)."""
+    vectors = (half_extents(frame, paths) if paths
+               else read_tiles(frame, source)[..., components])
     moving = moving_lookups(vectors, early_out_px)
     if reach_px > 0:
         moving, tile = within_reach(moving, tile, frame.size, reach_px), FINE
     frame.stats[f"{source}_gather_tiles"] = int(moving.sum())
-    if moving.all():
-        return None
-    tl = kept_tile_list(frame, f"gather_tiles:{source}")
-    tl.set(tile_coords(moving), tile, frame.size)
-    return tl
+    return None if moving.all() else tile_list(frame, source, moving, tile)
 
 
 def jitter_reach(tile_jitter: float, tile: int) -> int:
@@ -99,11 +97,16 @@ def jitter_reach(tile_jitter: float, tile: int) -> int:
 
 
 def draw_gather(pass_, frame: Frame, output: str, textures: dict, uniforms: dict,
-                tiles: TileList | None):
+                tiles: TileList | None, variants: tuple = ()):
     """Draw a gather pass into `output`: full screen without tiles, else the sharp colour
-    copied and the tiles drawn over it."""
-    if tiles is not None:
-        frame.ctx.copy_framebuffer(frame.pool.framebuffer((output,)),
-                                   frame.pool.framebuffer(("color",)))
-        frame.pool.mark_written((output,))
-    pass_.draw(frame, (output,), textures, uniforms, tiles=tiles, clear=False)
+    copied and the tiles drawn over it; `variants`: (TileList, defines) pairs drawn over
+    it too, each its tiles with the shader variant of those defines."""
+    if tiles is None:
+        pass_.draw(frame, (output,), textures, uniforms, clear=False)
+        return
+    frame.ctx.copy_framebuffer(frame.pool.framebuffer((output,)),
+                               frame.pool.framebuffer(("color",)))
+    frame.pool.mark_written((output,))
+    for tl, defines in ((tiles, None), *variants):
+        pass_.draw(frame, (output,), textures, uniforms, tiles=tl, clear=False,
+                   defines=defines)

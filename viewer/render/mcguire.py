@@ -15,13 +15,15 @@ from __future__ import annotations
 from ..params import group, param
 from .blur_common import max_radius_px
 from .frame import Frame
-from .gather_tiles import draw_gather, gather_tiles
+from .gather_reach import mcguire_maps
+from .gather_tiles import draw_gather, gather_tiles, tile_list
 from .gbuffer import GBufferPass, segments_in, segments_param
 from .motion_params import curve_steps_param
 from .half_velocity import EARLY_OUT_PX, GBUFFER_PATHS, VelocityPrep, path_bindings
 from .registry import mode
 from .passes import FullscreenPass, Pipeline
 from .pool import TexSpec
+from .tile_lists import FINE
 from .tiles import tile_passes
 
 # Which noise stream of glsl/noise.glsl's hash01 the per-pixel tap jitter uses.
@@ -48,12 +50,14 @@ class McGuireParams:
 
 segments = segments_in("mcguire")
 class Gather(FullscreenPass):
-    """The reconstruction; tiled: drawn only on the tiles whose NeighborMax passes the
-    early out (viewer/render/gather_tiles.py), the same image."""
+    """The reconstruction; tiled: drawn only on the FINE tiles where a pixel's blur reaches
+    and the NeighborMax lookup fails the early out, the CENTRE_ONLY variant where only
+    the centre taps can weigh (viewer/render/gather_reach.py), with a path on the tiles
+    whose lookup fails the early out (viewer/render/gather_tiles.py): the same image."""
     name = "mcguire_gather"
     fragment = "mcguire_gather.frag"
-    inputs = ("color", "depth", "mcguire_velocity", "mcguire_neighbormax", *GBUFFER_PATHS,
-              "mcguire_neighbormax_path", "mcguire_neighbormax_path2")
+    inputs = ("color", "depth", "mcguire_velocity", "mcguire_tilemax_x", "mcguire_neighbormax",
+              *GBUFFER_PATHS, "mcguire_neighbormax_path", "mcguire_neighbormax_path2")
     produces = ("mcguire",)
 
     def __init__(self, tiled: bool = True):
@@ -61,7 +65,7 @@ class Gather(FullscreenPass):
 
     def defines(self, frame: Frame):
         return {"EARLY_OUT_PX": EARLY_OUT_PX, "JITTER_STREAM": f"{JITTER_STREAM}u",
-                "SEGMENTS": segments(frame)}
+                "SEGMENTS": segments(frame), "CENTRE_ONLY": 0}
 
     def outputs(self, frame: Frame):
         return {"mcguire": TexSpec(4, "f4")}
@@ -71,14 +75,29 @@ class Gather(FullscreenPass):
         k = max_radius_px(frame)
         paths = path_bindings(frame, "mcguire_neighbormax", segments)
         tile_paths = tuple(v for key, v in paths.items() if key.startswith("u_tile_"))
-        tiles = (gather_tiles(frame, "mcguire_neighbormax", slice(0, 2), k, EARLY_OUT_PX, 0,
-                              tile_paths) if self.tiled else None)
+        tiles, variants = self.tiles(frame, k, p, tile_paths)
         draw_gather(self, frame, "mcguire",
                     {"u_color": "color", "u_depth": "depth", "u_velocity": "mcguire_velocity",
                      "u_neighbormax": "mcguire_neighbormax", **paths},
                     {"u_tile": k, "u_samples": int(p.samples),
                      "u_soft_z": float(p.soft_z_extent), "u_jitter": float(p.jitter),
-                     "u_kappa": float(p.centre_kappa)}, tiles)
+                     "u_kappa": float(p.centre_kappa)}, tiles, variants)
+
+    def tiles(self, frame: Frame, k: int, p, tile_paths):
+        """draw_gather's tiles (None: full screen) and variants."""
+        if not self.tiled:
+            return None, ()
+        if tile_paths:
+            return gather_tiles(frame, "mcguire_neighbormax", slice(0, 2), k, EARLY_OUT_PX,
+                                0, tile_paths), ()
+        full, centre = mcguire_maps(frame, k, int(p.samples), float(p.jitter),
+                                    float(p.centre_kappa), EARLY_OUT_PX)
+        frame.stats["mcguire_gather_tiles"] = int(full.sum())
+        frame.stats["mcguire_gather_centre_tiles"] = int(centre.sum())
+        if full.all():
+            return None, ()
+        return (tile_list(frame, "mcguire", full, FINE),
+                ((tile_list(frame, "mcguire_centre", centre, FINE), {"CENTRE_ONLY": 1}),))
 
 
 def mcguire_passes(tiled: bool = True) -> list:

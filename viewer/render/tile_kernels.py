@@ -308,3 +308,91 @@ def mark_tiles(pixels, rows, cols, tile):
     for k in range(pixels.shape[0]):
         out[pixels[k, 1] // tile, pixels[k, 0] // tile, 1] = 1.0
     return out
+
+
+@njit(**_JIT)
+def reach_boxes(reach, bw, bh, w, h, fine):
+    """FINE x FINE tiles (GL rows, `fine` px, cut at the w x h screen) holding a pixel
+    closer than reach[j, i] px to a pixel of box (i, j), the bw x bh px at (i bw, j bh)
+    (cut at the screen too); reach < 0: no box. Distances between pixel indices: the
+    nearest pixels of two boxes lie (gap x, gap y) apart, so a tile is set when
+    gap_x^2 + gap_y^2 < reach^2 (numpy: that test over every box and tile)."""
+    fh, fw = -(-h // fine), -(-w // fine)
+    out = np.zeros((fh, fw), np.bool_)
+    for j in range(reach.shape[0]):
+        for i in range(reach.shape[1]):
+            r = reach[j, i]
+            if r < 0.0:
+                continue
+            ext = int(np.ceil(r))
+            x0, y0 = i * bw, j * bh
+            x1, y1 = min(x0 + bw, w) - 1, min(y0 + bh, h) - 1
+            for v in range(max(0, y0 - ext) // fine, min(h - 1, y1 + ext) // fine + 1):
+                gy = max(0, v * fine - y1, y0 - (min(v * fine + fine, h) - 1))
+                for u in range(max(0, x0 - ext) // fine, min(w - 1, x1 + ext) // fine + 1):
+                    gx = max(0, u * fine - x1, x0 - (min(u * fine + fine, w) - 1))
+                    if gx * gx + gy * gy < r * r:
+                        out[v, u] = True
+    return out
+
+
+@njit(**_JIT)
+def tiles_in_reach(marked, tile, w, h, reach, fine):
+    """FINE x FINE tiles (GL rows) whose pixels, grown by reach px on either axis and cut
+    at the w x h screen, meet a `marked` tile (tile x tile px): gather_tiles.within_reach."""
+    fh, fw = -(-h // fine), -(-w // fine)
+    out = np.zeros((fh, fw), np.bool_)
+    th, tw = marked.shape
+    for v in range(fh):
+        y0 = min(max(v * fine - reach, 0), h - 1) // tile
+        y1 = min(max(min(v * fine + fine, h) - 1 + reach, 0), h - 1) // tile
+        for u in range(fw):
+            x0 = min(max(u * fine - reach, 0), w - 1) // tile
+            x1 = min(max(min(u * fine + fine, w) - 1 + reach, 0), w - 1) // tile
+            hit = False
+            for ty in range(y0, min(y1, th - 1) + 1):
+                for tx in range(x0, min(x1, tw - 1) + 1):
+                    if marked[ty, tx]:
+                        hit = True
+            out[v, u] = hit
+    return out
+
+
+@njit(inline="always")
+def _border_count(a, b, n):
+    """How many of the border indices 0 and n - 1 lie in [a, b]."""
+    return int(a <= 0 <= b) + int(n > 1 and a <= n - 1 <= b)
+
+
+@njit(**_JIT)
+def self_taps(off_x, off_y, run, k, w, h, fine):
+    """FINE tiles (GL rows) holding a pixel X whose k-tile (k px, GL rows) runs and that
+    no axis keeps every tap off: off_x[tile] says each tap leaves X's column, which holds
+    for X off the first and last columns (there a tap may be clamped back onto X);
+    likewise off_y for rows. An inner pixel needs one of the two, a border column's the
+    rows', a border row's the columns', a corner is never safe. (McGuire's self-tap test,
+    viewer/render/gather_reach.py.)"""
+    fh, fw = -(-h // fine), -(-w // fine)
+    out = np.zeros((fh, fw), np.bool_)
+    for v in range(fh):
+        py0, py1 = v * fine, min(v * fine + fine, h) - 1
+        for u in range(fw):
+            px0, px1 = u * fine, min(u * fine + fine, w) - 1
+            bad = False
+            for ty in range(py0 // k, py1 // k + 1):
+                ya, yb = max(py0, ty * k), min(py1, ty * k + k - 1)
+                edge_y = _border_count(ya, yb, h)
+                inner_y = yb - ya + 1 - edge_y > 0
+                for tx in range(px0 // k, px1 // k + 1):
+                    if not run[ty, tx]:
+                        continue
+                    xa, xb = max(px0, tx * k), min(px1, tx * k + k - 1)
+                    edge_x = _border_count(xa, xb, w)
+                    inner_x = xb - xa + 1 - edge_x > 0
+                    ox, oy = off_x[ty, tx], off_y[ty, tx]
+                    if ((inner_x and inner_y and not (ox or oy))
+                            or (edge_x and inner_y and not oy)
+                            or (inner_x and edge_y and not ox) or (edge_x and edge_y)):
+                        bad = True
+            out[v, u] = bad
+    return out

@@ -24,13 +24,15 @@ import math
 from ..params import group, param
 from .blur_common import max_radius_px
 from .frame import Frame
-from .gather_tiles import draw_gather, gather_tiles, jitter_reach
+from .gather_reach import ue4_map
+from .gather_tiles import draw_gather, gather_tiles, jitter_reach, tile_list
 from .gbuffer import GBufferPass, segments_in, segments_param
 from .motion_params import curve_steps_param
 from .half_velocity import GBUFFER_PATHS, path_bindings
 from .registry import mode
 from .passes import FullscreenPass, Pipeline
 from .pool import TexSpec
+from .tile_lists import FINE
 
 
 @group("ue4")
@@ -151,12 +153,14 @@ EARLY_OUT_PX = 0.5
 
 
 class Gather(FullscreenPass):
-    """The gather; tiled: drawn only on the tiles whose lookup can pass the early out
-    (viewer/render/gather_tiles.py), the same image."""
+    """The gather; tiled: drawn only on the FINE tiles where a lookup can take the fast
+    path or fail the early out and a moving pixel's taps reach (viewer/render/
+    gather_reach.py), with a path on those where a lookup can fail the early out
+    (viewer/render/gather_tiles.py): the same image."""
     name = "ue4_gather"
     fragment = "ue4_gather.frag"
-    inputs = ("color", "ue4_flat", "ue4_dilated", *GBUFFER_PATHS, "ue4_dilated_path",
-              "ue4_dilated_path2")
+    inputs = ("color", "ue4_flat", "ue4_tiles", "ue4_dilated", *GBUFFER_PATHS,
+              "ue4_dilated_path", "ue4_dilated_path2")
     produces = ("ue4",)
 
     def __init__(self, tiled: bool = True):
@@ -170,15 +174,25 @@ class Gather(FullscreenPass):
 
     def execute(self, frame):
         p = frame.params["ue4"]
-        tiles = (gather_tiles(frame, "ue4_dilated", slice(2, 4), p.tile, EARLY_OUT_PX,
-                              jitter_reach(p.tile_jitter, p.tile)) if self.tiled else None)
+        tiles = self.tiles(frame, p) if self.tiled else None
         draw_gather(self, frame, "ue4",
                     {"u_color": "color", "u_flat": "ue4_flat", "u_tiles": "ue4_dilated",
                      **path_bindings(frame, "ue4_dilated", segments)},
-                    {"u_tile": p.tile, "u_max_px": float(max_radius_px(frame)), "u_taps": p.taps, "u_depth_scale": p.depth_scale,
+                    {"u_tile": p.tile, "u_max_px": float(max_radius_px(frame)), "u_taps": p.taps,
+                     "u_depth_scale": p.depth_scale,
                      "u_tile_jitter": p.tile_jitter, "u_tap_jitter": p.tap_jitter,
                      "u_fast_path": bool(p.fast_path), "u_fast_ratio": p.fast_ratio,
                      "u_mirror": bool(p.mirror), "u_bilinear": bool(p.bilinear)}, tiles)
+
+    def tiles(self, frame, p):
+        """draw_gather's tiles (None: full screen)."""
+        reach = jitter_reach(p.tile_jitter, p.tile)
+        if segments(frame) > 1:
+            return gather_tiles(frame, "ue4_dilated", slice(2, 4), p.tile, EARLY_OUT_PX, reach)
+        draw = ue4_map(frame, p.tile, reach, p.taps, max_radius_px(frame), bool(p.fast_path),
+                       p.fast_ratio, EARLY_OUT_PX)
+        frame.stats["ue4_gather_tiles"] = int(draw.sum())
+        return None if draw.all() else tile_list(frame, "ue4", draw, FINE)
 
 
 def ue4_passes(tiled: bool = True) -> list:
