@@ -30,6 +30,7 @@ from embreex import rtcore_scene as rtcs
 from embreex.mesh_construction import TriangleMesh
 
 from world.scene import Scene, SceneObject
+from world.transforms import box_corners
 
 from . import kernels
 from .attributes import SurfaceTable
@@ -147,12 +148,6 @@ class RowIndex:
                                  np.ascontiguousarray(hi, np.float64), 1e-6)
 
 
-def _box_corners(vertices: np.ndarray) -> np.ndarray:
-    """(8, 3) corners of the axis-aligned box around `vertices`."""
-    lo, hi = vertices.min(axis=0), vertices.max(axis=0)
-    return np.array([[(lo, hi)[i >> k & 1][k] for k in range(3)] for i in range(8)])
-
-
 def _embree_run(scene: rtcs.EmbreeScene, origins: np.ndarray, dirs: np.ndarray,
                 tfar: np.ndarray, threads: int = 1) -> dict:
     """Embree's nearest hits (run(..., output=1)); with threads > 1 and PARALLEL_RAYS rays
@@ -212,7 +207,7 @@ class RayScene:
         # The corners of each moving mesh's local bounding box: at time t their world
         # box culls the rays that cannot hit the object before any Embree call.
         self._moving_ids = np.array([o.id for o, _ in self.moving], np.uint32)
-        self._corners = np.array([_box_corners(o.mesh.vertices) for o, _ in self.moving]
+        self._corners = np.array([box_corners(o.mesh.vertices) for o, _ in self.moving]
                                  ).reshape(-1, 8, 3)
         self._pose_cache: tuple | None = None
 

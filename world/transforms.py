@@ -137,3 +137,10 @@ def euler_xyz_degrees_of(r3: np.ndarray) -> np.ndarray:
     else:                                   # gimbal lock: the x and z turns share one axis
         rx, rz = np.arctan2(-r3[1, 2], r3[1, 1]), 0.0
     return np.degrees([rx, ry, rz])
+
+
+def box_corners(vertices: np.ndarray) -> np.ndarray:
+    """(8, 3) corners of the axis-aligned box around `vertices`, corner i taking hi on
+    axis k where bit k of i is set."""
+    lo, hi = vertices.min(axis=0), vertices.max(axis=0)
+    return np.array([[(lo, hi)[i >> k & 1][k] for k in range(3)] for i in range(8)])

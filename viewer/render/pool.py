@@ -90,7 +90,7 @@ class ResourcePool:
             if box is None:
                 self._written.pop(n, None)
             elif n in self._written:
-                self._written[n] = _union(self._written[n], box)
+                self._written[n] = union_of_two(self._written[n], box)
 
     def written_box(self, name: str):
         """The box written since `name`'s last clear: None if nothing, "unknown" if it
@@ -104,7 +104,7 @@ class ResourcePool:
         box = None
         for n in names:
             w, h = self._tex[n][1]
-            box = _union(box, self._written[n] if n in self._written else (0, 0, w, h))
+            box = union_of_two(box, self._written[n] if n in self._written else (0, 0, w, h))
         if box is not None:
             x0, y0, x1, y1 = box
             self.framebuffer(tuple(names)).clear(*value, viewport=(x0, y0, x1 - x0, y1 - y0))
@@ -170,7 +170,8 @@ def _tile_map(tiles) -> tuple[tuple, np.ndarray]:
     return (tile, tile_h, (w, h)), grid
 
 
-def _union(a, b):
+def union_of_two(a, b):
+    """The box around boxes a and b (x0, y0, x1, y1); None ones left out."""
     if a is None:
         return b
     if b is None:

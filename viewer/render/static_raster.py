@@ -29,16 +29,19 @@ Z: a float depth buffer, which the copies and `far` hold exactly (viewer/render/
 """
 from __future__ import annotations
 
+import functools
 from collections import OrderedDict
 
 import moderngl
 import numpy as np
 
+from world.transforms import box_corners
+
 from . import depth
 from .framebuffers import park_framebuffer
 from .gpu_scene import set_uniform
 from .kept import KeptSlot
-from .pool import TexSpec
+from .pool import TexSpec, union_of_two
 
 # Kept rasters' memory at most (all layouts together): the least recently used goes
 # first; a raster larger than this alone is not kept (~5 Mpx in the full layout).
@@ -235,9 +238,7 @@ class StaticRasters:
             v = obj.mesh.vertices
             c = None
             if len(v):
-                lo, hi = v.min(0), v.max(0)
-                c = np.array([[(lo, hi)[i >> k & 1][k] for k in range(3)] + [1.0]
-                              for i in range(8)])
+                c = np.c_[box_corners(v), np.ones(8)]
             self._corners[obj.id] = c
         return self._corners[obj.id]
 
@@ -259,11 +260,8 @@ def rasters(frame) -> StaticRasters:
 
 def union(boxes):
     """The box around `boxes` (None ones left out); None if there is none."""
-    boxes = [b for b in boxes if b is not None]
-    if not boxes:
-        return None
-    b = np.array(boxes)
-    return (*b[:, :2].min(0).tolist(), *b[:, 2:].max(0).tolist())
+    box = functools.reduce(union_of_two, boxes, None)
+    return None if box is None else tuple(int(x) for x in box)
 
 
 def draw_plan(order) -> list:

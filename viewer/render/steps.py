@@ -5,10 +5,10 @@ t_k = t - s/2 + (k + 0.5) s/N of the k-th of N equal parts of the exposure
 (conventions.sample_times), each a whole run of the mode's pipeline on a Frame whose
 shutter is s/N, so that the mode blurs over its part only; the N images are averaged in
 linear light, unclamped (an f4 sum of the first N - 1 images, added in k order by the
-GPU's blending, then (1/N) (sum + image_N-1) blended into the pipeline's output texture),
-where every reader (the CLI, the viewer, `--buffers`) finds the image as usual. Each linear blur then
-follows one N-th of the path, so motion that bends, turns or speeds up within the
-exposure is followed by N chords instead of one.
+GPU's blending, then (1/N) (sum + image_N-1) blended into the pipeline's output
+texture), where every reader (the CLI, the viewer, `--buffers`) finds the image as usual.
+Each linear blur then follows one N-th of the path, so motion that bends, turns or speeds
+up within the exposure is followed by N chords instead of one.
 
 N = 1 is the plain frame (no sub-frame, no copy: the image is today's to the bit); a zero
 shutter is too (N sub-frames at one time show the same image). A mode takes steps when it
