@@ -5,6 +5,15 @@
 in vec3 in_position;
 in vec3 in_normal;
 in vec2 in_uv;
+// The point at shutter open and close (and the path's quarter points): a rigid object's
+// buffer gives its one position for each (its model matrices move it), a skinned one's
+// the posed positions (GpuScene.vao).
+in vec3 in_position_open;
+in vec3 in_position_close;
+#if SEGMENTS == 4
+in vec3 in_path1;
+in vec3 in_path3;
+#endif
 
 // Composed on the host in float64 (GpuScene.object_matrices): in float32 a scene far from
 // the origin would lose its detail to the world translation before V subtracts it again.
@@ -33,11 +42,16 @@ void main() {
     v_uv = in_uv;
     v_world = (u_model_eye * vec4(in_position, 1.0)).xyz;
     v_view = u_modelview * vec4(in_position, 1.0);
-    v_view_open = view_open(in_position);
-    v_view_close = view_close(in_position);
-#if SEGMENTS > 1
-    for (int j = 0; j < SEGMENTS; ++j)
-        v_view_path[j] = u_modelview_path[j < SEGMENTS / 2 ? j : j + 1] * vec4(in_position, 1.0);
+    v_view_open = view_open(in_position_open);
+    v_view_close = view_close(in_position_close);
+#if SEGMENTS == 2
+    v_view_path[0] = u_modelview_path[0] * vec4(in_position_open, 1.0);
+    v_view_path[1] = u_modelview_path[2] * vec4(in_position_close, 1.0);
+#elif SEGMENTS == 4
+    v_view_path[0] = u_modelview_path[0] * vec4(in_position_open, 1.0);
+    v_view_path[1] = u_modelview_path[1] * vec4(in_path1, 1.0);
+    v_view_path[2] = u_modelview_path[3] * vec4(in_path3, 1.0);
+    v_view_path[3] = u_modelview_path[4] * vec4(in_position_close, 1.0);
 #endif
     gl_Position = u_proj * v_view;
 }

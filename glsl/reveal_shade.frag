@@ -46,6 +46,11 @@ mat4 object_mat4(int id, int k) {
 uniform mat4 u_model_eye;       // T(-eye(t)) M(t) (GpuScene.object_matrices)
 uniform mat3 u_normal_matrix;
 uniform uint u_object_id;
+uniform ivec2 u_face_range;     // the faces this draw shades (a part's: its material)
+#endif
+#if SKINNED_FACES
+uniform sampler2D u_faces_motion;   // as u_faces, per corner: (position at shutter open, 0),
+                                    // (at close, 0): a skinned mesh's posed corners
 #endif
 #if STATIC_LAYER
 uniform sampler2D u_static_front;   // the static objects' raster: (D, depth, id), colour
@@ -80,6 +85,9 @@ void main() {
 #endif
     float weight[3] = float[3](1.0 - hit.y - hit.z, hit.y, hit.z);
     int face = int(hit.x);
+#if !OBJECT_TABLE
+    if (face < u_face_range.x || face >= u_face_range.y) discard;   // another part's
+#endif
     int row = face / FACES_PER_ROW;
     ivec2 base = ivec2((face - row * FACES_PER_ROW) * TEXELS_PER_FACE, row);
     vec3 local = vec3(0.0), normal_local = vec3(0.0);
@@ -118,8 +126,17 @@ void main() {
     vec4 view_now = vec4(mat3(u_view) * world.xyz, 1.0);
     vec3 n = unit_or_zero(normal_matrix * normal_local);
     if (dot(n, -world.xyz) < 0.0) n = -n;
-    vec2 d = displacement_between(modelview_open * vec4(local, 1.0),
-                                  modelview_close * vec4(local, 1.0), view_now);
+    vec3 local_open = local, local_close = local;
+#if SKINNED_FACES
+    local_open = vec3(0.0);
+    local_close = vec3(0.0);
+    for (int c = 0; c < 3; ++c) {
+        local_open += weight[c] * texelFetch(u_faces_motion, base + ivec2(2 * c, 0), 0).xyz;
+        local_close += weight[c] * texelFetch(u_faces_motion, base + ivec2(2 * c + 1, 0), 0).xyz;
+    }
+#endif
+    vec2 d = displacement_between(modelview_open * vec4(local_open, 1.0),
+                                  modelview_close * vec4(local_close, 1.0), view_now);
     out_packed = vec4(d, -view_now.z, packed_id);
     out_packed_color = vec4(shade(world.xyz, n, local, uv), 1.0);
 #endif

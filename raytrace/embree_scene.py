@@ -22,6 +22,7 @@ distance it reports.
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -201,15 +202,37 @@ class RayScene:
         self.moving: list[tuple[SceneObject, rtcs.EmbreeScene]] = []
         for o in scene.objects:
             if o.moving and len(o.mesh.faces):
-                es = rtcs.EmbreeScene(self._device)
-                TriangleMesh(es, o.mesh.vertices.astype(np.float32), o.mesh.faces.astype(np.int32))
-                self.moving.append((o, es))
+                self.moving.append((o, self._mesh_scene(o.vertices_at(0.0), o.mesh.faces)))
+        # A skinned mover's scene holds its mesh posed at one time: rebuilt for each new t
+        # (embreex has no refit), the time it takes counted in skin_ms.
+        self._skinned = [k for k, (o, _) in enumerate(self.moving) if o.skin is not None]
+        self._skin_time = 0.0
+        self.skin_ms, self.skin_builds = 0.0, 0
         # The corners of each moving mesh's local bounding box: at time t their world
         # box culls the rays that cannot hit the object before any Embree call.
         self._moving_ids = np.array([o.id for o, _ in self.moving], np.uint32)
-        self._corners = np.array([box_corners(o.mesh.vertices) for o, _ in self.moving]
+        self._corners = np.array([box_corners(o.vertices_at(0.0)) for o, _ in self.moving]
                                  ).reshape(-1, 8, 3)
         self._pose_cache: tuple | None = None
+
+    def _mesh_scene(self, vertices: np.ndarray, faces: np.ndarray) -> rtcs.EmbreeScene:
+        es = rtcs.EmbreeScene(self._device)
+        TriangleMesh(es, np.asarray(vertices, np.float32), faces.astype(np.int32))
+        return es
+
+    def pose_skins(self, t: float):
+        """The skinned movers' scenes and boxes posed at time t (kept while t holds)."""
+        if not self._skinned or t == self._skin_time:
+            return
+        t0 = time.perf_counter()
+        for k in self._skinned:
+            obj = self.moving[k][0]
+            v = obj.vertices_at(t)
+            self.moving[k] = (obj, self._mesh_scene(v, obj.mesh.faces))
+            self._corners[k] = box_corners(v)
+        self._skin_time = t
+        self.skin_ms += (time.perf_counter() - t0) * 1e3
+        self.skin_builds += 1
 
     def _static_scene(self, ids: np.ndarray) -> rtcs.EmbreeScene:
         """One Embree scene of the static objects `ids`, geometry k = ids[k]."""
@@ -236,10 +259,11 @@ class RayScene:
         animation's every frame has a new t: per object, np.linalg.inv alone cost ~9 us,
         32 movers 0.3 ms); kept for the last M(t)s (every layer and chunk of a frame asks
         again)."""
+        self.pose_skins(t)
         if matrices is None:
             matrices = [obj.matrix(t) for obj, _ in self.moving]
         ms = np.stack(matrices) if len(matrices) else np.zeros((0, 4, 4))
-        key = ms.tobytes()
+        key = (ms.tobytes(), t if self._skinned else None)
         if self._pose_cache is None or self._pose_cache[0] != key:
             lo, hi = kernels.world_boxes(ms, self._corners, 1e-4, 1e-6)
             inv, ok = kernels.affine_inverses(ms)

@@ -27,7 +27,7 @@ import scenes
 
 from world.errors import SceneError
 from world.scene import (INTERPOLATIONS, CameraKeys, CameraSpec, Light, Material, Mesh, ObjectKeys,
-                    RenderDefaults, Scene, SceneObject, Texture)
+                    Placement, RenderDefaults, Scene, SceneObject, Texture)
 
 PRIMITIVES = ("box", "sphere", "cylinder", "revolve")
 SHADINGS = ("smooth", "flat")
@@ -220,10 +220,24 @@ class _Loader:
         render = self.render(doc.get("render", {}))
         lights = [self.light(t, f"lights[{i}]")
                   for i, t in enumerate(self.array_of_tables(doc.get("lights", []), "lights"), 1)]
-        objects = [self.object(t, i)
-                   for i, t in enumerate(self.array_of_tables(doc.get("objects", []), "objects"), 1)]
+        objects, assets = [], []
+        # Every earlier object and glTF node by name, for `parent` (v1.2).
+        self.named: dict[str, list] = {}
+        entries = self.array_of_tables(doc.get("objects", []), "objects")
+        for i, t in enumerate(entries, 1):
+            if "gltf" in t:
+                from world import gltf_entry     # (pygltflib only for scenes that use it)
+                instance, made = gltf_entry.load_entry(self, t, i, len(objects) + 1)
+                assets.append(instance)
+                for node in instance.nodes:
+                    self.named.setdefault(node.name, []).append(node)
+            else:
+                made = [self.object(t, i, len(objects) + 1)]
+                self.named.setdefault(made[0].name, []).append(made[0])
+            objects.extend(made)
         return Scene(name=name, path=self.path, camera=camera, background=background,
-                     ambient=ambient, render=render, lights=lights, objects=objects)
+                     ambient=ambient, render=render, lights=lights, objects=objects,
+                     assets=assets)
 
     def parse(self) -> dict:
         try:
@@ -360,15 +374,20 @@ class _Loader:
         return Light(direction=direction, color=self.colour(t.get("color", [1, 1, 1]),
                                                             f"{k}.color"))
 
-    def object(self, t: dict, number: int) -> SceneObject:
+    def entry_key(self, t: dict, number: int) -> str:
+        """How errors name objects entry `number`: objects[k] (name)."""
         k = f"objects[{number}]"
         name = t.get("name", f"object{number}")
-        if isinstance(name, str):
-            k = f"{k} ({name})"
+        return f"{k} ({name})" if isinstance(name, str) else k
+
+    def object(self, t: dict, number: int, oid: int) -> SceneObject:
+        k = self.entry_key(t, number)
+        name = t.get("name", f"object{number}")
         self.table(t, k, ("name", "mesh", "position", "rotation", "scale", "shading",
-                          "material", "velocity", "angular_velocity", "interpolation", "keys"))
+                          "material", "velocity", "angular_velocity", "interpolation", "keys",
+                          "parent"))
         name = self.string(name, f"{k}.name")
-        interpolation = self.keyed(t, k, OBJECT_UNKEYED)
+        placement = self.placement(t, k)
         mesh_value = self.require(t, "mesh", k, "a file path or a primitive table")
         mesh = self.mesh(mesh_value, f"{k}.mesh")
         default_shading = "flat" if isinstance(mesh_value, dict) and "box" in mesh_value \
@@ -377,21 +396,39 @@ class _Loader:
         if shading not in SHADINGS:
             self.fail(f"{k}.shading", f"expected \"smooth\" or \"flat\", got {shading!r}")
         material = self.material(t.get("material", {}), f"{k}.material", mesh)
+        return SceneObject(name=name, id=oid, mesh=mesh, material=material, shading=shading,
+                           parent=self.parent(t, k), **placement)
+
+    def placement(self, t: dict, k: str) -> dict:
+        """An object's own pose: position, rotation, scale, velocities, or keys (then the
+        pose fields hold the first key's), as Placement's fields."""
+        interpolation = self.keyed(t, k, OBJECT_UNKEYED)
         if interpolation is not None:
             keys = self.object_keys(t["keys"], k, interpolation)
-            return SceneObject(name=name, id=number, mesh=mesh, material=material,
-                               shading=shading, position=keys.positions[0].copy(),
-                               rotation=keys.rotations[0].copy(), scale=keys.scales[0].copy(),
-                               keys=keys)
-        scale = self.scale(t.get("scale", 1.0), f"{k}.scale")
-        return SceneObject(
-            name=name, id=number, mesh=mesh, material=material, shading=shading,
+            return dict(position=keys.positions[0].copy(), rotation=keys.rotations[0].copy(),
+                        scale=keys.scales[0].copy(), keys=keys)
+        return dict(
             position=self.vec3(t.get("position", [0, 0, 0]), f"{k}.position"),
             rotation=self.vec3(t.get("rotation", [0, 0, 0]), f"{k}.rotation"),
-            scale=scale,
+            scale=self.scale(t.get("scale", 1.0), f"{k}.scale"),
             velocity=self.vec3(t.get("velocity", [0, 0, 0]), f"{k}.velocity"),
             angular_velocity=self.vec3(t.get("angular_velocity", [0, 0, 0]),
                                        f"{k}.angular_velocity"))
+
+    def parent(self, t: dict, k: str):
+        """The node named by `parent` (v1.2): exactly one earlier object or glTF node
+        (`entry/<node name>`) of that name; None without the key."""
+        if "parent" not in t:
+            return None
+        name = self.string(t["parent"], f"{k}.parent")
+        found = self.named.get(name, [])
+        if not found:
+            self.fail(f"{k}.parent", f"expected the name of an earlier object or glTF node "
+                      f"(entry/<node name>), got {name!r}: none before this object has it")
+        if len(found) > 1:
+            self.fail(f"{k}.parent", f"{name!r} names {len(found)} earlier objects or nodes; "
+                      "a parent's name must be unique")
+        return found[0]
 
     def scale(self, v, key: str) -> np.ndarray:
         if isinstance(v, list):

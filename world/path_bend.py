@@ -36,9 +36,14 @@ MARGIN_PX = 64.0
 FAR_PX = 1e7
 
 
-def object_points(obj) -> np.ndarray:
-    """At most MAX_POINTS of the object's vertices, homogeneous (4, n), kept on the object
-    (a frame asks once per mode and step count; 32 movers' points cost ~1 ms to build)."""
+def object_points(obj, t: float = 0.0) -> np.ndarray:
+    """At most MAX_POINTS of the object's vertices at time t, homogeneous (4, n): a rigid
+    mesh's kept on the object (a frame asks once per mode and step count; 32 movers'
+    points cost ~1 ms to build), a skinned mesh's from its pose at t."""
+    if obj.skin is not None:
+        v = obj.vertices_at(t)
+        v = v[::max(1, -(-len(v) // MAX_POINTS))]
+        return np.vstack([v.T, np.ones(len(v))])
     kept = obj.__dict__.get("_bend_points")
     if kept is None or kept[0] is not obj.mesh:
         v = np.asarray(obj.mesh.vertices, dtype=np.float64)
@@ -69,12 +74,15 @@ def _screen_bend(scene: Scene, camera: Camera, t: float, shutter: float) -> floa
     points = [object_points(o) for o in objects]
     local = np.concatenate(points, axis=1)                      # (4, n) all objects'
     owner = np.repeat(np.arange(len(objects)), [p.shape[1] for p in points])
-    # clip = P V(t) M(t) p per point, its object's matrix at each time; clip w is the
-    # view depth (GL perspective)
+    skinned = any(o.skin is not None for o in objects)
+    # clip = P V(t) M(t) p per point, its object's matrix at each time (a skinned mesh's
+    # points posed at that time too); clip w is the view depth (GL perspective)
     clip = np.empty((len(times), 4, local.shape[1]))
     for i, ti in enumerate(times):
         vp = camera.projection() @ camera.view(float(ti))
         mats = np.stack([vp @ o.matrix(float(ti)) for o in objects])
+        if skinned:
+            local = np.concatenate([object_points(o, float(ti)) for o in objects], axis=1)
         clip[i] = np.einsum("nij,jn->in", mats[owner], local)
     depth = clip[:, 3]
     size = np.array([camera.width, camera.height], dtype=np.float64)[:, None]

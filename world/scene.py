@@ -178,13 +178,11 @@ class CameraKeys:
                 for t, p, a, u in zip(self.times, self.positions, self.look_ats, self.ups)]
 
 
-@dataclass
-class SceneObject:
-    name: str
-    id: int                           # 1, 2, 3 ... in file order; 0 is the background
-    mesh: Mesh
-    material: Material
-    shading: str = "smooth"           # "smooth" or "flat"
+@dataclass(kw_only=True, eq=False)
+class Placement:
+    """A node's own motion (pose and velocities, or keys) under an optional parent:
+    M(t) = M_parent(t) @ M_own(t) (scene format v1.2, "Parents"). Plain objects are
+    placements with a mesh; a glTF entry's root is one without."""
     position: np.ndarray = field(default_factory=lambda: np.zeros(3))
     rotation: np.ndarray = field(default_factory=lambda: np.zeros(3))   # Euler degrees
     scale: np.ndarray = field(default_factory=lambda: np.ones(3))
@@ -193,23 +191,35 @@ class SceneObject:
     # Keyed motion instead of the pose and velocities above (which then hold the first
     # key's pose and zero velocities, for what reads a rest pose).
     keys: ObjectKeys | None = None
+    # What this node hangs from: another placement or a glTF node (AssetNode); None: the world.
+    parent: "Placement | AssetNode | None" = None
 
     @property
-    def moving(self) -> bool:
+    def own_moving(self) -> bool:
         if self.keys is not None:
             return self.keys.varies
         return bool(self.velocity.any() or self.angular_velocity.any())   # (np.any: 3x slower)
 
+    @property
+    def moving(self) -> bool:
+        """Whether M(t) changes with t: its own motion or anything above it moves."""
+        return self.own_moving or (self.parent is not None and self.parent.moving)
+
     def matrix(self, t: float) -> np.ndarray:
-        """M(t) = T(position + velocity t) @ Rot(angular_velocity t) @ R0 @ S, or for a
-        keyed object T(p(t)) @ R(q(t)) @ S(s(t)).
+        """M(t) = M_parent(t) @ M_own(t) (a new array)."""
+        own = self.own_matrix(t)
+        return own if self.parent is None else self.parent.matrix(t) @ own
+
+    def own_matrix(self, t: float) -> np.ndarray:
+        """M_own(t) = T(position + velocity t) @ Rot(angular_velocity t) @ R0 @ S, or for a
+        keyed node T(p(t)) @ R(q(t)) @ S(s(t)).
 
         A frame asks for the same few times (t, shutter open and close) in many passes:
-        the last few results are kept, keyed by t and every field they depend on. An
-        object that does not move has one matrix at every t (translation p + 0 t = p, no
+        the last few results are kept, keyed by t and every field they depend on. A node
+        that does not move has one matrix at every t (translation p + 0 t = p, no
         turn): keyed as t = 0, so an animation's frames do not rebuild it three times
         each (living_room: 28 still objects)."""
-        moving = self.moving
+        moving = self.own_moving
         if self.keys is not None:
             key = (float(t) if moving else 0.0, self.keys.token)
         else:
@@ -243,6 +253,37 @@ class SceneObject:
             cached = (key, tf.homogeneous(tf.euler_xyz_degrees(self.rotation)) @ tf.scale(self.scale))
             self._rest_cache = cached
         return cached[1].copy()
+
+
+@dataclass(eq=False)
+class SceneObject(Placement):
+    """A drawn object: a mesh with one id, placed like any node. A glTF mesh node is one
+    whose parent is its AssetNode (own pose the identity); a skinned one hangs from its
+    entry's root and deforms its mesh by `skin` (scene format v1.2)."""
+    name: str
+    id: int                           # 1, 2, 3 ... in file order; 0 is the background
+    mesh: Mesh
+    material: Material
+    shading: str = "smooth"           # "smooth" or "flat"
+    # Linear blend skinning of the mesh (world.skinning.Skin), or None: a rigid mesh.
+    skin: object | None = None
+    # A mesh of several materials (glTF primitives): (first face, face count, material)
+    # per part, covering the faces in order; None: `material` for every face.
+    parts: list | None = None
+
+    @property
+    def moving(self) -> bool:
+        return (self.own_moving or (self.parent is not None and self.parent.moving)
+                or (self.skin is not None and self.skin.moving))
+
+    def vertices_at(self, t: float) -> np.ndarray:
+        """The mesh's vertices in the object's own space at time t (what M(t) places): a
+        skinned mesh's posed at t, else the mesh's own."""
+        return self.mesh.vertices if self.skin is None else self.skin.deformed(t)[0]
+
+    def normals_at(self, t: float) -> np.ndarray:
+        """The vertex normals in the object's own space at time t, as vertices_at."""
+        return self.mesh.vertex_normals if self.skin is None else self.skin.deformed(t)[1]
 
 
 @dataclass
@@ -349,6 +390,8 @@ class Scene:
     render: RenderDefaults = field(default_factory=RenderDefaults)
     lights: list[Light] = field(default_factory=list)
     objects: list[SceneObject] = field(default_factory=list)
+    # The glTF entries (world.gltf_scene.AssetInstance), for what lists their animations.
+    assets: list = field(default_factory=list)
 
     def exposure(self, t: float) -> tuple[float, float]:
         """[t - shutter/2, t + shutter/2] of the camera's shutter (conventions.exposure)."""

@@ -246,4 +246,11 @@ class _Draw:
             set_uniform(prog, "u_modelview", turn @ model_eye)
             if ranks:
                 set_uniform(prog, "u_rank", k + 1)
-            gpu.vao(prog, obj).render(moderngl.TRIANGLES)
+            gpu.pose(obj, t, self.t_open, self.t_close, self.times)
+            vao = gpu.vao(prog, obj)
+            if obj.parts is None:
+                vao.render(moderngl.TRIANGLES)
+                continue
+            for first, count, material in obj.parts:     # (each part its own material)
+                gpu.bind_material(prog, obj, material)
+                vao.render(moderngl.TRIANGLES, vertices=3 * count, first=3 * first)

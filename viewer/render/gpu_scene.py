@@ -12,7 +12,7 @@ import numpy as np
 from world import transforms as tf
 from world.conventions import to_image
 from world.errors import SceneError
-from world.scene import Scene, SceneObject
+from world.scene import Material, Scene, SceneObject
 from . import depth
 
 # The shaders' light arrays hold a multiple of this many lights (the define MAX_LIGHTS):
@@ -40,6 +40,39 @@ def vertex_data(obj: SceneObject) -> np.ndarray:
         nrm = m.vertex_normals[corners]
     uv = m.uv[corners] if m.uv is not None else np.zeros((len(corners), 2))
     return np.hstack([pos, nrm, uv]).astype(np.float32)
+
+
+# A vertex's attributes in the G-buffer program (glsl/gbuffer.vert): (name, floats). A
+# rigid object's buffer holds the first three; its positions at the exposure's times are
+# its one position (the model matrices move it). A skinned object's holds them all, posed
+# per draw: at t, shutter open and close, and the path's quarter points (SEGMENTS 4).
+ATTRIBUTES = (("in_position", 3), ("in_normal", 3), ("in_uv", 2), ("in_position_open", 3),
+              ("in_position_close", 3), ("in_path1", 3), ("in_path3", 3))
+RIGID_FLOATS = 8
+SKINNED_FLOATS = sum(n for _, n in ATTRIBUTES)
+# Where a rigid buffer finds each attribute (float offset): the exposure's positions are
+# the position.
+RIGID_OFFSETS = {"in_position": 0, "in_normal": 3, "in_uv": 6, "in_position_open": 0,
+                 "in_position_close": 0, "in_path1": 0, "in_path3": 0}
+
+
+def skinned_vertex_data(obj: SceneObject, t: float, t_open: float, t_close: float,
+                        times) -> np.ndarray:
+    """A skinned object's unshared triangles posed for one draw: (3m, SKINNED_FLOATS)
+    float32 of ATTRIBUTES (the path's quarter points where `times` has 5, else the
+    shutter's ends again)."""
+    m = obj.mesh
+    corners = m.faces.reshape(-1)
+    pos, nrm = obj.skin.deformed(t)
+    uv = m.uv[corners] if m.uv is not None else np.zeros((len(corners), 2))
+    quarter = (times[1], times[3]) if times is not None and len(times) == 5 else (t_open, t_close)
+    others = [obj.vertices_at(tk)[corners] for tk in (t_open, t_close, *quarter)]
+    return np.hstack([pos[corners], nrm[corners], uv, *others]).astype(np.float32)
+
+
+def materials_of(obj: SceneObject) -> list[Material]:
+    """Every material an object draws with: its parts', or its one."""
+    return [m for _, _, m in obj.parts] if obj.parts else [obj.material]
 
 
 def mat(m: np.ndarray) -> bytes:
@@ -119,12 +152,19 @@ class GpuScene:
             self.light_texture = ctx.texture(texels.shape[1::-1], 3, texels.tobytes(),
                                              dtype="f4")
             self.light_texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
-        self.buffers = [ctx.buffer(vertex_data(o).tobytes()) for o in scene.objects]
+        # Rigid meshes uploaded once; a skinned one's buffer is posed per draw (pose()).
+        self.buffers = [ctx.buffer(vertex_data(o).tobytes()) if o.skin is None
+                        else ctx.buffer(reserve=3 * len(o.mesh.faces) * SKINNED_FLOATS * 4)
+                        for o in scene.objects]
+        self._posed: dict[int, tuple] = {}          # object id -> the times its buffer holds
+        # Image textures by the Texture they draw (one object may draw several: parts).
         self.images: dict[int, moderngl.Texture] = {}
         limit = int(ctx.info.get("GL_MAX_TEXTURE_SIZE") or 1024)
         for o in scene.objects:
-            tex = o.material.texture
-            if tex is not None and tex.kind == "image":
+            for m in materials_of(o):
+                tex = m.texture
+                if tex is None or tex.kind != "image" or id(tex) in self.images:
+                    continue
                 h, w = tex.image.shape[:2]
                 if max(w, h) > limit:        # (GL would leave the texture empty: black)
                     raise SceneError(scene.path or scene.name,
@@ -136,7 +176,7 @@ class GpuScene:
                 t = ctx.texture((img.shape[1], img.shape[0]), 3, img.tobytes(), dtype="f4")
                 t.filter = (moderngl.LINEAR, moderngl.LINEAR)
                 t.repeat_x = t.repeat_y = True
-                self.images[o.id] = t
+                self.images[id(tex)] = t
         self._vaos: dict[tuple[int, int], moderngl.VertexArray] = {}
         # Local bounding-box centres (homogeneous: (x, y, z, 1)), for the draw order.
         self._centres = {o.id: np.append((o.mesh.vertices.min(0) + o.mesh.vertices.max(0)) / 2
@@ -154,17 +194,33 @@ class GpuScene:
     def vao(self, prog: moderngl.Program, obj: SceneObject) -> moderngl.VertexArray:
         key = (prog.glo, obj.id)
         if key not in self._vaos:
-            # Attributes the compiler dropped are skipped in the layout ("12x" = 3 floats).
-            fmt, names = [], []
-            for name, n in (("in_position", 3), ("in_normal", 3), ("in_uv", 2)):
-                if prog.get(name, None) is not None:
-                    fmt.append(f"{n}f")
-                    names.append(name)
-                else:
-                    fmt.append(f"{4 * n}x")
-            self._vaos[key] = self.ctx.vertex_array(
-                prog, [(self.buffers[obj.id - 1], " ".join(fmt), *names)])
+            # Each attribute the program uses, from its place in the object's buffer
+            # (attributes the compiler dropped are left out).
+            rigid = obj.skin is None
+            floats = RIGID_FLOATS if rigid else SKINNED_FLOATS
+            content, at = [], 0
+            for name, n in ATTRIBUTES:
+                offset = RIGID_OFFSETS[name] if rigid else at
+                at += n
+                if prog.get(name, None) is None:
+                    continue
+                pad = (f"{4 * offset}x " if offset else "") + f"{n}f"
+                rest = floats - offset - n
+                content.append((self.buffers[obj.id - 1],
+                                pad + (f" {4 * rest}x" if rest else ""), name))
+            self._vaos[key] = self.ctx.vertex_array(prog, content)
         return self._vaos[key]
+
+    def pose(self, obj: SceneObject, t: float, t_open: float, t_close: float, times=None):
+        """A skinned object's buffer posed for a draw at these times (kept while they
+        hold); nothing for a rigid one."""
+        if obj.skin is None:
+            return
+        key = (t, t_open, t_close, None if times is None else tuple(times))
+        if self._posed.get(obj.id) != key:
+            data = skinned_vertex_data(obj, t, t_open, t_close, times)
+            self.buffers[obj.id - 1].write(data.tobytes())
+            self._posed[obj.id] = key
 
     @staticmethod
     def bind_camera(prog: moderngl.Program, cam, t: float, size: tuple[int, int]):
@@ -202,8 +258,10 @@ class GpuScene:
             prog["u_light_dir"].write(dirs.tobytes())
             prog["u_light_color"].write(cols.tobytes())
 
-    def bind_material(self, prog: moderngl.Program, obj: SceneObject):
-        m = obj.material
+    def bind_material(self, prog: moderngl.Program, obj: SceneObject,
+                      material: Material | None = None):
+        """`material` (one of the object's parts'), else the object's."""
+        m = obj.material if material is None else material
         tex = m.texture
         set_uniform(prog, "u_albedo", m.albedo)
         set_uniform(prog, "u_specular", float(m.specular))
@@ -213,8 +271,8 @@ class GpuScene:
             set_uniform(prog, "u_tex_size", float(tex.size))
             set_uniform(prog, "u_tex_axis", int(tex.axis))
             set_uniform(prog, "u_albedo2", tex.albedo2)
-        if obj.id in self.images:
-            self.images[obj.id].use(TEXTURE_UNIT_IMAGE)
+        if tex is not None and id(tex) in self.images:
+            self.images[id(tex)].use(TEXTURE_UNIT_IMAGE)
             set_uniform(prog, "u_tex_image", TEXTURE_UNIT_IMAGE)
 
     @staticmethod

@@ -218,7 +218,7 @@ class StaticRasters:
         vp = frame.camera.view_projection(t)
         boxes = []
         for o in movers:
-            corners = self.corners(o)
+            corners = self.corners(o, t)
             clip = None if corners is None else corners @ (vp @ o.matrix(t)).T
             if clip is None:
                 boxes.append(None)
@@ -231,9 +231,11 @@ class StaticRasters:
                 boxes.append((*lo, *hi) if (lo < hi).all() else None)
         return boxes
 
-    def corners(self, obj) -> np.ndarray | None:
-        """The 8 corners (homogeneous rows) of the object's mesh box; None if it has no
-        vertices."""
+    def corners(self, obj, t: float) -> np.ndarray | None:
+        """The 8 corners (homogeneous rows) of the object's mesh box (a skinned mesh's
+        at t); None if it has no vertices."""
+        if obj.skin is not None:
+            return np.c_[box_corners(obj.vertices_at(t)), np.ones(8)]
         if obj.id not in self._corners:
             v = obj.mesh.vertices
             c = None

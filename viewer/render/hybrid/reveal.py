@@ -56,6 +56,8 @@ FACES_PER_ROW = 682
 # Texture units of reveal_shade: draw() binds the pass's own textures from unit 0 up, an
 # image-textured object's image goes to gpu_scene.TEXTURE_UNIT_IMAGE (7): each its own.
 OBJECT_UNIT = 4
+# Skinned meshes' corners at shutter open and close (SKINNED_FACES), beside the face texture.
+FACE_MOTION_UNIT = 9
 FACE_UNIT = 5
 RECORD_UNIT = 6
 # Tile side for reveal_shade's draws: finer than the tile lists' FINE, so fewer fragments
@@ -110,8 +112,8 @@ class ObjectTable:
         if key == 1:
             return True
         obj = self.objects.get(key - 1)
-        return obj is not None and not (obj.material.texture is not None
-                                         and obj.material.texture.kind == "image")
+        return obj is not None and obj.parts is None and not (
+            obj.material.texture is not None and obj.material.texture.kind == "image")
 
     def write(self, frame: Frame, ids):
         """The transforms of objects `ids` at the frame's time, uploaded."""
@@ -154,6 +156,11 @@ class RevealState:
         self.ctx, self.scene = ctx, scene
         self.rays = RayScene(scene)
         self._faces: moderngl.Texture | None = None
+        self._faces_motion: moderngl.Texture | None = None
+        self._faces_data: np.ndarray | None = None
+        self._faces_posed = None
+        # The skinned movers: their rows of the face texture are posed per frame.
+        self.skinned = [o for o, _ in self.rays.moving if o.skin is not None]
         self.tiles: dict[str, TileList] = {}
         self.records: moderngl.Texture | None = None
         # Keys above every 1 + object id: the rays whose hit the static layer holds.
@@ -193,7 +200,50 @@ class RevealState:
             self._faces = self.ctx.texture((FACES_PER_ROW * TEXELS_PER_FACE, rows), 4,
                                            data.tobytes(), dtype="f4")
             self._faces.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            if self.skinned:
+                # Rigid corners are where they are at every time (M(t) moves them).
+                self._faces_data = data
+                c = data.reshape(-1, 3, 2, 4)
+                self._motion_data = np.zeros_like(c)
+                self._motion_data[:, :, 0, :3] = self._motion_data[:, :, 1, :3] = c[:, :, 0, :3]
+                self._motion_data = self._motion_data.reshape(data.shape)
+                self._faces_motion = self.ctx.texture(self._faces.size, 4,
+                                                      self._motion_data.tobytes(), dtype="f4")
+                self._faces_motion.filter = (moderngl.NEAREST, moderngl.NEAREST)
         return self._faces
+
+    def pose_faces(self, t: float, t_open: float, t_close: float):
+        """The skinned movers' faces posed for a frame at t: their corners (position,
+        normal) at t in the face texture, their positions at shutter open and close in
+        the motion texture (SKINNED_FACES: per corner (open, 0), (close, 0)); only their
+        rows are written."""
+        key = (t, t_open, t_close)
+        if not self.skinned or self._faces_posed == key:
+            return
+        self.face_texture()
+        table = self.rays.surfaces
+        width = FACES_PER_ROW * TEXELS_PER_FACE
+        motion = self._motion_data
+        for o in self.skinned:
+            first = int(table.face_offset[o.id])
+            faces = o.mesh.faces
+            pos, nrm = o.skin.deformed(t)
+            rows = slice(first, first + len(faces))
+            d = self._faces_data[rows].reshape(len(faces), 3, 2, 4)
+            d[:, :, 0, :3] = pos[faces]
+            d[:, :, 0, 3] = nrm[faces][:, :, 0]
+            d[:, :, 1, :2] = nrm[faces][:, :, 1:]
+            m = motion[rows].reshape(len(faces), 3, 2, 4)
+            m[:, :, 0, :3] = o.vertices_at(t_open)[faces]
+            m[:, :, 1, :3] = o.vertices_at(t_close)[faces]
+            self._faces_data[rows] = d.reshape(len(faces), TEXELS_PER_FACE, 4)
+            motion[rows] = m.reshape(len(faces), TEXELS_PER_FACE, 4)
+            r0, r1 = first // FACES_PER_ROW, -(-(first + len(faces)) // FACES_PER_ROW)
+            span = slice(r0 * FACES_PER_ROW, r1 * FACES_PER_ROW)
+            vp = (0, r0, width, r1 - r0)
+            self._faces.write(self._faces_data[span].tobytes(), viewport=vp)
+            self._faces_motion.write(motion[span].tobytes(), viewport=vp)
+        self._faces_posed = key
 
     def records_texture(self, shape: tuple[int, int]) -> moderngl.Texture:
         """The hit-record texture, at least `shape` (rows, columns); grown in whole
@@ -218,6 +268,9 @@ class RevealState:
         if self._faces is not None:
             self._faces.release()
             self._faces = None
+        if self._faces_motion is not None:
+            self._faces_motion.release()
+            self._faces_motion = None
         if self._table is not None:
             self._table.release()
             self._table = None
@@ -359,7 +412,8 @@ class RevealShade(FullscreenPass):
 
     def defines(self, frame: Frame):
         return {**frame.gpu.light_defines(), **ObjectTable.glsl_defines(),
-                "FACES_PER_ROW": FACES_PER_ROW, "TEXELS_PER_FACE": TEXELS_PER_FACE}
+                "FACES_PER_ROW": FACES_PER_ROW, "TEXELS_PER_FACE": TEXELS_PER_FACE,
+                "SKINNED_FACES": int(bool(reveal_state(frame).skinned))}
 
     def outputs(self, frame: Frame):
         return {n: PACKED for n in self.produces}
@@ -387,6 +441,9 @@ class RevealShade(FullscreenPass):
         h, w = hits.records.shape[:2]
         records.write(hits.records.tobytes(), viewport=(0, 0, w, h))
         st.face_texture().use(FACE_UNIT)      # draw() binds its textures from unit 0
+        if st.skinned:
+            st.pose_faces(t, t_open, t_close)
+            st._faces_motion.use(FACE_MOTION_UNIT)
         records.use(RECORD_UNIT)
         objects = {o.id: o for o in frame.scene.objects}
         if any(key == st.static_key for key, _, _ in hits.keys):
@@ -409,13 +466,28 @@ class RevealShade(FullscreenPass):
                 set_uniform(prog, "u_background", frame.scene.background)
                 gpu.bind_lights(prog)
                 set_uniform(prog, "u_faces", FACE_UNIT)
+            if st.skinned and not static:
+                set_uniform(prog, "u_faces_motion", FACE_MOTION_UNIT)
             if from_table:
                 set_uniform(prog, "u_objects", OBJECT_UNIT)
-            elif not static:          # an image-textured object
-                gpu.bind_object(prog, objects[key - 1], cam, t, t_open, t_close,
-                                frame.object_matrices)
-            self.draw(frame, names, textures, tiles=tl.part(first, count), clear=False,
-                      defines=variant)
+                self.draw(frame, names, textures, tiles=tl.part(first, count), clear=False,
+                          defines=variant)
+                continue
+            if static:
+                self.draw(frame, names, textures, tiles=tl.part(first, count), clear=False,
+                          defines=variant)
+                continue
+            # An object drawn alone (an image, or parts of several materials): each part
+            # shades the faces of its range, discarding the others' (their draw writes them).
+            obj = objects[key - 1]
+            gpu.bind_object(prog, obj, cam, t, t_open, t_close, frame.object_matrices)
+            offset = int(st.rays.surfaces.face_offset[obj.id])
+            for lo, n, material in obj.parts or [(0, len(obj.mesh.faces), None)]:
+                if material is not None:
+                    gpu.bind_material(prog, obj, material)
+                set_uniform(prog, "u_face_range", (offset + lo, offset + lo + n))
+                self.draw(frame, names, textures, tiles=tl.part(first, count), clear=False,
+                          defines=variant)
         frame.stats["shade_draws"] = len(draws)
         frame.pool.mark_tiles(names, tl)
 

@@ -1,0 +1,212 @@
+"""A scene file's `gltf` entry (scene format v1.2) -> its AssetInstance and one SceneObject
+per mesh node, with every mistake a SceneError naming the scene file, the entry and what
+is wrong (the asset's own mistakes as world.gltf words them).
+
+Ids: the asset's mesh nodes in depth-first order take consecutive ids from `first_id`,
+named `entry/<node name>`. A rigid mesh node hangs from its AssetNode (M(t) = P(t) @
+World(node, t)); a skinned one from the entry's root (M(t) = P(t)) and deforms its mesh.
+"""
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+
+from world.gltf import GltfError, GltfPart, load_gltf
+from world.gltf_scene import AssetInstance, AssetNode, Skin
+from world.scene import Material, Mesh, Placement, SceneObject, Texture
+
+ENTRY_KEYS = ("name", "gltf", "animation", "time_offset", "time_scale", "loop", "position",
+              "rotation", "scale", "velocity", "angular_velocity", "interpolation", "keys",
+              "material", "parent")
+
+
+def load_entry(loader, t: dict, number: int, first_id: int):
+    """(AssetInstance with .nodes, [SceneObject]) of objects entry `number` (a table with
+    `gltf`); `loader` is world.loader's _Loader (its checks and fail())."""
+    k = loader.entry_key(t, number)
+    loader.table(t, k, ENTRY_KEYS)
+    name = loader.string(t.get("name", f"object{number}"), f"{k}.name")
+    if "mesh" in t:
+        loader.fail(f"{k}.mesh", "not allowed together with gltf (the asset brings its meshes)")
+    if "parent" in t:
+        loader.fail(f"{k}.parent", "not allowed on a gltf entry: place the asset with its own "
+                    "position, rotation, scale, velocities or keys")
+    rel = loader.string(t["gltf"], f"{k}.gltf")
+    path = loader.file(rel, f"{k}.gltf", "glTF")
+    try:
+        asset = load_gltf(path)
+    except GltfError as e:
+        loader.fail(f"{k}.gltf", f"{path}: {e}")
+    animation = t.get("animation", "all")
+    if isinstance(animation, bool) or not isinstance(animation, (str, int)):
+        loader.fail(f"{k}.animation", "expected an animation's name or index, \"all\" or "
+                    f"\"none\", got {type(animation).__name__}")
+    try:
+        anims = asset.select(animation)
+    except GltfError as e:
+        loader.fail(f"{k}.animation", f"{path}: {e}")
+    time_offset = loader.number(t.get("time_offset", 0.0), f"{k}.time_offset")
+    time_scale = loader.positive(t.get("time_scale", 1.0), f"{k}.time_scale")
+    loop = t.get("loop", False)
+    if not isinstance(loop, bool):
+        loader.fail(f"{k}.loop", f"expected true or false, got {loop!r}")
+    mt = loader.table(t.get("material", {}), f"{k}.material", ("specular", "shininess"))
+    specular = loader.non_negative(mt.get("specular", 0.0), f"{k}.material.specular")
+    shininess = loader.non_negative(mt.get("shininess", 32.0), f"{k}.material.shininess")
+    root = Placement(**loader.placement(t, k))
+    instance = AssetInstance(name, asset, anims, time_offset, time_scale, loop, root)
+    instance.nodes = [AssetNode(instance, i, f"{name}/{asset.nodes[i].name}")
+                      for i in asset.depth_first()]
+    by_index = {n.index: n for n in instance.nodes}
+    if asset.ignored:
+        print(f"{loader.path}: {k}.gltf: ignored (scene format v1.2 draws none of these): "
+              + ", ".join(asset.ignored), file=sys.stderr)
+    materials = _Materials(asset, specular, shininess)
+    objects = []
+    for i in asset.mesh_nodes():
+        node = asset.nodes[i]
+        key = f"{k}.gltf: nodes[{i}] ({node.name})"
+        arrays = _mesh(loader, asset.meshes[node.mesh], key)
+        mesh, ranges = arrays["mesh"], arrays["ranges"]
+        parts = [(first, count, materials.get(m, mesh.uv is not None and has_uv))
+                 for first, count, m, has_uv in ranges]
+        skin = None
+        if node.skin is not None:
+            skin = _skin(loader, instance, node.skin, arrays, key)
+            if not skin.moving:        # a still skin: its pose once, drawn as a rigid mesh
+                mesh = _posed(mesh, *skin.deformed(0.0))
+                skin = None
+        obj = SceneObject(name=f"{name}/{node.name}", id=first_id + len(objects), mesh=mesh,
+                          material=parts[0][2], shading="smooth",
+                          parent=root if node.skin is not None else by_index[i],
+                          skin=skin, parts=_parts(parts))
+        objects.append(obj)
+    return instance, objects
+
+
+class _Materials:
+    """Scene materials of the asset's materials: albedo baseColorFactor.rgb, times the
+    baseColorTexture where the mesh has TEXCOORD_0 (the factor premultiplied into the
+    image: bilinear filtering is linear, so the product is the same), specular and
+    shininess from the entry. Each made once."""
+
+    def __init__(self, asset, specular: float, shininess: float):
+        self.asset, self.specular, self.shininess = asset, specular, shininess
+        self.made: dict = {}
+
+    def get(self, index: int | None, textured: bool) -> Material:
+        key = (index, textured)
+        if key not in self.made:
+            if index is None:
+                base, image = np.ones(4), None
+            else:
+                m = self.asset.materials[index]
+                base, image = np.asarray(m.base_color, np.float64), m.image
+            albedo = np.clip(base[:3], 0.0, None)
+            texture = None
+            if textured and image is not None:
+                texture = Texture(kind="image",
+                                  image=(image * albedo.astype(np.float32)).astype(np.float32))
+            self.made[key] = Material(albedo=albedo, specular=self.specular,
+                                      shininess=self.shininess, texture=texture)
+        return self.made[key]
+
+
+def _parts(parts):
+    """None where every part has one material (the common case), else the parts."""
+    first = parts[0][2]
+    return None if all(m is first for _, _, m in parts) else parts
+
+
+def face_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Unit normals of the faces by their winding ((v1 - v0) x (v2 - v0)); 0 where a face
+    has no area."""
+    v = vertices[faces]
+    n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+
+
+def _unit(n: np.ndarray) -> np.ndarray:
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+
+
+def _mesh(loader, parts: list[GltfPart], key: str) -> dict:
+    """One Mesh of a glTF mesh's primitives, in order. A primitive with NORMAL is smooth
+    (its normals interpolated); one without is flat: its corners unshared, each with its
+    face's normal. UVs turned to this project's convention (origin bottom-left: v -> 1 -
+    v); zeros for a primitive without TEXCOORD_0 where another has them. Returns the mesh,
+    the face ranges with their material and whether they have UVs, joints and weights."""
+    pos, nrm, uvs, faces, joints, weights, ranges = [], [], [], [], [], [], []
+    skinned = [p.joints is not None for p in parts]
+    any_uv = any(p.uv is not None for p in parts)
+    nv = nf = 0
+    for p in parts:
+        f = np.asarray(p.faces, np.int64)
+        v = np.asarray(p.positions, np.float64)
+        cols = {"uv": p.uv, "joints": p.joints, "weights": p.weights}
+        if p.normals is None:                   # flat: unshare the corners
+            n = np.repeat(face_normals(v, f), 3, axis=0)
+            corners = f.reshape(-1)
+            v = v[corners]
+            cols = {c: (a[corners] if a is not None else None) for c, a in cols.items()}
+            f = np.arange(len(corners), dtype=np.int64).reshape(-1, 3)
+        else:
+            n = _unit(np.asarray(p.normals, np.float64))
+        pos.append(v)
+        nrm.append(n)
+        if any_uv:
+            uv = cols["uv"]
+            uvs.append(np.zeros((len(v), 2)) if uv is None
+                       else np.stack([uv[:, 0], 1.0 - uv[:, 1]], axis=1))
+        if any(skinned):
+            if cols["joints"] is None:
+                loader.fail(key, "a skinned mesh's primitives all need JOINTS_0 and WEIGHTS_0; "
+                            "one has none")
+            joints.append(cols["joints"])
+            weights.append(cols["weights"])
+        faces.append(f + nv)
+        ranges.append((nf, len(f), p.material, p.uv is not None))
+        nv += len(v)
+        nf += len(f)
+    vertices = np.concatenate(pos)
+    allf = np.concatenate(faces)
+    mesh = Mesh(vertices=vertices, faces=allf, vertex_normals=np.concatenate(nrm),
+                face_normals=face_normals(vertices, allf),
+                uv=np.concatenate(uvs) if any_uv else None)
+    if len(allf) == 0:
+        loader.fail(key, "expected a mesh with triangles, this one has none")
+    width = max((j.shape[1] for j in joints), default=0)
+
+    def padded(a, fill):           # JOINTS_1 on some primitives only: pad the others
+        return np.concatenate([np.pad(x, ((0, 0), (0, width - x.shape[1])),
+                                      constant_values=fill) for x in a])
+    return {"mesh": mesh, "ranges": ranges,
+            "joints": padded(joints, 0) if joints else None,
+            "weights": padded(weights, 0.0) if weights else None}
+
+
+def _skin(loader, instance: AssetInstance, skin: int, arrays: dict, key: str) -> Skin:
+    joints, weights = arrays["joints"], arrays["weights"]
+    if joints is None:
+        loader.fail(key, "a node with a skin needs a mesh with JOINTS_0 and WEIGHTS_0")
+    count = len(instance.asset.skins[skin].joints)
+    if count == 0:
+        loader.fail(key, f"skins[{skin}] has no joints")
+    used = weights != 0
+    if (joints[used] >= count).any() or (joints < 0).any():
+        loader.fail(key, f"a vertex names a joint past skins[{skin}]'s {count} joints")
+    if not (weights.sum(axis=1) > 0).all():
+        loader.fail(key, "a vertex's skin weights sum to 0")
+    mesh = arrays["mesh"]
+    return Skin(instance, skin, mesh.vertices, mesh.vertex_normals,
+                np.where(used, joints, 0), weights)
+
+
+def _posed(mesh: Mesh, vertices: np.ndarray, normals: np.ndarray) -> Mesh:
+    """The mesh in one skinned pose (vertices, normals), its face normals remade."""
+    v = np.array(vertices)
+    return Mesh(vertices=v, faces=mesh.faces, vertex_normals=np.array(normals),
+                face_normals=face_normals(v, mesh.faces), uv=mesh.uv)
