@@ -61,16 +61,24 @@ class AssetInstance:
 
 
 class AssetNode:
-    """A node of a glTF entry, as a parent in the scene tree (named `entry/<node name>`)."""
+    """A node of a glTF entry, as a parent in the scene tree (named `entry/<node name>`):
+    its transform is its object's, P(t) @ World(node, t), or for a skinned mesh node P(t)
+    alone (the skinned object's: glTF does not apply a skinned node's own World)."""
 
     def __init__(self, instance: AssetInstance, index: int, name: str):
         self.instance, self.index, self.name = instance, index, name
+        node = instance.asset.nodes[index]
+        self.skinned = node.mesh is not None and node.skin is not None
 
     @property
     def moving(self) -> bool:
+        if self.skinned:
+            return self.instance.root.moving
         return bool(self.instance.node_moving[self.index]) or self.instance.root.moving
 
     def matrix(self, t: float) -> np.ndarray:
+        if self.skinned:
+            return self.instance.root.matrix(t)
         return self.instance.node_matrix(self.index, t)
 
 
