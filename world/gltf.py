@@ -246,28 +246,37 @@ def skin_vertices(positions, normals, joints, weights, joint_mats, normalize_nor
     Zero-weight influences are ignored whatever their joint index. float64, vectorised."""
     p = np.asarray(positions, dtype=np.float64)
     w = np.asarray(weights, dtype=np.float64)
-    j = np.asarray(joints)
     jm = np.asarray(joint_mats, dtype=np.float64)
     total = w.sum(axis=1)
-    scale = np.where((total != 1.0) & (total != 0.0), 1.0 / np.where(total == 0.0, 1.0, total), 1.0)
-    w = w * scale[:, None]
-    j = np.where(w != 0.0, j, 0)
-    j = np.clip(j, 0, jm.shape[0] - 1)
-    b = np.zeros((p.shape[0], 3, 4))
-    for c in range(w.shape[1]):
-        b += w[:, c, None, None] * jm[j[:, c], :3, :]
-    out_p = np.einsum("nij,nj->ni", b[:, :, :3], p) + b[:, :, 3]
+    fix = (total != 1.0) & (total != 0.0)
+    if fix.any():
+        w = w / np.where(fix, total, 1.0)[:, None]
+    j = np.where(w != 0.0, np.asarray(joints), 0)
+    np.clip(j, 0, jm.shape[0] - 1, out=j)
+    rows = jm[:, :3, :].reshape(jm.shape[0], 12)          # the 3x4 top of each joint matrix
+    b = np.einsum("nk,nkc->nc", w, np.take(rows, j, axis=0))   # (n, 12): B row-major
+    m = np.ascontiguousarray(b.T)                        # m[4 r + c] = B[r, c], each (n,)
+    x, y, z = p[:, 0], p[:, 1], p[:, 2]
+    out_p = np.empty((p.shape[0], 3))
+    for r in range(3):
+        out_p[:, r] = m[4 * r] * x + m[4 * r + 1] * y + m[4 * r + 2] * z + m[4 * r + 3]
     if normals is None:
         return out_p, None
     nrm = np.asarray(normals, dtype=np.float64)
-    c0, c1, c2 = b[:, :, 0], b[:, :, 1], b[:, :, 2]
-    cof = np.stack([np.cross(c1, c2), np.cross(c2, c0), np.cross(c0, c1)], axis=2)
-    det = np.einsum("ni,ni->n", c0, cof[:, :, 0])
-    out_n = np.einsum("nij,nj->ni", cof, nrm)
+    a00, a01, a02, a10, a11, a12, a20, a21, a22 = (m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10])
+    # cofactor matrix C = det * inverse transpose: C[r, c] = (-1)^(r+c) minor(r, c)
+    c00, c01, c02 = a11 * a22 - a12 * a21, a12 * a20 - a10 * a22, a10 * a21 - a11 * a20
+    c10, c11, c12 = a02 * a21 - a01 * a22, a00 * a22 - a02 * a20, a01 * a20 - a00 * a21
+    c20, c21, c22 = a01 * a12 - a02 * a11, a02 * a10 - a00 * a12, a00 * a11 - a01 * a10
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    nx, ny, nz = nrm[:, 0], nrm[:, 1], nrm[:, 2]
+    out_n = np.empty((nrm.shape[0], 3))
+    out_n[:, 0] = c00 * nx + c01 * ny + c02 * nz
+    out_n[:, 1] = c10 * nx + c11 * ny + c12 * nz
+    out_n[:, 2] = c20 * nx + c21 * ny + c22 * nz
     if normalize_normals:
-        out_n *= np.where(det < 0.0, -1.0, 1.0)[:, None]
         length = np.sqrt(np.einsum("ni,ni->n", out_n, out_n))
-        out_n /= np.where(length > 0.0, length, 1.0)[:, None]
+        out_n /= np.where(length > 0.0, np.where(det < 0.0, -length, length), 1.0)[:, None]
     else:
         out_n /= np.where(det != 0.0, det, 1.0)[:, None]
     return out_p, out_n
@@ -1177,7 +1186,7 @@ class _Reader:
             _fail(f"{where}.input: non-finite key times")
         if t.size > 1 and not (np.diff(t) > 0).all():
             k = int(np.nonzero(~(np.diff(t) > 0))[0][0])
-            _fail(f"{where}.input: key times not strictly increasing (key {k + 1}: {t[k + 1]!r} after {t[k]!r})")
+            _fail(f"{where}.input: key times not strictly increasing (key {k + 1}: {float(t[k + 1])!r} after {float(t[k])!r})")
         return t
 
     def sampler(self, s: dict, times: np.ndarray, path: str, where: str) -> GltfSampler:
