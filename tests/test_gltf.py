@@ -1103,3 +1103,39 @@ def test_mutated_document_loads_or_raises_gltf_error(tmp_path_factory, edits):
         an = a.select()
         a.world_matrices(0.25, an)
         a.moving(an)
+
+
+def test_quantized_positions_uint_indices_and_long_chain(tmp_path):
+    b = Builder()
+    pa = b.accessor(np.int16([[0, 0, 0], [300, 0, 0], [0, -300, 0]]), SHORT)
+    ia = b.accessor(np.uint32([2, 1, 0]), UINT)
+    b.add("meshes", {"primitives": [{"attributes": {"POSITION": pa}, "indices": ia}]})
+    b.doc["extensionsUsed"] = b.doc["extensionsRequired"] = ["KHR_mesh_quantization"]
+    # a chain of 3000 nodes: the mesh at its end, each link translated by (1, 0, 0)
+    n = 3000
+    b.doc["nodes"] = [{"children": [i + 1], "translation": [1, 0, 0]} for i in range(n - 1)] + [{"mesh": 0}]
+    t0 = time.perf_counter()
+    a = load_gltf(b.write(tmp_path))
+    assert time.perf_counter() - t0 < 2.0
+    part = a.meshes[0][0]
+    assert part.positions.dtype == np.float64 and part.faces.tolist() == [[2, 1, 0]]
+    np.testing.assert_array_equal(part.positions, [[0, 0, 0], [300, 0, 0], [0, -300, 0]])
+    assert not part.positions.flags.writeable
+    assert a.ignored == [] and a.mesh_nodes() == [n - 1] and a.roots == [0]
+    assert a.world_matrices(0.0, ())[n - 1][0, 3] == n - 1
+    # a long cycle, detached from the root, is found quickly too
+    b.doc["nodes"][n - 1]["children"] = [1]
+    b.doc["nodes"][0]["children"] = []
+    with pytest.raises(GltfError, match=r"nodes\[1\]: the node graph has a cycle"):
+        load_gltf(b.write(tmp_path, "c.gltf"))
+
+
+def test_glb_json_chunk_padding(tmp_path):
+    b = one_triangle()
+    js = json.dumps(b._doc_with_buffer(None)).encode()
+    js += b"\0" * (4 - len(js) % 4)
+    binary = bytes(b.bin) + b"\0" * (-len(b.bin) % 4)
+    body = struct.pack("<II", len(js), 0x4E4F534A) + js + struct.pack("<II", len(binary), 0x004E4942) + binary
+    p = tmp_path / "z.glb"
+    p.write_bytes(struct.pack("<III", 0x46546C67, 2, 12 + len(body)) + body)
+    assert load_gltf(p).mesh_nodes() == [0]

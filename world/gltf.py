@@ -32,13 +32,11 @@ import stat
 import struct
 import urllib.parse
 from collections import OrderedDict
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pygltflib as G
-
-from world import transforms as tf
 
 MAX_ASSET_BYTES = 256 * 2**20         # any one .gltf/.glb/.bin/image file or data URI
 MAX_ACCESSOR_COMPONENTS = 2**27        # all decoded accessor components together (1 GiB as float64)
@@ -92,6 +90,8 @@ class GltfMaterial:
 
 @dataclass
 class GltfPart:
+    """One triangle primitive. Its arrays are read-only (several primitives may share an
+    accessor's decoded array): copy before modifying."""
     positions: np.ndarray           # (n, 3) float64
     normals: np.ndarray | None      # (n, 3) float64
     uv: np.ndarray | None           # (n, 2) float64, (0, 0) = top-left of the image
@@ -524,7 +524,7 @@ def _parse_glb(data: bytes) -> tuple[dict, bytes | None]:
         k += 1
     if js is None:
         _fail("GLB: no JSON chunk")
-    return _parse_json(js, "GLB JSON chunk"), binary
+    return _parse_json(js.rstrip(b" \t\r\n\x00"), "GLB JSON chunk"), binary
 
 
 def _reject_constant(name):
@@ -559,7 +559,12 @@ def _is_int(v) -> bool:
 
 
 def _is_num(v) -> bool:
-    return (isinstance(v, (int, float)) and not isinstance(v, bool)) and math.isfinite(v)
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return False
+    try:
+        return math.isfinite(v)
+    except OverflowError:                      # an integer beyond float range
+        return False
 
 
 def _obj(v, where: str) -> dict:
@@ -635,6 +640,8 @@ class _Reader:
         self.ignored: list[str] = []
         self.components = 0
         self.image_pixels = 0
+        self.part_vertices = 0
+        self.part_triangles = 0
         self.file_cache: dict[str, bytes] = {}
         self.buffer_cache: dict[int, bytes] = {}
         self.view_cache: dict[int, tuple[bytes, int, int, int | None]] = {}
@@ -942,13 +949,16 @@ class _Reader:
             out.append(GltfNode(i, name, None, [int(c) for c in children], matrix, t, r, s, mesh, skin))
         for i, p in enumerate(parent):
             out[i].parent = p
-        # cycles: with one parent each, a node on a cycle never reaches a parentless node
-        for i in range(n):
-            seen, j = 0, i
-            while parent[j] is not None and seen <= n:
-                j, seen = parent[j], seen + 1
-            if seen > n:
-                _fail(f"nodes[{i}]: the node graph has a cycle")
+        # cycles: with one parent each, the nodes on (or below) a cycle are exactly those
+        # that a walk down from the parentless nodes never reaches
+        reached = [False] * n
+        stack = [i for i in range(n) if parent[i] is None]
+        while stack:
+            i = stack.pop()
+            reached[i] = True
+            stack.extend(out[i].children)
+        if not all(reached):
+            _fail(f"nodes[{reached.index(False)}]: the node graph has a cycle")
         return out
 
     def scene(self, nodes: list[GltfNode]) -> list[int]:
@@ -1060,9 +1070,10 @@ class _Reader:
         if pos is None:
             _fail(f"{where}.attributes: no POSITION")
         n = pos.shape[0]
+        if pos.dtype != np.float64:
+            pos = pos.astype(np.float64)           # KHR_mesh_quantization: non-normalized ints
         if not np.isfinite(pos).all():
             _fail(f"{where}.attributes.POSITION: non-finite values")
-        pos = pos.astype(np.float64)
 
         def same_count(arr, name):
             if arr is not None and arr.shape[0] != n:
@@ -1100,9 +1111,20 @@ class _Reader:
         else:
             if n % 3:
                 _fail(f"{where}: {n} vertices without indices, not a multiple of 3")
+            if self.part_vertices + n > MAX_VERTICES:
+                _fail(f"{where}: the asset's primitives have more than {MAX_VERTICES} vertices together")
             faces = np.arange(n, dtype=np.int64).reshape(-1, 3)
+        self.part_vertices += n
+        self.part_triangles += faces.shape[0]
+        if self.part_vertices > MAX_VERTICES or self.part_triangles > MAX_TRIANGLES:
+            _fail(f"{where}: the asset's primitives have more than {MAX_VERTICES} vertices or "
+                  f"{MAX_TRIANGLES} triangles together")
         mat = _ref(p, "material", where, range(n_materials), "materials")
-        return GltfPart(pos, nrm, uv, faces, joints, weights, mat)
+        part = GltfPart(pos, nrm, uv, faces, joints, weights, mat)
+        for arr in (pos, nrm, uv, faces, joints, weights):
+            if arr is not None:
+                arr.flags.writeable = False
+        return part
 
     # -- skins
 
