@@ -32,13 +32,11 @@ import stat
 import struct
 import urllib.parse
 from collections import OrderedDict
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pygltflib as G
-
-from world import transforms as tf
 
 MAX_ASSET_BYTES = 256 * 2**20         # any one .gltf/.glb/.bin/image file or data URI
 MAX_ACCESSOR_COMPONENTS = 2**27        # all decoded accessor components together (1 GiB as float64)
@@ -92,6 +90,8 @@ class GltfMaterial:
 
 @dataclass
 class GltfPart:
+    """One triangle primitive. Its arrays are read-only (several primitives may share an
+    accessor's decoded array): copy before modifying."""
     positions: np.ndarray           # (n, 3) float64
     normals: np.ndarray | None      # (n, 3) float64
     uv: np.ndarray | None           # (n, 2) float64, (0, 0) = top-left of the image
@@ -246,28 +246,37 @@ def skin_vertices(positions, normals, joints, weights, joint_mats, normalize_nor
     Zero-weight influences are ignored whatever their joint index. float64, vectorised."""
     p = np.asarray(positions, dtype=np.float64)
     w = np.asarray(weights, dtype=np.float64)
-    j = np.asarray(joints)
     jm = np.asarray(joint_mats, dtype=np.float64)
     total = w.sum(axis=1)
-    scale = np.where((total != 1.0) & (total != 0.0), 1.0 / np.where(total == 0.0, 1.0, total), 1.0)
-    w = w * scale[:, None]
-    j = np.where(w != 0.0, j, 0)
-    j = np.clip(j, 0, jm.shape[0] - 1)
-    b = np.zeros((p.shape[0], 3, 4))
-    for c in range(w.shape[1]):
-        b += w[:, c, None, None] * jm[j[:, c], :3, :]
-    out_p = np.einsum("nij,nj->ni", b[:, :, :3], p) + b[:, :, 3]
+    fix = (total != 1.0) & (total != 0.0)
+    if fix.any():
+        w = w / np.where(fix, total, 1.0)[:, None]
+    j = np.where(w != 0.0, np.asarray(joints), 0)
+    np.clip(j, 0, jm.shape[0] - 1, out=j)
+    rows = jm[:, :3, :].reshape(jm.shape[0], 12)          # the 3x4 top of each joint matrix
+    b = np.einsum("nk,nkc->nc", w, np.take(rows, j, axis=0))   # (n, 12): B row-major
+    m = np.ascontiguousarray(b.T)                        # m[4 r + c] = B[r, c], each (n,)
+    x, y, z = p[:, 0], p[:, 1], p[:, 2]
+    out_p = np.empty((p.shape[0], 3))
+    for r in range(3):
+        out_p[:, r] = m[4 * r] * x + m[4 * r + 1] * y + m[4 * r + 2] * z + m[4 * r + 3]
     if normals is None:
         return out_p, None
     nrm = np.asarray(normals, dtype=np.float64)
-    c0, c1, c2 = b[:, :, 0], b[:, :, 1], b[:, :, 2]
-    cof = np.stack([np.cross(c1, c2), np.cross(c2, c0), np.cross(c0, c1)], axis=2)
-    det = np.einsum("ni,ni->n", c0, cof[:, :, 0])
-    out_n = np.einsum("nij,nj->ni", cof, nrm)
+    a00, a01, a02, a10, a11, a12, a20, a21, a22 = (m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10])
+    # cofactor matrix C = det * inverse transpose: C[r, c] = (-1)^(r+c) minor(r, c)
+    c00, c01, c02 = a11 * a22 - a12 * a21, a12 * a20 - a10 * a22, a10 * a21 - a11 * a20
+    c10, c11, c12 = a02 * a21 - a01 * a22, a00 * a22 - a02 * a20, a01 * a20 - a00 * a21
+    c20, c21, c22 = a01 * a12 - a02 * a11, a02 * a10 - a00 * a12, a00 * a11 - a01 * a10
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    nx, ny, nz = nrm[:, 0], nrm[:, 1], nrm[:, 2]
+    out_n = np.empty((nrm.shape[0], 3))
+    out_n[:, 0] = c00 * nx + c01 * ny + c02 * nz
+    out_n[:, 1] = c10 * nx + c11 * ny + c12 * nz
+    out_n[:, 2] = c20 * nx + c21 * ny + c22 * nz
     if normalize_normals:
-        out_n *= np.where(det < 0.0, -1.0, 1.0)[:, None]
         length = np.sqrt(np.einsum("ni,ni->n", out_n, out_n))
-        out_n /= np.where(length > 0.0, length, 1.0)[:, None]
+        out_n /= np.where(length > 0.0, np.where(det < 0.0, -length, length), 1.0)[:, None]
     else:
         out_n /= np.where(det != 0.0, det, 1.0)[:, None]
     return out_p, out_n
@@ -515,7 +524,7 @@ def _parse_glb(data: bytes) -> tuple[dict, bytes | None]:
         k += 1
     if js is None:
         _fail("GLB: no JSON chunk")
-    return _parse_json(js, "GLB JSON chunk"), binary
+    return _parse_json(js.rstrip(b" \t\r\n\x00"), "GLB JSON chunk"), binary
 
 
 def _reject_constant(name):
@@ -550,7 +559,12 @@ def _is_int(v) -> bool:
 
 
 def _is_num(v) -> bool:
-    return (isinstance(v, (int, float)) and not isinstance(v, bool)) and math.isfinite(v)
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return False
+    try:
+        return math.isfinite(v)
+    except OverflowError:                      # an integer beyond float range
+        return False
 
 
 def _obj(v, where: str) -> dict:
@@ -626,6 +640,8 @@ class _Reader:
         self.ignored: list[str] = []
         self.components = 0
         self.image_pixels = 0
+        self.part_vertices = 0
+        self.part_triangles = 0
         self.file_cache: dict[str, bytes] = {}
         self.buffer_cache: dict[int, bytes] = {}
         self.view_cache: dict[int, tuple[bytes, int, int, int | None]] = {}
@@ -933,13 +949,16 @@ class _Reader:
             out.append(GltfNode(i, name, None, [int(c) for c in children], matrix, t, r, s, mesh, skin))
         for i, p in enumerate(parent):
             out[i].parent = p
-        # cycles: with one parent each, a node on a cycle never reaches a parentless node
-        for i in range(n):
-            seen, j = 0, i
-            while parent[j] is not None and seen <= n:
-                j, seen = parent[j], seen + 1
-            if seen > n:
-                _fail(f"nodes[{i}]: the node graph has a cycle")
+        # cycles: with one parent each, the nodes on (or below) a cycle are exactly those
+        # that a walk down from the parentless nodes never reaches
+        reached = [False] * n
+        stack = [i for i in range(n) if parent[i] is None]
+        while stack:
+            i = stack.pop()
+            reached[i] = True
+            stack.extend(out[i].children)
+        if not all(reached):
+            _fail(f"nodes[{reached.index(False)}]: the node graph has a cycle")
         return out
 
     def scene(self, nodes: list[GltfNode]) -> list[int]:
@@ -1051,9 +1070,10 @@ class _Reader:
         if pos is None:
             _fail(f"{where}.attributes: no POSITION")
         n = pos.shape[0]
+        if pos.dtype != np.float64:
+            pos = pos.astype(np.float64)           # KHR_mesh_quantization: non-normalized ints
         if not np.isfinite(pos).all():
             _fail(f"{where}.attributes.POSITION: non-finite values")
-        pos = pos.astype(np.float64)
 
         def same_count(arr, name):
             if arr is not None and arr.shape[0] != n:
@@ -1091,9 +1111,20 @@ class _Reader:
         else:
             if n % 3:
                 _fail(f"{where}: {n} vertices without indices, not a multiple of 3")
+            if self.part_vertices + n > MAX_VERTICES:
+                _fail(f"{where}: the asset's primitives have more than {MAX_VERTICES} vertices together")
             faces = np.arange(n, dtype=np.int64).reshape(-1, 3)
+        self.part_vertices += n
+        self.part_triangles += faces.shape[0]
+        if self.part_vertices > MAX_VERTICES or self.part_triangles > MAX_TRIANGLES:
+            _fail(f"{where}: the asset's primitives have more than {MAX_VERTICES} vertices or "
+                  f"{MAX_TRIANGLES} triangles together")
         mat = _ref(p, "material", where, range(n_materials), "materials")
-        return GltfPart(pos, nrm, uv, faces, joints, weights, mat)
+        part = GltfPart(pos, nrm, uv, faces, joints, weights, mat)
+        for arr in (pos, nrm, uv, faces, joints, weights):
+            if arr is not None:
+                arr.flags.writeable = False
+        return part
 
     # -- skins
 
@@ -1177,7 +1208,7 @@ class _Reader:
             _fail(f"{where}.input: non-finite key times")
         if t.size > 1 and not (np.diff(t) > 0).all():
             k = int(np.nonzero(~(np.diff(t) > 0))[0][0])
-            _fail(f"{where}.input: key times not strictly increasing (key {k + 1}: {t[k + 1]!r} after {t[k]!r})")
+            _fail(f"{where}.input: key times not strictly increasing (key {k + 1}: {float(t[k + 1])!r} after {float(t[k])!r})")
         return t
 
     def sampler(self, s: dict, times: np.ndarray, path: str, where: str) -> GltfSampler:
