@@ -26,6 +26,9 @@ BOUNDS = {
     "vase_pan": {"off": (45.0, 70, 70), "reference": (49.5, 200, 175), "linear": 3e-4},
     "keys_arc": {"off": (53.0, 6, 6), "reference": (67.0, 80, 25), "linear": 3e-5},
     "shapes": {"off": (60.0, 4, 4), "reference": (80.0, 8, 4), "linear": 3e-6},
+    # format v1.2: glTF node animation, a glTF texture, a skin, parents
+    "gltf/gltf_box": {"off": (40.0, 10**6, 10**6), "reference": (40.0, 10**6, 10**6), "linear": 1.0},
+    "gltf/gltf_skin": {"off": (40.0, 10**6, 10**6), "reference": (40.0, 10**6, 10**6), "linear": 1.0},
 }
 
 

@@ -176,7 +176,7 @@ def reveal_summary(results: dict) -> dict | None:
             "fraction_of_embree": (rps / ceiling) if ceiling else None,
             "trace_fraction_of_embree": (trace_rps / ceiling) if ceiling else None,
             "fraction_with_bare_tracing": bound,
-            "embree_front_rays_per_s": front,
+            "embree_front_rays_per_s": front, "skin_ms": st.get("reveal_skin_ms", 0.0),
             "fraction_of_embree_front": (rps / front) if front else None}
 
 
@@ -322,6 +322,9 @@ def reveal_lines(rv: dict) -> list[str]:
     if rv.get("embree_front_rays_per_s"):
         out.append(f"  bare Embree stopping at each ray's own object: "
                    f"{rv['embree_front_rays_per_s'] / 1e6:.2f} M rays/s")
+    if rv.get("skin_ms"):
+        out.append(f"  of which skinned meshes' Embree scenes rebuilt at the frame time: "
+                   f"{rv['skin_ms']:.2f} ms")
     if rv.get("fraction_with_bare_tracing"):
         out.append(f"  bound, tracing at bare Embree's speed + the mask read-back "
                    f"({rv['readback_ms']:.2f} ms): {100 * rv['fraction_with_bare_tracing']:.0f}%")

@@ -400,3 +400,18 @@ class Scene:
     def sample_times(self, t: float, n: int) -> np.ndarray:
         """n stratified times over the camera's exposure (conventions.sample_times)."""
         return conventions.sample_times(t, self.camera.shutter, n)
+
+    def pose(self, times) -> int:
+        """Every glTF entry's node matrices and every skinned mesh's vertices at `times`,
+        evaluated now (kept: the passes that read them find them); returns the skinned
+        vertices posed."""
+        posed = 0
+        for t in times:
+            for instance in self.assets:
+                if instance.animated:
+                    instance.worlds(float(t))
+            for o in self.objects:
+                if o.skin is not None:
+                    o.skin.deformed(float(t))
+                    posed += len(o.mesh.vertices)
+        return posed

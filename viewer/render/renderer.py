@@ -9,6 +9,7 @@ import moderngl
 import numpy as np
 
 from world.camera import Camera
+from world.conventions import exposure
 from world.path_bend import screen_bend
 from world.errors import UserError
 from ..params import ParamSet
@@ -21,7 +22,7 @@ from .host import HostResources
 from .kept import KeptState
 from .modes import MODES
 from .pool import ResourcePool
-from .steps import MakeFrame, Measure, run_steps, step_count
+from .steps import MakeFrame, Measure, run_steps, step_count, sub_exposures
 
 
 @dataclass
@@ -92,12 +93,26 @@ class Renderer:
             bend["cpu_ms"] = (time.thread_time() - c0) * 1e3
             return bend["px"]
         n = step_count(mode, params, shutter, measure_bend)
+        pose = self._pose(float(t), shutter, n) if self.scene.assets else None
         frame = run_steps(make_frame, self.pipeline(mode), float(t), shutter, seed, n, measure)
+        if pose is not None:   # (host work before the first pass: reported as one of them)
+            frame.pass_ms["scene_pose"], frame.pass_cpu_ms["scene_pose"] = pose[:2]
+            frame.stats["skinned_vertices"] = pose[2]
         if bend:         # (host work before the first pass: reported as one of them)
             frame.stats["bend_px"] = bend["px"]
             frame.pass_ms["motion_bend"] = bend["ms"]
             frame.pass_cpu_ms["motion_bend"] = bend["cpu_ms"]
         return frame
+
+    def _pose(self, t: float, shutter: float, steps: int):
+        """The glTF entries' poses (node matrices, skinned vertices) at the frame's times
+        (each sub-frame's t and shutter ends), evaluated once: (ms, CPU ms, vertices)."""
+        t0, c0 = time.perf_counter(), time.thread_time()
+        times = set()
+        for tk, sk, _ in sub_exposures(t, shutter, 0, steps):
+            times.update((tk, *exposure(tk, sk)))
+        n = self.scene.pose(sorted(times))
+        return (time.perf_counter() - t0) * 1e3, (time.thread_time() - c0) * 1e3, n
 
     def render(self, mode: str, t: float, params: ParamSet | None = None, seed: int = 0,
                timing: bool = False, record_visibility: bool = False,

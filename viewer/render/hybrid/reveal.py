@@ -372,6 +372,7 @@ class RevealTrace(Pass):
         pixels, own = read_masked_pixels(frame)
         t1 = time.perf_counter()
         result = None
+        skin0 = st.rays.skin_ms
         if len(pixels) and p.trace:
             result = reveal(st.rays, frame.camera, frame.time, pixels, own, layers=1,
                             max_depth=p.max_depth, threads=p.threads or None,
@@ -392,6 +393,8 @@ class RevealTrace(Pass):
         s["reveal_trace_ms"] = (t2 - t1) * 1e3
         s["reveal_pack_ms"] = (t3 - t2) * 1e3
         s["reveal_ms"] = (t3 - t0) * 1e3
+        if st.skinned:     # (within the tracing: skinned movers' Embree scenes rebuilt)
+            s["reveal_skin_ms"] = st.rays.skin_ms - skin0
         frame.host.put(MASKED_PIXELS, pixels)
         frame.host.put(REVEAL_HITS, hits)
         frame.host.put(REVEAL_BATCH, {"rayscene": st.rays, "camera": frame.camera,
