@@ -1,0 +1,228 @@
+"""A bare glTF asset as a scene (world/asset_scene.py, docs/scene-format.md "A glTF file as a
+scene"): the document it stands for, its framing, `hmblur scene` writing it as TOML that
+loads back to the same scene, the render commands taking the asset, and the TOML writer.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+import tomllib
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from tests.conftest import CONFORMANCE, ROOT
+from viewer.cli import main
+from world import toml_out
+from world.camera import Camera
+
+GLB = ROOT / "scenes" / "assets" / "rover.glb"
+
+
+def scene_files():
+    return sorted([*(ROOT / "scenes").glob("*.toml"), *(ROOT / "scenes" / "bench").glob("*.toml"),
+                   *(ROOT / "scenes" / "examples").glob("*.toml"), *CONFORMANCE.glob("*.toml")])
+
+
+# ---------------------------------------------------------------- the TOML writer
+
+@pytest.mark.parametrize("path", scene_files(), ids=lambda p: p.name)
+def test_writer_round_trips_every_scene_file(path):
+    doc = tomllib.loads(path.read_text())
+    assert tomllib.loads(toml_out.dumps(doc)) == doc
+
+
+def test_writer_escapes_strings_and_quotes_keys():
+    doc = {"name": 'a "b" \\ c\nd\te\x7f é 🚗', "n": -3, "x": 1e-300, "y": -0.0, "ok": False,
+           "empty": [], "t": {"odd key": [1.5, 2], "in": {"z": "w"}},
+           "objects": [{"name": "k", "keys": [{"time": 0.0}, {"time": 1.0}]}, {"name": "l"}]}
+    text = toml_out.dumps(doc, header="line one\nline two")
+    assert text.startswith("# line one\n# line two\n")
+    back = tomllib.loads(text)
+    assert back == doc and math.copysign(1.0, back["y"]) == -1.0
+
+
+@pytest.mark.parametrize("bad", [math.inf, -math.inf, math.nan])
+def test_writer_refuses_non_finite_numbers(bad):
+    with pytest.raises(ValueError):
+        toml_out.dumps({"x": [1.0, bad]})
+
+
+# ---------------------------------------------------------------- the asset's scene
+
+@pytest.fixture(scope="module")
+def asset():
+    pytest.importorskip("world.gltf")
+    from world.loader import load_asset
+    return load_asset(GLB)
+
+
+def corners(lo, hi):
+    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                     for z in (lo[2], hi[2])])
+
+
+def test_the_document_and_its_framing(asset):
+    from world import asset_scene
+    scene, doc = asset
+    assert doc["name"] == scene.name == "rover"
+    assert doc["objects"] == [{"name": "rover", "gltf": "rover.glb", "loop": True}]
+    (inst,) = scene.assets
+    assert inst.loop and [inst.asset.animations[i].name for i in inst.animations] == [
+        "drive", "swing"]
+    assert scene.objects[0].name == "rover/body" and len(scene.objects) == 7
+    assert scene.render.time == 2.5                         # the middle of the keys' 0..5 s
+    assert (scene.render.width, scene.render.height) == (1280, 720)
+    cam = scene.camera
+    assert cam.fov_y == 40.0 and cam.shutter == pytest.approx(1 / 60, abs=1e-7)
+    assert len(scene.lights) == 2 and not cam.moving
+    # the box over the animation: all of it in the frame at every one of the nine times,
+    # its bounding sphere about 60% of the frame height, the view from front-right-above
+    times = np.linspace(0.0, 5.0, 9)
+    lo, hi = asset_scene.bounds(scene, times)
+    np.testing.assert_allclose(cam.look_at, 0.5 * (lo + hi), rtol=1e-5, atol=1e-5)
+    view = cam.position - cam.look_at
+    assert view[0] > 0 and view[1] > 0 and view[2] > 0
+    r = 0.5 * np.linalg.norm(hi - lo)
+    d = np.linalg.norm(view)
+    assert 2 * r / (2 * d * math.tan(math.radians(20))) == pytest.approx(0.6, rel=1e-4)
+    c = Camera(cam, 1280, 720)
+    for t in times:
+        for o in scene.objects:
+            v = o.vertices_at(t)
+            m = o.matrix(t)
+            xy, _ = c.project(t, v @ m[:3, :3].T + m[:3, 3])
+            assert xy.min() >= 0 and xy[:, 0].max() <= 1280 and xy[:, 1].max() <= 720
+    xy, _ = c.project(0.0, corners(lo, hi))
+    assert np.ptp(xy[:, 1]) > 0.3 * 720                     # not lost in the middle
+    # everything in the sphere lies between near and far
+    assert cam.near < d - r and cam.far > d + r
+
+
+def test_an_asset_without_animation_is_framed_at_time_0(tmp_path):
+    pytest.importorskip("world.gltf")
+    from world.loader import load_asset
+    path = tmp_path / "still.gltf"
+    path.write_text(json.dumps(triangle_gltf()))
+    scene, doc = load_asset(path)
+    assert doc["render"]["time"] == 0.0 and scene.render.time == 0.0
+    np.testing.assert_allclose(scene.camera.look_at, [0.5, 0.5, 0.0], atol=1e-6)
+
+
+def triangle_gltf(with_mesh: bool = True) -> dict:
+    """A one-triangle glTF with its buffer embedded as a data URI."""
+    import base64
+    data = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32).tobytes()
+    doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+           "nodes": [{"name": "tri"}]}
+    if with_mesh:
+        doc["nodes"][0]["mesh"] = 0
+        doc.update(
+            meshes=[{"primitives": [{"attributes": {"POSITION": 0}}]}],
+            accessors=[{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                        "min": [0, 0, 0], "max": [1, 1, 0]}],
+            bufferViews=[{"buffer": 0, "byteLength": len(data)}],
+            buffers=[{"byteLength": len(data), "uri": "data:application/octet-stream;base64,"
+                      + base64.b64encode(data).decode()}])
+    return doc
+
+
+def same_scene(a, b):
+    assert a.name == b.name
+    assert [(o.name, o.id) for o in a.objects] == [(o.name, o.id) for o in b.objects]
+    for f in ("position", "look_at", "up"):
+        assert np.array_equal(getattr(a.camera, f), getattr(b.camera, f))
+    for f in ("fov_y", "near", "far", "shutter"):
+        assert getattr(a.camera, f) == getattr(b.camera, f)
+    assert a.render == b.render
+    assert np.array_equal(a.background, b.background) and np.array_equal(a.ambient, b.ambient)
+    for la, lb in zip(a.lights, b.lights, strict=True):
+        assert np.array_equal(la.direction, lb.direction) and np.array_equal(la.color, lb.color)
+    for oa, ob in zip(a.objects, b.objects):
+        for t in (0.0, 1.3, 2.5, 4.9, 7.0):                # 7: past the end, looped
+            assert np.array_equal(oa.matrix(t), ob.matrix(t))
+            assert np.array_equal(oa.vertices_at(t), ob.vertices_at(t))
+
+
+def test_printed_scene_loads_back_to_the_same_scene(asset, tmp_path, capsys):
+    from world.loader import load_scene
+    scene, doc = asset
+    out = tmp_path / "edit" / "rover.toml"
+    assert main(["scene", str(GLB), "--out", str(out)]) == 0
+    text = out.read_text()
+    written = tomllib.loads(text)
+    assert written["objects"][0]["gltf"] == os.path.relpath(GLB, out.parent)
+    assert {k: v for k, v in written.items() if k != "objects"} == {
+        k: v for k, v in doc.items() if k != "objects"}
+    same_scene(load_scene(out), scene)
+    # to stdout: the asset's path relative to the current folder
+    os.chdir(tmp_path)
+    try:
+        capsys.readouterr()
+        assert main(["scene", os.path.relpath(GLB)]) == 0
+        printed = capsys.readouterr().out
+        assert printed.startswith("# The scene that `hmblur shot")
+        (tmp_path / "here.toml").write_text(printed)
+        same_scene(load_scene(tmp_path / "here.toml"), scene)
+    finally:
+        os.chdir(ROOT)
+
+
+def one_line_error(args, *words):
+    p = subprocess.run([sys.executable, "-m", "viewer", *args], cwd=ROOT, capture_output=True,
+                       text=True, timeout=240)
+    lines = p.stderr.strip().splitlines()
+    assert p.returncode == 2 and len(lines) == 1, p.stderr
+    assert lines[0].startswith("hmblur: error: ")
+    for w in words:
+        assert w in lines[0], lines[0]
+    return lines[0]
+
+
+def test_mistakes_are_one_line_and_exit_2(tmp_path):
+    pytest.importorskip("world.gltf")
+    one_line_error(["scene", "scenes/rover.toml"], "expected a .gltf or .glb file")
+    one_line_error(["scene", str(tmp_path / "nothing.glb")], "nothing.glb", "file not found")
+    junk = tmp_path / "junk.glb"
+    junk.write_bytes(b"not a glb at all")
+    one_line_error(["scene", str(junk)], "junk.glb")
+    one_line_error(["shot", str(junk), "--out", str(tmp_path / "x.png")], "junk.glb")
+    empty = tmp_path / "empty.gltf"
+    empty.write_text(json.dumps(triangle_gltf(with_mesh=False)))
+    one_line_error(["shot", str(empty), "--out", str(tmp_path / "y.png")], "empty.gltf",
+                   "no mesh")
+    one_line_error(["scene", str(GLB), "--out", str(tmp_path / "x.txt")], ".toml")
+    assert not (tmp_path / "x.png").exists() and not (tmp_path / "y.png").exists()
+
+
+def test_shot_of_a_bare_glb_shows_the_asset(tmp_path):
+    pytest.importorskip("world.gltf")
+    from viewer.imageio import linear_to_srgb8
+    from world import asset_scene
+    out = tmp_path / "rover.png"
+    p = subprocess.run([sys.executable, "-m", "viewer", "shot", str(GLB), "--size", "320x180",
+                        "--mode", "hybrid", "--out", str(out)], cwd=ROOT, capture_output=True,
+                       text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    img = np.asarray(Image.open(out).convert("RGB")).astype(int)
+    side = json.loads(out.with_suffix(".json").read_text())
+    assert side["scene_name"] == "rover" and side["time"] == 2.5
+    assert side["scene"] == str(GLB)
+    bg = linear_to_srgb8(np.array(asset_scene.BACKGROUND)).astype(int)
+    fg = np.abs(img - bg).max(axis=2) > 6
+    assert 0.05 < fg.mean() < 0.7, fg.mean()
+    ys, xs = np.nonzero(fg)
+    # the asset in the middle of the frame, not cut by its edges
+    assert 0.3 * 320 < xs.mean() < 0.7 * 320 and 0.3 * 180 < ys.mean() < 0.7 * 180
+    assert not fg[0].any() and not fg[-1].any() and not fg[:, 0].any() and not fg[:, -1].any()
+
+
+def test_panel_lists_the_assets_animations(asset):
+    from viewer.ui.panel import animation_lines
+    scene, _ = asset
+    assert animation_lines(scene) == [
+        "rover: drive 0.00-5.00 s, swing 0.00-5.00 s (looped)"]
