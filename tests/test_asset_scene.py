@@ -80,27 +80,25 @@ def test_the_document_and_its_framing(asset):
     cam = scene.camera
     assert cam.fov_y == 40.0 and cam.shutter == pytest.approx(1 / 60, abs=1e-7)
     assert len(scene.lights) == 2 and not cam.moving
-    # the box over the animation: all of it in the frame at every one of the nine times,
-    # its bounding sphere about 60% of the frame height, the view from front-right-above
+    # the box over the animation: the view from front-right-above at its centre, every
+    # corner in the middle 60% of the frame, one of them at that edge; the asset in the
+    # frame at every one of the nine times
     times = np.linspace(0.0, 5.0, 9)
     lo, hi = asset_scene.bounds(scene, times)
     np.testing.assert_allclose(cam.look_at, 0.5 * (lo + hi), rtol=1e-5, atol=1e-5)
     view = cam.position - cam.look_at
     assert view[0] > 0 and view[1] > 0 and view[2] > 0
-    r = 0.5 * np.linalg.norm(hi - lo)
-    d = np.linalg.norm(view)
-    assert 2 * r / (2 * d * math.tan(math.radians(20))) == pytest.approx(0.6, rel=1e-4)
     c = Camera(cam, 1280, 720)
+    xy, depth = c.project(0.0, corners(lo, hi))
+    ndc = np.abs(xy / [640.0, 360.0] - 1.0)
+    assert ndc.max() == pytest.approx(0.6, abs=1e-4)
+    assert cam.near < depth.min() and cam.far > depth.max()
     for t in times:
         for o in scene.objects:
             v = o.vertices_at(t)
             m = o.matrix(t)
             xy, _ = c.project(t, v @ m[:3, :3].T + m[:3, 3])
-            assert xy.min() >= 0 and xy[:, 0].max() <= 1280 and xy[:, 1].max() <= 720
-    xy, _ = c.project(0.0, corners(lo, hi))
-    assert np.ptp(xy[:, 1]) > 0.3 * 720                     # not lost in the middle
-    # everything in the sphere lies between near and far
-    assert cam.near < d - r and cam.far > d + r
+            assert np.abs(xy / [640.0, 360.0] - 1.0).max() <= 0.6 + 1e-4
 
 
 def test_an_asset_without_animation_is_framed_at_time_0(tmp_path):
@@ -199,26 +197,41 @@ def test_mistakes_are_one_line_and_exit_2(tmp_path):
     assert not (tmp_path / "x.png").exists() and not (tmp_path / "y.png").exists()
 
 
-def test_shot_of_a_bare_glb_shows_the_asset(tmp_path):
-    pytest.importorskip("world.gltf")
+def shot(tmp_path, asset, *args):
+    """`hmblur shot ASSET` at 320x180: (foreground mask, sidecar)."""
     from viewer.imageio import linear_to_srgb8
     from world import asset_scene
-    out = tmp_path / "rover.png"
-    p = subprocess.run([sys.executable, "-m", "viewer", "shot", str(GLB), "--size", "320x180",
-                        "--mode", "hybrid", "--out", str(out)], cwd=ROOT, capture_output=True,
-                       text=True, timeout=600)
+    out = tmp_path / f"{asset.stem}.png"
+    p = subprocess.run([sys.executable, "-m", "viewer", "shot", str(asset), "--size", "320x180",
+                        "--out", str(out), *args], cwd=ROOT, capture_output=True, text=True,
+                       timeout=600)
     assert p.returncode == 0, p.stderr
     img = np.asarray(Image.open(out).convert("RGB")).astype(int)
-    side = json.loads(out.with_suffix(".json").read_text())
-    assert side["scene_name"] == "rover" and side["time"] == 2.5
-    assert side["scene"] == str(GLB)
     bg = linear_to_srgb8(np.array(asset_scene.BACKGROUND)).astype(int)
     fg = np.abs(img - bg).max(axis=2) > 6
-    assert 0.05 < fg.mean() < 0.7, fg.mean()
-    ys, xs = np.nonzero(fg)
-    # the asset in the middle of the frame, not cut by its edges
-    assert 0.3 * 320 < xs.mean() < 0.7 * 320 and 0.3 * 180 < ys.mean() < 0.7 * 180
+    # in the frame, not cut by its edges
     assert not fg[0].any() and not fg[-1].any() and not fg[:, 0].any() and not fg[:, -1].any()
+    return fg, json.loads(out.with_suffix(".json").read_text())
+
+
+def test_shot_of_a_bare_glb_shows_the_asset(tmp_path):
+    pytest.importorskip("world.gltf")
+    # the rover drives ~8 m over its animation: framed over all of it, small at mid-drive
+    fg, side = shot(tmp_path, GLB, "--mode", "hybrid")
+    assert side["scene_name"] == "rover" and side["time"] == 2.5
+    assert side["scene"] == str(GLB)
+    assert fg.mean() > 0.004, fg.mean()
+
+
+def test_shot_of_a_bare_gltf_in_place_is_centred(tmp_path):
+    pytest.importorskip("world.gltf")
+    fg, side = shot(tmp_path, CONFORMANCE / "gltf" / "RiggedSimple.gltf")
+    assert side["scene_name"] == "RiggedSimple"
+    assert 0.01 < fg.mean() < 0.5, fg.mean()          # a thin tube
+    ys, xs = np.nonzero(fg)
+    assert 0.35 * 320 < xs.mean() < 0.65 * 320 and 0.3 * 180 < ys.mean() < 0.7 * 180
+    # the box's extent reaches the middle 60% of the frame's height or width
+    assert max(np.ptp(ys) / 180, np.ptp(xs) / 320) > 0.4
 
 
 def test_panel_lists_the_assets_animations(asset):

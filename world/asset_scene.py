@@ -16,7 +16,7 @@ from world.errors import SceneError
 
 SUFFIXES = (".gltf", ".glb")
 FOV_Y = 40.0
-FILL = 0.6                     # the bounding sphere's diameter: this much of the frame height
+FILL = 0.6                     # the asset's box: within the middle 60% of the frame
 VIEW = np.array([0.6, 0.45, 1.0])   # centre -> eye: in front (+Z), right (+X), above (+Y)
 FRAME_TIMES = 9                # times over the animation range that the bounds cover
 SHUTTER = 1.0 / 60.0
@@ -48,10 +48,11 @@ def animation_range(instance, animations=None) -> tuple[float, float] | None:
     """[A0, A1] in scene time of the animations an entry plays (or of `animations`, indices
     into its asset's), its time_offset and time_scale applied; None for no animation."""
     chosen = instance.animations if animations is None else animations
-    span = instance.asset.time_range(chosen)
-    if span is None:
+    spans = [instance.asset.animations[i].time_span for i in chosen]
+    spans = [s for s in spans if s is not None]
+    if not spans:
         return None
-    a0, a1 = span
+    a0, a1 = min(s[0] for s in spans), max(s[1] for s in spans)
     return (instance.time_offset + a0 / instance.time_scale,
             instance.time_offset + a1 / instance.time_scale)
 
@@ -71,8 +72,9 @@ def bounds(scene, times) -> tuple[np.ndarray, np.ndarray]:
 def frame(doc: dict, scene) -> None:
     """Set doc's camera and render time from the loaded scene: the render time is the middle
     of the animation range (0 without animation); the camera looks at the centre of the box
-    that holds the asset at FRAME_TIMES times over that range, from direction VIEW, at the
-    distance where the box's bounding sphere spans FILL of the frame height at FOV_Y."""
+    that holds the asset at FRAME_TIMES times over that range, from direction VIEW, from the
+    nearest distance at which every corner of the box lies in the middle FILL of the frame
+    (of the document's width and height)."""
     (instance,) = scene.assets
     span = animation_range(instance)
     if span is None:
@@ -84,15 +86,28 @@ def frame(doc: dict, scene) -> None:
         raise SceneError(scene.path, "", "the asset has no mesh to show")
     lo, hi = bounds(scene, times)
     centre = 0.5 * (lo + hi)
-    radius = max(0.5 * float(np.linalg.norm(hi - lo)), 1e-3)
-    distance = radius / (FILL * math.tan(math.radians(FOV_Y) / 2.0))
-    eye = centre + distance * VIEW / np.linalg.norm(VIEW)
+    back = VIEW / np.linalg.norm(VIEW)                       # from the centre to the eye
+    right = np.cross(-back, [0.0, 1.0, 0.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, -back)
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                        for z in (lo[2], hi[2])]) - centre
+    # a corner at depth (d - c.back) from the eye is inside the middle FILL of the frame
+    # when |c.right| <= FILL tan(fov/2) aspect (d - c.back), and likewise for up
+    tan = math.tan(math.radians(FOV_Y) / 2.0)
+    aspect = doc["render"]["width"] / doc["render"]["height"]
+    toward = corners @ back
+    need = np.maximum(np.abs(corners @ right) / (FILL * tan * aspect),
+                      np.abs(corners @ up) / (FILL * tan)) + toward
+    extent = max(float(np.linalg.norm(hi - lo)), 1e-3)       # a point-like asset: 1 mm
+    distance = max(float(need.max()), extent * 1e-3)
+    depth = distance - toward
     cam = doc["camera"]
-    cam["position"] = [_round(x) for x in eye]
+    cam["position"] = [_round(x) for x in centre + distance * back]
     cam["look_at"] = [_round(x) for x in centre]
-    # all of the sphere between near and far, with room to move the camera in the viewer
-    cam["near"] = _round(0.1 * (distance - radius))
-    cam["far"] = _round(4.0 * (distance + radius))
+    # all of the box between near and far, with room to move the camera in the viewer
+    cam["near"] = _round(max(0.1 * float(depth.min()), 1e-4 * distance))
+    cam["far"] = _round(4.0 * float(depth.max()))
     doc["render"]["time"] = _round(t)
 
 
