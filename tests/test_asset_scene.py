@@ -234,6 +234,24 @@ def test_shot_of_a_bare_gltf_in_place_is_centred(tmp_path):
     assert max(np.ptp(ys) / 180, np.ptp(xs) / 320) > 0.4
 
 
+def test_view_opens_a_bare_glb(tmp_path):
+    pytest.importorskip("world.gltf")
+    from tests.xvfb import Xvfb
+    display = Xvfb().start()
+    try:
+        shot_png, stats = tmp_path / "win.png", tmp_path / "win.json"
+        p = subprocess.run([sys.executable, "-m", "viewer", "view", str(GLB), "--size", "480x270",
+                            "--frames", "4", "--screenshot", str(shot_png), "--stats-json",
+                            str(stats), "--shot-dir", str(tmp_path)], cwd=ROOT,
+                           env=display.env(), capture_output=True, text=True, timeout=240)
+    finally:
+        display.stop()
+    assert p.returncode == 0, p.stderr
+    st = json.loads(stats.read_text())
+    assert st["errors"] == [] and st["scene"] == str(GLB) and st["frames"] == 4
+    assert shot_png.is_file()
+
+
 def test_panel_lists_the_assets_animations(asset):
     from viewer.ui.panel import animation_lines
     scene, _ = asset
