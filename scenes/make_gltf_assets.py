@@ -19,12 +19,12 @@ The asset (metres, Y-up, the rover's front is +X, its right +Z):
 -Z) on a curve whose curvature rises and falls smoothly, its rear axle on the path; each
 wheel turns by the distance its own centre travels over its radius (the inner wheels
 slower). "swing" (0..5 s, two periods of 2.5 s): the crane yaws +-50 degrees and bends.
-Keys at 30 per second, LINEAR: a wheel turns at most ~20 degrees between keys (slerp must
-never see 180), so at a 1/25-1/30 s shutter the wheels smear over a spoke's width or more
-and the arm's tip moves a few centimetres.
+Keys at 30 per second, LINEAR: a wheel turns at most 24 degrees between keys (slerp must
+never see 180). Within a 0.04 s shutter a wheel at 10 rad/s turns 23 degrees, over half of
+one of its hub's 36-degree sectors, and the arm's tip moves a few centimetres.
 
-Deterministic: fixed sizes and formulas, float32 data, a JSON chunk with sorted-order
-arrays, and the PNG written here with stored (uncompressed) deflate blocks, so no zlib
+Deterministic: fixed sizes and formulas, float32 data, the JSON written in one fixed
+order, and the PNG written here with stored (uncompressed) deflate blocks, so no zlib
 version can change a byte.
 """
 from __future__ import annotations

@@ -234,6 +234,24 @@ def test_shot_of_a_bare_gltf_in_place_is_centred(tmp_path):
     assert max(np.ptp(ys) / 180, np.ptp(xs) / 320) > 0.4
 
 
+def test_compare_video_and_bench_take_a_bare_gltf(tmp_path):
+    pytest.importorskip("world.gltf")
+    box = str(CONFORMANCE / "gltf" / "BoxAnimated.gltf")
+    for args in (["compare", box, "--size", "96x54", "--samples", "4", "--out",
+                  str(tmp_path / "cmp")],
+                 ["video", box, "--size", "96x54", "--frames", "2", "--modes", "off,hybrid",
+                  "--out", str(tmp_path / "frames")],
+                 ["bench", box, "--size", "96x54", "--frames", "2", "--warmup", "1",
+                  "--json", str(tmp_path / "bench.json")]):
+        p = subprocess.run([sys.executable, "-m", "viewer", *args], cwd=ROOT,
+                           capture_output=True, text=True, timeout=600)
+        assert p.returncode == 0, (args[0], p.stderr)
+    metrics = json.loads((tmp_path / "cmp" / "metrics.json").read_text())
+    assert "BoxAnimated" in json.dumps(metrics)
+    assert len(list((tmp_path / "frames").glob("*.png"))) == 2
+    assert json.loads((tmp_path / "bench.json").read_text())
+
+
 def test_view_opens_a_bare_glb(tmp_path):
     pytest.importorskip("world.gltf")
     from tests.xvfb import Xvfb
