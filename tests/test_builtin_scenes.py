@@ -13,7 +13,7 @@ from world.camera import Camera
 from world.errors import SceneError
 from world.loader import builtin_scene_names, builtin_scene_path, load_scene
 
-NAMES = ["living_room", "pan", "spinner", "thin", "wheel"]
+NAMES = ["living_room", "pan", "rover", "spinner", "thin", "wheel"]
 
 
 def world(obj, t, local_points):

@@ -17,13 +17,14 @@ def test_wheel_contains_code_shaders_and_scenes(tmp_path):
             "world/camera.py", "viewer/render/hybrid/pipeline.py", "glsl/gbuffer.frag",
             "glsl/shading.glsl",
             "glsl/fullscreen.vert", "scenes/living_room.toml", "scenes/assets/painting.png",
-            "scenes/assets/quad_uv.obj"}
+            "scenes/assets/quad_uv.obj", "scenes/rover.toml", "scenes/assets/rover.glb"}
     assert need <= names, need - names
     for folder in ("glsl", "scenes"):
         shipped = {n.split("/", 1)[1] for n in names if n.startswith(folder + "/")}
         on_disk = {p.relative_to(ROOT / folder).as_posix()
                    for p in (ROOT / folder).rglob("*")
-                   if p.is_file() and p.suffix in {".glsl", ".frag", ".vert", ".toml", ".png", ".obj"}}
+                   if p.is_file() and p.suffix in {".glsl", ".frag", ".vert", ".toml", ".png", ".obj",
+                                         ".glb"}}
         assert on_disk <= shipped, on_disk - shipped
     assert not any(n.startswith("tests/") for n in names)
     entry = [n for n in names if n.endswith("entry_points.txt")]

@@ -9,17 +9,20 @@ from pathlib import Path
 from world.errors import UserError
 from .progress import end_line
 
-COMMANDS = ("shot", "compare", "bench", "view", "params", "graph", "video")
+COMMANDS = ("shot", "compare", "bench", "view", "params", "graph", "video", "scene")
 
 EPILOG = """\
 SCENE is a scene file (.toml) or a built-in name ({builtins}); more scenes:
 tests/conformance/*.toml (basic, vase_pan), scenes/bench/*.toml (crowd, crowd_pan),
-scenes/examples/first_scene.toml (a commented first scene).
+scenes/examples/first_scene.toml (a commented first scene). A glTF asset (.gltf, .glb) is
+a scene too: framed, lit and played ('hmblur scene ASSET' writes that scene as TOML).
 
 examples:
   hmblur shot living_room --mode hybrid --out out/hybrid.png
   hmblur compare spinner --size 640x360 --out out/spinner
   hmblur params hybrid
+  hmblur shot model.glb --mode hybrid --out out/model.png
+  hmblur scene model.glb --out model.toml                  (the same scene, to edit)
   hmblur shot --params out/hybrid.json --out again.png     (the same image, byte for byte)
 
 'hmblur COMMAND --help' describes a command. A user's mistake prints one line

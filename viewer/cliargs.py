@@ -47,8 +47,8 @@ def load(source: str):
 
 def add_scene_args(p, samples: bool = True):
     p.add_argument("scene", nargs="?", default=None, metavar="SCENE",
-                   help="scene file (.toml) or built-in scene name; may be left out with "
-                        "--params (the sidecar's scene)")
+                   help="scene file (.toml), glTF asset (.gltf, .glb) or built-in scene name; "
+                        "may be left out with --params (the sidecar's scene)")
     p.add_argument("--time", type=str, default=None, metavar="T",
                    help="frame time in seconds (default: the scene's [render] time)")
     p.add_argument("--size", type=str, default=None, metavar="WxH",
@@ -193,7 +193,8 @@ def setup(args) -> Setup:
     side = read_sidecar(args.params) if getattr(args, "params", None) else None
     if args.scene is None:
         if side is None:
-            raise UserError("SCENE: expected a scene file (.toml) or built-in name ("
+            raise UserError("SCENE: expected a scene file (.toml), a glTF asset (.gltf, .glb) "
+                            "or a built-in name ("
                             + ", ".join(builtin_scene_names()) + "), or --params FILE.json")
         args.scene = sidecar_scene(side, args.params)
     scene = load(args.scene)

@@ -40,7 +40,8 @@ def register(sub):
                     "or more modes side by side with labels, one mode as its bare image (a PNG "
                     "frame is then byte-identical to `hmblur shot` at that time).")
     p.add_argument("scene", nargs="?", default=None,
-                   help="scene file (.toml) or built-in scene name (default: the --params file's)")
+                   help="scene file (.toml), glTF asset (.gltf, .glb) or built-in scene name "
+                        "(default: the --params file's)")
     p.add_argument("--modes", default=None,
                    help=f"comma-separated, any of {', '.join(MODES)} (default: the --params "
                         "file's, else every mode but reference)")

@@ -25,6 +25,7 @@ from PIL import Image
 
 import scenes
 
+from world import asset_scene
 from world.errors import SceneError
 from world.scene import (INTERPOLATIONS, CameraKeys, CameraSpec, Light, Material, Mesh, ObjectKeys,
                     Placement, RenderDefaults, Scene, SceneObject, Texture)
@@ -73,7 +74,15 @@ def load_scene(source) -> Scene:
             raise SceneError(path, "", "not a regular file")
         else:
             raise SceneError(path, "", "file not found")
+    if asset_scene.is_asset(path):      # a bare glTF asset: a scene made around it
+        return load_asset(path)[0]
     return _Loader(path).load()
+
+
+def load_asset(path) -> tuple[Scene, dict]:
+    """(Scene, the scene document it was loaded from) of a bare .gltf/.glb file
+    (world.asset_scene; docs/scene-format.md, "A glTF file as a scene")."""
+    return asset_scene.load_asset_scene(Path(path), _Loader)
 
 
 def _is_file(p: Path) -> bool:
@@ -122,8 +131,9 @@ def _join(prefix: str, key: str) -> str:
 
 
 class _Loader:
-    def __init__(self, path: Path):
+    def __init__(self, path: Path, document: dict | None = None):
         self.path = path
+        self.document = document        # a scene document made elsewhere, else the file's
 
     def fail(self, key: str, expected: str):
         if "[" in key:
@@ -210,7 +220,7 @@ class _Loader:
     # -- the document
 
     def load(self) -> Scene:
-        doc = self.parse()
+        doc = self.parse() if self.document is None else self.document
         self.table(doc, "", ("name", "background", "ambient", "camera", "render", "lights",
                              "objects"))
         name = self.string(doc.get("name", self.path.stem), "name")
@@ -650,5 +660,5 @@ def srgb_to_linear(c: np.ndarray) -> np.ndarray:
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
-__all__ = ["load_scene", "builtin_scene_names", "builtin_scene_path", "check_camera",
+__all__ = ["load_scene", "load_asset", "builtin_scene_names", "builtin_scene_path", "check_camera",
            "merge_camera", "image_srgb", "srgb_to_linear"]

@@ -9,6 +9,7 @@ from imgui_bundle import imgui
 
 from ..render.debug_view import KINDS
 from ..render.modes import MODE_GROUPS, MODES
+from world.asset_scene import animation_range
 from world.loader import builtin_scene_names
 from .camera_control import CameraControl
 from .input import InputRouter
@@ -189,6 +190,27 @@ def _animation(app):
     changed, seed = imgui.input_int("seed", s.seed)
     if changed:
         s.seed = max(0, int(seed))
+    for line in animation_lines(s.scene):
+        imgui.text_wrapped(line)
+
+
+def animation_lines(scene) -> list[str]:
+    """One line per glTF entry: each of its asset's animations with its key range in
+    scene time, "(not played)" where the entry does not play it, "(looped)" where it
+    loops."""
+    lines = []
+    for inst in scene.assets:
+        names = []
+        for i, anim in enumerate(inst.asset.animations):
+            label = anim.name or f"#{i}"
+            if i not in inst.animations:
+                names.append(f"{label} (not played)")
+                continue
+            a0, a1 = animation_range(inst, (i,))
+            names.append(f"{label} {a0:.2f}-{a1:.2f} s")
+        text = ", ".join(names) if names else "no animations"
+        lines.append(f"{inst.name}: {text}" + (" (looped)" if inst.loop and names else ""))
+    return lines
 
 
 def _camera(app):

@@ -1,0 +1,277 @@
+"""A bare glTF asset as a scene (world/asset_scene.py, docs/scene-format.md "A glTF file as a
+scene"): the document it stands for, its framing, `hmblur scene` writing it as TOML that
+loads back to the same scene, the render commands taking the asset, and the TOML writer.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+import tomllib
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from tests.conftest import CONFORMANCE, ROOT
+from viewer.cli import main
+from world import toml_out
+from world.camera import Camera
+
+GLB = ROOT / "scenes" / "assets" / "rover.glb"
+
+
+def scene_files():
+    return sorted([*(ROOT / "scenes").glob("*.toml"), *(ROOT / "scenes" / "bench").glob("*.toml"),
+                   *(ROOT / "scenes" / "examples").glob("*.toml"), *CONFORMANCE.glob("*.toml")])
+
+
+# ---------------------------------------------------------------- the TOML writer
+
+@pytest.mark.parametrize("path", scene_files(), ids=lambda p: p.name)
+def test_writer_round_trips_every_scene_file(path):
+    doc = tomllib.loads(path.read_text())
+    assert tomllib.loads(toml_out.dumps(doc)) == doc
+
+
+def test_writer_escapes_strings_and_quotes_keys():
+    doc = {"name": 'a "b" \\ c\nd\te\x7f é 🚗', "n": -3, "x": 1e-300, "y": -0.0, "ok": False,
+           "empty": [], "t": {"odd key": [1.5, 2], "in": {"z": "w"}},
+           "objects": [{"name": "k", "keys": [{"time": 0.0}, {"time": 1.0}]}, {"name": "l"}]}
+    text = toml_out.dumps(doc, header="line one\nline two")
+    assert text.startswith("# line one\n# line two\n")
+    back = tomllib.loads(text)
+    assert back == doc and math.copysign(1.0, back["y"]) == -1.0
+
+
+@pytest.mark.parametrize("bad", [math.inf, -math.inf, math.nan])
+def test_writer_refuses_non_finite_numbers(bad):
+    with pytest.raises(ValueError):
+        toml_out.dumps({"x": [1.0, bad]})
+
+
+# ---------------------------------------------------------------- the asset's scene
+
+@pytest.fixture(scope="module")
+def asset():
+    pytest.importorskip("world.gltf")
+    from world.loader import load_asset
+    return load_asset(GLB)
+
+
+def corners(lo, hi):
+    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                     for z in (lo[2], hi[2])])
+
+
+def test_the_document_and_its_framing(asset):
+    from world import asset_scene
+    scene, doc = asset
+    assert doc["name"] == scene.name == "rover"
+    assert doc["objects"] == [{"name": "rover", "gltf": "rover.glb", "loop": True}]
+    (inst,) = scene.assets
+    assert inst.loop and [inst.asset.animations[i].name for i in inst.animations] == [
+        "drive", "swing"]
+    assert scene.objects[0].name == "rover/body" and len(scene.objects) == 7
+    assert scene.render.time == 2.5                         # the middle of the keys' 0..5 s
+    assert (scene.render.width, scene.render.height) == (1280, 720)
+    cam = scene.camera
+    assert cam.fov_y == 40.0 and cam.shutter == pytest.approx(1 / 60, abs=1e-7)
+    assert len(scene.lights) == 2 and not cam.moving
+    # the box over the animation: the view from front-right-above at its centre, every
+    # corner in the middle 60% of the frame, one of them at that edge; the asset in the
+    # frame at every one of the nine times
+    times = np.linspace(0.0, 5.0, 9)
+    lo, hi = asset_scene.bounds(scene, times)
+    np.testing.assert_allclose(cam.look_at, 0.5 * (lo + hi), rtol=1e-5, atol=1e-5)
+    view = cam.position - cam.look_at
+    assert view[0] > 0 and view[1] > 0 and view[2] > 0
+    c = Camera(cam, 1280, 720)
+    xy, depth = c.project(0.0, corners(lo, hi))
+    ndc = np.abs(xy / [640.0, 360.0] - 1.0)
+    assert ndc.max() == pytest.approx(0.6, abs=1e-4)
+    assert cam.near < depth.min() and cam.far > depth.max()
+    for t in times:
+        for o in scene.objects:
+            v = o.vertices_at(t)
+            m = o.matrix(t)
+            xy, _ = c.project(t, v @ m[:3, :3].T + m[:3, 3])
+            assert np.abs(xy / [640.0, 360.0] - 1.0).max() <= 0.6 + 1e-4
+
+
+def test_an_asset_without_animation_is_framed_at_time_0(tmp_path):
+    pytest.importorskip("world.gltf")
+    from world.loader import load_asset
+    path = tmp_path / "still.gltf"
+    path.write_text(json.dumps(triangle_gltf()))
+    scene, doc = load_asset(path)
+    assert doc["render"]["time"] == 0.0 and scene.render.time == 0.0
+    np.testing.assert_allclose(scene.camera.look_at, [0.5, 0.5, 0.0], atol=1e-6)
+
+
+def triangle_gltf(with_mesh: bool = True) -> dict:
+    """A one-triangle glTF with its buffer embedded as a data URI."""
+    import base64
+    data = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32).tobytes()
+    doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+           "nodes": [{"name": "tri"}]}
+    if with_mesh:
+        doc["nodes"][0]["mesh"] = 0
+        doc.update(
+            meshes=[{"primitives": [{"attributes": {"POSITION": 0}}]}],
+            accessors=[{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                        "min": [0, 0, 0], "max": [1, 1, 0]}],
+            bufferViews=[{"buffer": 0, "byteLength": len(data)}],
+            buffers=[{"byteLength": len(data), "uri": "data:application/octet-stream;base64,"
+                      + base64.b64encode(data).decode()}])
+    return doc
+
+
+def same_scene(a, b):
+    assert a.name == b.name
+    assert [(o.name, o.id) for o in a.objects] == [(o.name, o.id) for o in b.objects]
+    for f in ("position", "look_at", "up"):
+        assert np.array_equal(getattr(a.camera, f), getattr(b.camera, f))
+    for f in ("fov_y", "near", "far", "shutter"):
+        assert getattr(a.camera, f) == getattr(b.camera, f)
+    assert a.render == b.render
+    assert np.array_equal(a.background, b.background) and np.array_equal(a.ambient, b.ambient)
+    for la, lb in zip(a.lights, b.lights, strict=True):
+        assert np.array_equal(la.direction, lb.direction) and np.array_equal(la.color, lb.color)
+    for oa, ob in zip(a.objects, b.objects):
+        for t in (0.0, 1.3, 2.5, 4.9, 7.0):                # 7: past the end, looped
+            assert np.array_equal(oa.matrix(t), ob.matrix(t))
+            assert np.array_equal(oa.vertices_at(t), ob.vertices_at(t))
+
+
+def test_printed_scene_loads_back_to_the_same_scene(asset, tmp_path, capsys):
+    from world.loader import load_scene
+    scene, doc = asset
+    out = tmp_path / "edit" / "rover.toml"
+    assert main(["scene", str(GLB), "--out", str(out)]) == 0
+    text = out.read_text()
+    written = tomllib.loads(text)
+    assert written["objects"][0]["gltf"] == os.path.relpath(GLB, out.parent)
+    assert {k: v for k, v in written.items() if k != "objects"} == {
+        k: v for k, v in doc.items() if k != "objects"}
+    same_scene(load_scene(out), scene)
+    # to stdout: the asset's path relative to the current folder
+    os.chdir(tmp_path)
+    try:
+        capsys.readouterr()
+        assert main(["scene", os.path.relpath(GLB)]) == 0
+        printed = capsys.readouterr().out
+        assert printed.startswith("# The scene that `hmblur shot")
+        (tmp_path / "here.toml").write_text(printed)
+        same_scene(load_scene(tmp_path / "here.toml"), scene)
+    finally:
+        os.chdir(ROOT)
+
+
+def one_line_error(args, *words):
+    p = subprocess.run([sys.executable, "-m", "viewer", *args], cwd=ROOT, capture_output=True,
+                       text=True, timeout=240)
+    lines = p.stderr.strip().splitlines()
+    assert p.returncode == 2 and len(lines) == 1, p.stderr
+    assert lines[0].startswith("hmblur: error: ")
+    for w in words:
+        assert w in lines[0], lines[0]
+    return lines[0]
+
+
+def test_mistakes_are_one_line_and_exit_2(tmp_path):
+    pytest.importorskip("world.gltf")
+    one_line_error(["scene", "scenes/rover.toml"], "expected a .gltf or .glb file")
+    one_line_error(["scene", str(tmp_path / "nothing.glb")], "nothing.glb", "file not found")
+    junk = tmp_path / "junk.glb"
+    junk.write_bytes(b"not a glb at all")
+    one_line_error(["scene", str(junk)], "junk.glb")
+    one_line_error(["shot", str(junk), "--out", str(tmp_path / "x.png")], "junk.glb")
+    empty = tmp_path / "empty.gltf"
+    empty.write_text(json.dumps(triangle_gltf(with_mesh=False)))
+    one_line_error(["shot", str(empty), "--out", str(tmp_path / "y.png")], "empty.gltf",
+                   "no mesh")
+    one_line_error(["scene", str(GLB), "--out", str(tmp_path / "x.txt")], ".toml")
+    assert not (tmp_path / "x.png").exists() and not (tmp_path / "y.png").exists()
+
+
+def shot(tmp_path, asset, *args):
+    """`hmblur shot ASSET` at 320x180: (foreground mask, sidecar)."""
+    from viewer.imageio import linear_to_srgb8
+    from world import asset_scene
+    out = tmp_path / f"{asset.stem}.png"
+    p = subprocess.run([sys.executable, "-m", "viewer", "shot", str(asset), "--size", "320x180",
+                        "--out", str(out), *args], cwd=ROOT, capture_output=True, text=True,
+                       timeout=600)
+    assert p.returncode == 0, p.stderr
+    img = np.asarray(Image.open(out).convert("RGB")).astype(int)
+    bg = linear_to_srgb8(np.array(asset_scene.BACKGROUND)).astype(int)
+    fg = np.abs(img - bg).max(axis=2) > 6
+    # in the frame, not cut by its edges
+    assert not fg[0].any() and not fg[-1].any() and not fg[:, 0].any() and not fg[:, -1].any()
+    return fg, json.loads(out.with_suffix(".json").read_text())
+
+
+def test_shot_of_a_bare_glb_shows_the_asset(tmp_path):
+    pytest.importorskip("world.gltf")
+    # the rover drives ~8 m over its animation: framed over all of it, small at mid-drive
+    fg, side = shot(tmp_path, GLB, "--mode", "hybrid")
+    assert side["scene_name"] == "rover" and side["time"] == 2.5
+    assert side["scene"] == str(GLB)
+    assert fg.mean() > 0.004, fg.mean()
+
+
+def test_shot_of_a_bare_gltf_in_place_is_centred(tmp_path):
+    pytest.importorskip("world.gltf")
+    fg, side = shot(tmp_path, CONFORMANCE / "gltf" / "RiggedSimple.gltf")
+    assert side["scene_name"] == "RiggedSimple"
+    assert 0.01 < fg.mean() < 0.5, fg.mean()          # a thin tube
+    ys, xs = np.nonzero(fg)
+    assert 0.35 * 320 < xs.mean() < 0.65 * 320 and 0.3 * 180 < ys.mean() < 0.7 * 180
+    # the box's extent reaches the middle 60% of the frame's height or width
+    assert max(np.ptp(ys) / 180, np.ptp(xs) / 320) > 0.4
+
+
+def test_compare_video_and_bench_take_a_bare_gltf(tmp_path):
+    pytest.importorskip("world.gltf")
+    box = str(CONFORMANCE / "gltf" / "BoxAnimated.gltf")
+    for args in (["compare", box, "--size", "96x54", "--samples", "4", "--out",
+                  str(tmp_path / "cmp")],
+                 ["video", box, "--size", "96x54", "--frames", "2", "--modes", "off,hybrid",
+                  "--out", str(tmp_path / "frames")],
+                 ["bench", box, "--size", "96x54", "--frames", "2", "--warmup", "1",
+                  "--json", str(tmp_path / "bench.json")]):
+        p = subprocess.run([sys.executable, "-m", "viewer", *args], cwd=ROOT,
+                           capture_output=True, text=True, timeout=600)
+        assert p.returncode == 0, (args[0], p.stderr)
+    metrics = json.loads((tmp_path / "cmp" / "metrics.json").read_text())
+    assert "BoxAnimated" in json.dumps(metrics)
+    assert len(list((tmp_path / "frames").glob("*.png"))) == 2
+    assert json.loads((tmp_path / "bench.json").read_text())
+
+
+def test_view_opens_a_bare_glb(tmp_path):
+    pytest.importorskip("world.gltf")
+    from tests.xvfb import Xvfb
+    display = Xvfb().start()
+    try:
+        shot_png, stats = tmp_path / "win.png", tmp_path / "win.json"
+        p = subprocess.run([sys.executable, "-m", "viewer", "view", str(GLB), "--size", "480x270",
+                            "--frames", "4", "--screenshot", str(shot_png), "--stats-json",
+                            str(stats), "--shot-dir", str(tmp_path)], cwd=ROOT,
+                           env=display.env(), capture_output=True, text=True, timeout=240)
+    finally:
+        display.stop()
+    assert p.returncode == 0, p.stderr
+    st = json.loads(stats.read_text())
+    assert st["errors"] == [] and st["scene"] == str(GLB) and st["frames"] == 4
+    assert shot_png.is_file()
+
+
+def test_panel_lists_the_assets_animations(asset):
+    from viewer.ui.panel import animation_lines
+    scene, _ = asset
+    assert animation_lines(scene) == [
+        "rover: drive 0.00-5.00 s, swing 0.00-5.00 s (looped)"]
