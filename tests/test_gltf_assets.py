@@ -187,7 +187,6 @@ def test_skin_binds_the_tube_to_three_joints(glb):
 
 @pytest.fixture(scope="module")
 def scene():
-    pytest.importorskip("world.gltf")
     from world.loader import load_scene
     return load_scene("rover")
 

@@ -13,10 +13,11 @@ from .cliargs import check_output_file
 from .imageio import OutputSet
 
 HEADER = """\
-The scene that `hmblur shot {asset}` renders, written by `hmblur scene`: the asset as one
-gltf entry, a camera framing it over its animation, two lights, a 1/60 s shutter and the
-middle of its animation as the frame time (docs/scene-format.md, "A glTF file as a
-scene"). Edit freely: the file loads as it is."""
+Written by `hmblur scene {asset}`:
+the scene this asset stands for in shot, view, compare, bench and video (docs/scene-format.md,
+"A glTF file as a scene"): the asset as one gltf entry, a camera framing it over its
+animation, two lights, a 1/60 s shutter, the middle of its animation as the frame time.
+Edit freely: the file loads as it is."""
 
 
 def register(sub):
