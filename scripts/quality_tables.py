@@ -23,7 +23,7 @@ CONFORMANCE = ROOT / "tests" / "conformance"
 
 # (label, scene argument)
 SCENES = [("living_room", "living_room"), ("spinner", "spinner"), ("thin", "thin"),
-          ("pan", "pan"), ("wheel", "wheel"),
+          ("pan", "pan"), ("wheel", "wheel"), ("rover", "rover"),
           ("basic", str(CONFORMANCE / "basic.toml")),
           ("vase_pan", str(CONFORMANCE / "vase_pan.toml")),
           ("keys_arc", str(CONFORMANCE / "keys_arc.toml")),
