@@ -200,9 +200,16 @@ class RayScene:
 
         self._static_hits: StaticHits | None = None
         self.moving: list[tuple[SceneObject, rtcs.EmbreeScene]] = []
+        built: dict[int, rtcs.EmbreeScene] = {}     # a mesh shared by rigid movers: one scene
         for o in scene.objects:
             if o.moving and len(o.mesh.faces):
-                self.moving.append((o, self._mesh_scene(o.vertices_at(0.0), o.mesh.faces)))
+                if o.skin is None and id(o.mesh) in built:
+                    es = built[id(o.mesh)]
+                else:
+                    es = self._mesh_scene(o.vertices_at(0.0), o.mesh.faces)
+                    if o.skin is None:
+                        built[id(o.mesh)] = es
+                self.moving.append((o, es))
         # A skinned mover's scene holds its mesh posed at one time: rebuilt for each new t
         # (embreex has no refit), the time it takes counted in skin_ms.
         self._skinned = [k for k, (o, _) in enumerate(self.moving) if o.skin is not None]
