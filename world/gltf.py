@@ -14,7 +14,14 @@ pygltflib supplies the glTF constants. Accessors are decoded as glTF 2.0 says: b
 matrix column padding, normalized integer components, sparse substitution.
 
 Conventions: matrices are column-vector (p' = M @ p; glTF stores them column-major);
-quaternions are in glTF's (x, y, z, w) order throughout this module.
+quaternions are in glTF's (x, y, z, w) order throughout this module. Decoded arrays are
+read-only and may be shared between primitives (copy before modifying).
+
+What the scene loader does with it (SCENE_FORMAT.md, v1.2): one object per
+`mesh_nodes()` entry, in that order; M(t) = P(t) @ world_matrices(a)[node], with
+a = animation_time(t, ...); a skinned node draws skin_vertices(...) with
+joint_matrices(skin, worlds) and P(t) only (its own World is not applied), and moves when
+`skin_moving(skin, anims)`; `ignored` is printed once.
 
 Sizes are bounded before anything is allocated (MAX_* below), so that a small hostile file
 cannot make the program allocate gigabytes: file sizes, decoded accessor components,
