@@ -594,6 +594,7 @@ def test_two_joint_bar(tmp_path, weights_scale):
     anims = a.select("bend")
     assert a.skin_moving(0, anims) and a.moving(anims).tolist() == [False, True, False]
     part = a.meshes[0][0]
+    a.validate_skin(part, 0)
     jm = a.joint_matrices(0, a.world_matrices(1.0, anims))
     pos, nrm = skin_vertices(part.positions, part.normals, part.joints, part.weights, jm)
     # joint 1 = T(1,0,0) Rz(90) T(-1,0,0): (2,0,0) -> (1,1,0); (1.5,0,0) -> (1,0.5,0), half with (1.5,0,0)

@@ -46,7 +46,7 @@ import numpy as np
 import pygltflib as G
 
 MAX_ASSET_BYTES = 256 * 2**20         # any one .gltf/.glb/.bin/image file or data URI
-MAX_ACCESSOR_COMPONENTS = 2**27        # all decoded accessor components together (1 GiB as float64)
+MAX_ACCESSOR_COMPONENTS = 2**26        # all decoded accessor components together (512 MiB as float64)
 MAX_VERTICES = 2**24                   # vertices of all mesh-node instances of the scene
 MAX_TRIANGLES = 2**24                  # triangles of all mesh-node instances of the scene
 MAX_NODES = 2**16
