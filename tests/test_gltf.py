@@ -699,6 +699,9 @@ def test_file_mistakes(tmp_path, monkeypatch):
         load_gltf(tmp_path / "missing.gltf")
     with pytest.raises(GltfError, match="is not a regular file"):
         load_gltf(tmp_path)
+    with pytest.raises(GltfError, match=r"cannot read .*a\\nb\.gltf") as e:
+        load_gltf(tmp_path / "a\nb.gltf")
+    assert "\n" not in str(e.value)
     fifo = tmp_path / "fifo.gltf"
     os.mkfifo(fifo)
     with pytest.raises(GltfError, match="is not a regular file"):

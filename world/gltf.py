@@ -83,7 +83,11 @@ _CHUNK_BIN = 0x004E4942
 
 
 class GltfError(Exception):
-    """One line saying what is wrong with the asset, naming the item (no file prefix)."""
+    """One line saying what is wrong with the asset, naming the item (no file prefix).
+    Line breaks that come with names or paths from the asset are escaped."""
+
+    def __init__(self, message: str = ""):
+        super().__init__(str(message).replace("\r", "\\r").replace("\n", "\\n"))
 
 
 # ---------------------------------------------------------------- data classes
