@@ -645,7 +645,9 @@ def test_skin_speed():
         t = time.perf_counter()
         pos, nrm = skin_vertices(p, nr, j, w, jm)
         best = min(best, time.perf_counter() - t)
-    assert best < 0.1, f"{best * 1000:.0f} ms for 100k vertices"
+    # ~40 ms on an idle core; the bound leaves room for a loaded test machine and still
+    # fails any per-vertex Python loop (seconds)
+    assert best < 0.25, f"{best * 1000:.0f} ms for 100k vertices"
     v = 12345
     b = sum(w[v, i] * jm[j[v, i]] for i in range(4)) / w[v].sum()
     np.testing.assert_allclose(pos[v], (b @ np.append(p[v], 1))[:3], atol=1e-12)
