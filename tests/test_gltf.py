@@ -1248,3 +1248,20 @@ def test_conformance_gltf_skin_silhouette():
     # unlooped (clamped to the last key) is visibly another pose
     bad, n = _agrees(mask(a.animation_time(t, an, time_scale=3.0)), ids, 2, (3, 4, 5))
     assert bad > 500, (bad, n)
+
+
+def test_matrix_column_padding(tmp_path):
+    """MAT2 of bytes and MAT3 of shorts: each column starts on a 4-byte boundary (glTF
+    3.6.2.4); the accessor's components come out column by column."""
+    b = Builder()
+    m2 = b.view(np.uint8([1, 2, 99, 99, 3, 4, 99, 99, 5, 6, 99, 99, 7, 8, 99, 99]).tobytes())
+    b.add_accessor({"bufferView": m2, "componentType": UBYTE, "count": 2, "type": "MAT2"})
+    cols = np.int16([[1, 2, 3, 99], [4, 5, 6, 99], [7, 8, 9, 99]])
+    m3 = b.view(cols.tobytes())
+    b.add_accessor({"bufferView": m3, "componentType": SHORT, "count": 1, "type": "MAT3", "normalized": True})
+    r = gl._Reader(write(tmp_path, b.gltf_dict()))
+    r.load()
+    v2, _ = r.accessor(0, "test")
+    np.testing.assert_array_equal(v2, [[1, 2, 3, 4], [5, 6, 7, 8]])
+    v3, _ = r.accessor(1, "test")
+    np.testing.assert_array_equal(v3, [np.arange(1, 10) / 32767.0])
