@@ -3,10 +3,12 @@ through `register(subparsers)`; a user's mistake prints one line and exits 2."""
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+import threading
 from pathlib import Path
 
-from world.errors import UserError
+from world.errors import UserError, printable
 from .progress import end_line
 
 COMMANDS = ("shot", "compare", "bench", "view", "params", "graph", "video")
@@ -70,8 +72,33 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP (a job scheduler, a closed terminal), raised in the main thread
+    as Ctrl-C is: every `finally` and `except BaseException` that cleans up after an
+    interrupt (temp files, a video's staging folder) runs for these too."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _terminate(signum, frame):
+    raise Terminated(signum)
+
+
+def catch_signals():
+    """SIGTERM and SIGHUP end the program the way SIGINT does (Terminated); where they
+    were ignored (nohup), they stay ignored."""
+    for name in ("SIGTERM", "SIGHUP"):
+        sig = getattr(signal, name, None)
+        if sig is not None and signal.getsignal(sig) is not signal.SIG_IGN:
+            signal.signal(sig, _terminate)
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
+    if threading.current_thread() is threading.main_thread():
+        catch_signals()
     try:
         try:
             parser = build_parser()
@@ -87,8 +114,11 @@ def main(argv=None) -> int:
         return 2
     except OSError as exc:                 # an output that cannot be written (full disk, ...)
         where = f"{exc.filename}: " if exc.filename else ""
-        print(f"hmblur: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        print(printable(f"hmblur: error: {where}{exc.strerror or exc}"), file=sys.stderr)
         return 2
+    except Terminated as exc:
+        print(f"hmblur: terminated ({signal.Signals(exc.signum).name})", file=sys.stderr)
+        return 128 + exc.signum
     except KeyboardInterrupt:
         print("hmblur: interrupted", file=sys.stderr)
         return 130

@@ -11,6 +11,7 @@ import time
 
 import numpy as np
 
+from world import limits
 from . import cliargs
 from .glcontext import create_headless, device_name
 from .imageio import write_json_atomic
@@ -210,8 +211,8 @@ def speed_table(r: Renderer, s, speeds: list[float], frames: int) -> list[dict]:
 
 def run(args) -> int:
     s = cliargs.setup(args)
-    frames = cliargs.parse_int("--frames", args.frames, 1)
-    warmup = cliargs.parse_int("--warmup", args.warmup, 0)
+    frames = cliargs.parse_int("--frames", args.frames, 1, limits.MAX_FRAMES)
+    warmup = cliargs.parse_int("--warmup", args.warmup, 0, limits.MAX_FRAMES)
     available = [m for m in REALTIME if m in MODES]
     modes = available if args.modes is None else cliargs.parse_modes("--modes", args.modes,
                                                                      available)

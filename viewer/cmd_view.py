@@ -6,6 +6,7 @@ import argparse
 import textwrap
 from pathlib import Path
 
+from world import limits
 from . import cliargs
 from .render.modes import MODES
 from .video_writer import OUT_HELP, video_paths
@@ -66,7 +67,8 @@ def run(args) -> int:
         args.mode = str((s.sidecar or {}).get("mode", "off"))
     if args.mode not in MODES:
         raise cliargs.UserError(f"--mode {args.mode}: expected one of {', '.join(MODES)}")
-    frames = cliargs.parse_int("--frames", args.frames, 1) if args.frames is not None else None
+    frames = (cliargs.parse_int("--frames", args.frames, 1, limits.MAX_FRAMES)
+              if args.frames is not None else None)
     if args.screenshot is not None and frames is None:
         raise cliargs.UserError("--screenshot needs --frames N (the window is saved at frame N)")
     screenshot = (cliargs.check_output_file(args.screenshot, "--screenshot", suffix=".png")
@@ -75,9 +77,7 @@ def run(args) -> int:
     shot_dir = cliargs.check_output_dir(args.shot_dir, "--shot-dir", create=False)
     if args.record is not None:
         video_paths(args.record, "--record")
-    fps = 30.0 if args.record_fps is None else cliargs.parse_float("--record-fps", args.record_fps)
-    if fps <= 0:
-        raise cliargs.UserError(f"--record-fps {args.record_fps}: expected frames per second > 0")
+    fps = 30.0 if args.record_fps is None else cliargs.parse_fps("--record-fps", args.record_fps)
     from .ui.script import load_script
     script = load_script(args.script) if args.script else []
     # Imported here so that `hmblur shot` and `--help` never load glfw or imgui.
