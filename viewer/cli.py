@@ -82,7 +82,13 @@ class Terminated(KeyboardInterrupt):
         self.signum = signum
 
 
+_received: list[int] = []      # the signal that is ending the program, once one has come
+
+
 def _terminate(signum, frame):
+    if _received:                  # already ending: let the clean-up run to its end
+        return
+    _received.append(signum)
     raise Terminated(signum)
 
 
@@ -95,8 +101,14 @@ def catch_signals():
             signal.signal(sig, _terminate)
 
 
+def _terminated(signum: int) -> int:
+    print(f"hmblur: terminated ({signal.Signals(signum).name})", file=sys.stderr)
+    return 128 + signum
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
+    _received.clear()
     if threading.current_thread() is threading.main_thread():
         catch_signals()
     try:
@@ -109,19 +121,24 @@ def main(argv=None) -> int:
             return int(args.run(args) or 0)
         finally:
             end_line()                     # (a progress bar's line, cut short)
-    except UserError as exc:
-        print(f"hmblur: error: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:                 # an output that cannot be written (full disk, ...)
-        where = f"{exc.filename}: " if exc.filename else ""
-        print(printable(f"hmblur: error: {where}{exc.strerror or exc}"), file=sys.stderr)
-        return 2
     except Terminated as exc:
-        print(f"hmblur: terminated ({signal.Signals(exc.signum).name})", file=sys.stderr)
-        return 128 + exc.signum
+        return _terminated(exc.signum)
     except KeyboardInterrupt:
         print("hmblur: interrupted", file=sys.stderr)
         return 130
+    except Exception as exc:
+        if _received:
+            # Raised inside C code (numpy's tofile, ...), Terminated can come out as
+            # another exception; the clean-up ran all the same.
+            return _terminated(_received[0])
+        if isinstance(exc, UserError):
+            print(f"hmblur: error: {exc}", file=sys.stderr)
+            return 2
+        if isinstance(exc, OSError):       # an output that cannot be written (full disk, ...)
+            where = f"{exc.filename}: " if exc.filename else ""
+            print(printable(f"hmblur: error: {where}{exc.strerror or exc}"), file=sys.stderr)
+            return 2
+        raise
 
 
 if __name__ == "__main__":

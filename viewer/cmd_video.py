@@ -129,6 +129,7 @@ def run(args) -> int:
                         "with a mode other than reference")
     cliargs.parse_time("last frame time", repr(s.time + (frames - 1) / fps))
     out = video_paths(args.out, "--out", METRIC_FILES if args.metrics else ())
+    check_gif_memory(out, frames, s.size, len(modes))
     check_folder_collisions(out, frames, METRIC_FILES if args.metrics else ())
     times = frame_times(s.time, frames, fps)
     from .glcontext import create_headless, device_name
@@ -175,6 +176,19 @@ def run(args) -> int:
 
 
 parse_fps = cliargs.parse_fps
+# A GIF is written in one piece (one palette for the clip): its frames are held in memory.
+MAX_GIF_BYTES = 1 << 30
+
+
+def check_gif_memory(out: VideoPaths, frames: int, size, n_modes: int):
+    """A GIF's frames, all held until it is written, must fit MAX_GIF_BYTES (an estimate:
+    the modes side by side, 3 bytes a pixel)."""
+    need = frames * size[0] * size[1] * n_modes * 3
+    if out.kind == "gif" and need > MAX_GIF_BYTES:
+        raise UserError(f"{out.flag} {out.video}: a GIF holds every frame in memory until it "
+                        f"is written: {frames} frames of {n_modes} x {size[0]}x{size[1]} are "
+                        f"~{need >> 20} MB, more than {MAX_GIF_BYTES >> 20} MB: write .mp4 or "
+                        "a folder, or fewer frames")
 
 
 def sidecar(s: cliargs.Setup, scene: str, modes, frames: int, fps: float, out: VideoPaths,
