@@ -9,6 +9,7 @@ import threading
 from pathlib import Path
 
 from world.errors import UserError, printable
+from .imageio import remove_partials
 from .progress import end_line
 
 COMMANDS = ("shot", "compare", "bench", "view", "params", "graph", "video")
@@ -121,6 +122,7 @@ def main(argv=None) -> int:
             return int(args.run(args) or 0)
         finally:
             end_line()                     # (a progress bar's line, cut short)
+            remove_partials()              # (what an interrupted write left: none, else)
     except Terminated as exc:
         return _terminated(exc.signum)
     except KeyboardInterrupt:

@@ -22,7 +22,7 @@ from PIL import Image
 
 from . import cliargs
 from world.errors import UserError
-from .imageio import OutputSet, write_png_atomic
+from .imageio import PARTIAL, OutputSet, forget_partial, signals_held, write_png_atomic
 
 KINDS = ("mp4", "gif", "png")
 SUFFIXES = {".mp4": "mp4", ".gif": "gif"}
@@ -154,8 +154,10 @@ class VideoWriter:
         parent = out.video.parent if str(out.video.parent) else Path(".")
         while not parent.exists() and parent != parent.parent:
             parent = parent.parent
-        self.stage = Path(tempfile.mkdtemp(prefix=f".{out.video.name}.", suffix=".part",
-                                           dir=parent))
+        with signals_held():
+            self.stage = Path(tempfile.mkdtemp(prefix=f".{out.video.name}.", suffix=".part",
+                                               dir=parent))
+            PARTIAL.add(self.stage)
         self.count = 0
         # (frames of an earlier hmblur clip in the folder: the only ones removed after)
         self._earlier = earlier_clip(out.video) if out.kind == "png" and out.video.is_dir() \
@@ -268,7 +270,7 @@ class VideoWriter:
                 pass
             self._container = None
         self._gif = []
-        shutil.rmtree(self.stage, ignore_errors=True)
+        forget_partial(self.stage)
 
     def __enter__(self):
         return self
