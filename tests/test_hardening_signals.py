@@ -41,7 +41,7 @@ def signal_when(argv, folder, sig, ready, timeout=120.0):
     return p.returncode, err, sent
 
 
-@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT])
 def test_a_signal_during_the_buffers_write_leaves_nothing(tmp_path, sig):
     # Signalled while the image, its sidecar and ~50 buffer files sit as temp files.
     argv = ["shot", BASIC, "--mode", "hybrid", "--size", "320x180", "--out",
@@ -50,8 +50,9 @@ def test_a_signal_during_the_buffers_write_leaves_nothing(tmp_path, sig):
                                   lambda f: any(p.name.endswith(".tmp") for p in f.rglob("*")))
     assert sent, err
     assert code == 128 + sig, err
-    assert err.strip().splitlines()[-1] == f"hmblur: terminated ({signal.Signals(sig).name})"
-    assert partial_files(tmp_path) == []
+    said = "interrupted" if sig == signal.SIGINT else f"terminated ({signal.Signals(sig).name})"
+    assert err.strip().splitlines()[-1] == f"hmblur: {said}"
+    assert partial_files(tmp_path) == [], err
     assert not (tmp_path / "a.png").exists() and not (tmp_path / "buf").exists()
 
 
@@ -64,8 +65,8 @@ def test_sigterm_during_a_video_leaves_nothing(tmp_path, out):
                                   lambda f: any(p.name.endswith(".part") for p in f.iterdir()))
     assert sent, err
     assert code == 128 + signal.SIGTERM, err
-    assert partial_files(tmp_path) == []
-    assert sorted(os.listdir(tmp_path)) == []
+    assert partial_files(tmp_path) == [], err
+    assert sorted(os.listdir(tmp_path)) == [], err
 
 
 def test_an_ignored_sighup_stays_ignored():

@@ -9,6 +9,7 @@ import threading
 from pathlib import Path
 
 from world.errors import UserError, printable
+from .ending import Terminated, catch_signals, received, restore_signals
 from .imageio import remove_partials
 from .progress import end_line
 
@@ -73,45 +74,17 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-class Terminated(KeyboardInterrupt):
-    """SIGTERM or SIGHUP (a job scheduler, a closed terminal), raised in the main thread
-    as Ctrl-C is: every `finally` and `except BaseException` that cleans up after an
-    interrupt (temp files, a video's staging folder) runs for these too."""
-
-    def __init__(self, signum: int):
-        super().__init__(signum)
-        self.signum = signum
-
-
-_received: list[int] = []      # the signal that is ending the program, once one has come
-
-
-def _terminate(signum, frame):
-    if _received:                  # already ending: let the clean-up run to its end
-        return
-    _received.append(signum)
-    raise Terminated(signum)
-
-
-def catch_signals():
-    """SIGTERM and SIGHUP end the program the way SIGINT does (Terminated); where they
-    were ignored (nohup), they stay ignored."""
-    for name in ("SIGTERM", "SIGHUP"):
-        sig = getattr(signal, name, None)
-        if sig is not None and signal.getsignal(sig) is not signal.SIG_IGN:
-            signal.signal(sig, _terminate)
-
-
 def _terminated(signum: int) -> int:
-    print(f"hmblur: terminated ({signal.Signals(signum).name})", file=sys.stderr)
+    if signum == signal.SIGINT:
+        print("hmblur: interrupted", file=sys.stderr)
+    else:
+        print(f"hmblur: terminated ({signal.Signals(signum).name})", file=sys.stderr)
     return 128 + signum
 
 
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
-    _received.clear()
-    if threading.current_thread() is threading.main_thread():
-        catch_signals()
+    old_handlers = catch_signals() if threading.current_thread() is threading.main_thread() else {}
     try:
         try:
             parser = build_parser()
@@ -123,16 +96,17 @@ def main(argv=None) -> int:
         finally:
             end_line()                     # (a progress bar's line, cut short)
             remove_partials()              # (what an interrupted write left: none, else)
+            restore_signals(old_handlers)
     except Terminated as exc:
         return _terminated(exc.signum)
     except KeyboardInterrupt:
         print("hmblur: interrupted", file=sys.stderr)
         return 130
     except Exception as exc:
-        if _received:
+        if received:
             # Raised inside C code (numpy's tofile, ...), Terminated can come out as
             # another exception; the clean-up ran all the same.
-            return _terminated(_received[0])
+            return _terminated(received[0])
         if isinstance(exc, UserError):
             print(f"hmblur: error: {exc}", file=sys.stderr)
             return 2

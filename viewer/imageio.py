@@ -21,13 +21,13 @@ import math
 import os
 import secrets
 import shutil
-import signal
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 from PIL import Image
+
+from .ending import held
 
 _SRGB_LINEAR_MAX = 0.0031308   # linear-side breakpoint of the sRGB curve
 _SRGB_ENCODED_MAX = 0.04045    # encoded-side breakpoint (decoding)
@@ -66,18 +66,9 @@ def srgb8_to_linear(srgb8) -> np.ndarray:
 # --- atomic writers ------------------------------------------------------------------
 
 PARTIAL: set[Path] = set()      # temp files and staging folders on disk now
-_ENDING = {getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n)}
-
-
-@contextmanager
-def signals_held():
-    """Signals that end the program wait until the block is done (a file made and
-    entered in PARTIAL, or renamed and taken out, is one step)."""
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, _ENDING)
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+# A signal that ends the program waits for the block (a file made and entered in PARTIAL,
+# or renamed and taken out, is one step).
+signals_held = held
 
 
 def remove_partials():
