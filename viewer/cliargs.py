@@ -285,6 +285,16 @@ def setup(args) -> Setup:
     return Setup(scene, size, t, params, seed, side)
 
 
+# What `shot` and `view` render when no mode is given: the blur this project is about.
+DEFAULT_MODE = "hybrid"
+
+
+def pick_mode(flag: str | None, sidecar: dict | None) -> str:
+    """--mode, else the --params file's mode, else DEFAULT_MODE (checked by the caller)."""
+    mode = flag if flag is not None else (sidecar or {}).get("mode")
+    return str(mode) if mode is not None else DEFAULT_MODE
+
+
 def parse_modes(flag: str, text: str, available: list[str]) -> list[str]:
     """A comma-separated list of modes, each of `available`, at least one, none twice."""
     modes = [m.strip() for m in text.split(",") if m.strip()]

@@ -40,7 +40,8 @@ def register(sub):
                        epilog=KEYS + "\n\n" + script_help)
     cliargs.add_scene_args(p)
     p.add_argument("--mode", default=None,
-                   help=f"one of: {', '.join(MODES)} (default: off, or the --params file's)")
+                   help=f"one of: {', '.join(MODES)} (default: {cliargs.DEFAULT_MODE}, or the "
+                        "--params file's)")
     p.add_argument("--frames", type=str, default=None, metavar="N",
                    help="run this many frames, then exit (no person needed)")
     p.add_argument("--screenshot", default=None, metavar="PNG",
@@ -63,8 +64,7 @@ def register(sub):
 
 def run(args) -> int:
     s = cliargs.setup(args)
-    if args.mode is None:
-        args.mode = str((s.sidecar or {}).get("mode", "off"))
+    args.mode = cliargs.pick_mode(args.mode, s.sidecar)
     if args.mode not in MODES:
         raise cliargs.UserError(f"--mode {args.mode}: expected one of {', '.join(MODES)}")
     frames = (cliargs.parse_int("--frames", args.frames, 1, limits.MAX_FRAMES)
