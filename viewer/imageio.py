@@ -163,8 +163,8 @@ class OutputSet:
                         made.append(folder)
             for path, write in self._files:
                 done.append(_write_temp(path, write))
-            for tmp, (path, _) in zip(done, self._files):
-                with signals_held():
+            with signals_held():              # the renames: all of them, then a signal
+                for tmp, (path, _) in zip(done, self._files):
                     os.replace(tmp, path)
                     PARTIAL.discard(tmp)
         except BaseException:
@@ -172,7 +172,10 @@ class OutputSet:
                 if tmp in PARTIAL:
                     forget_partial(tmp)
             for folder in reversed(made):     # deepest first
-                folder.rmdir()
+                try:
+                    folder.rmdir()
+                except OSError:               # (a file renamed into it before a failure)
+                    pass
             raise
 
 
