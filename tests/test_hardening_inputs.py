@@ -151,6 +151,18 @@ def test_the_scene_triangle_budget_counts_every_mesh(tmp_path, monkeypatch):
         load_scene(write_scene(tmp_path, body * 3, "three.toml"))
 
 
+def test_objects_and_lights_are_counted(tmp_path, monkeypatch):
+    monkeypatch.setattr(limits, "MAX_OBJECTS", 2)
+    monkeypatch.setattr(limits, "MAX_LIGHTS", 1)
+    box = "[[objects]]\nmesh = { box = [1.0, 1.0, 1.0] }\n"
+    light = "[[lights]]\ndirection = [0.0, -1.0, 0.0]\n"
+    load_scene(write_scene(tmp_path, box * 2 + light, "ok.toml"))
+    with pytest.raises(SceneError, match="objects: expected at most 2 entries, got 3"):
+        load_scene(write_scene(tmp_path, box * 3, "objects.toml"))
+    with pytest.raises(SceneError, match="lights: expected at most 1 entries, got 2"):
+        load_scene(write_scene(tmp_path, light * 2, "lights.toml"))
+
+
 def test_a_frame_size_past_the_pixel_limit_is_refused(tmp_path):
     path = write_scene(tmp_path, "", head=HEAD.replace("width = 64", "width = 16384")
                        .replace("height = 36", "height = 16384"))

@@ -185,18 +185,7 @@ def read_sidecar(path: str) -> dict:
     """An earlier output's JSON (an image's sidecar, compare's metrics.json, a bench
     report): anything with a table of parameters. A regular file of at most
     limits.MAX_PARAMS_BYTES, checked before reading (not a device, FIFO or folder)."""
-    try:
-        with open(path, "rb", opener=_open_regular) as f:
-            raw = f.read(limits.MAX_PARAMS_BYTES + 1)
-    except FileNotFoundError:
-        raise UserError(f"--params {path}: file not found") from None
-    except _NotRegular as exc:
-        raise UserError(f"--params {path}: {exc}") from None
-    except OSError as exc:
-        raise UserError(f"--params {path}: cannot read ({exc.strerror or exc.__class__.__name__})") from None
-    if len(raw) > limits.MAX_PARAMS_BYTES:
-        raise UserError(f"--params {path}: larger than {limits.MAX_PARAMS_BYTES} bytes: "
-                        "not a sidecar")
+    raw = read_user_file("--params", path, limits.MAX_PARAMS_BYTES, "a sidecar")
     try:
         data = json.loads(raw.decode("utf-8"))
     except UnicodeDecodeError:
@@ -231,6 +220,24 @@ def sidecar_size(value, source: str) -> tuple[int, int]:
 
 class _NotRegular(OSError):
     pass
+
+
+def read_user_file(flag: str, path: str, max_bytes: int, what: str) -> bytes:
+    """The bytes of a file a flag names: a regular file (not a device, FIFO or folder,
+    refused before any read) of at most `max_bytes`; else one line naming the flag."""
+    try:
+        with open(path, "rb", opener=_open_regular) as f:
+            raw = f.read(max_bytes + 1)
+    except FileNotFoundError:
+        raise UserError(f"{flag} {path}: file not found") from None
+    except _NotRegular as exc:
+        raise UserError(f"{flag} {path}: {exc}") from None
+    except (OSError, ValueError) as exc:
+        raise UserError(f"{flag} {path}: cannot read "
+                        f"({getattr(exc, 'strerror', None) or exc.__class__.__name__})") from None
+    if len(raw) > max_bytes:
+        raise UserError(f"{flag} {path}: larger than {max_bytes} bytes: not {what}")
+    return raw
 
 
 def _open_regular(path, flags):

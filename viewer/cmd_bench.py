@@ -26,6 +26,7 @@ REALTIME = ("off", "mcguire", "ue4", "guertin", "hybrid")
 # Bounds of --speeds and --animate: beyond them a scene's motion is no longer a frame's.
 MAX_SPEED = 1e3
 MIN_FPS, MAX_FPS = 1e-3, 1e6
+MAX_SPEEDS = 64              # --speeds factors (each a set of timed frames)
 
 
 def register(sub):
@@ -221,6 +222,8 @@ def run(args) -> int:
     if args.speeds:
         if "hybrid" not in available:
             raise cliargs.UserError("--speeds: needs the hybrid mode")
+        if args.speeds.count(",") >= MAX_SPEEDS:
+            raise cliargs.UserError(f"--speeds: expected at most {MAX_SPEEDS} factors")
         speeds = [cliargs.parse_float("--speeds", x) for x in args.speeds.split(",")]
         if any(abs(v) > MAX_SPEED for v in speeds):
             raise cliargs.UserError(f"--speeds {args.speeds}: expected factors within "

@@ -15,6 +15,10 @@ MAX_FRAME_PIXELS = 2048 * 2048
 # Triangles of a scene, all meshes together (a revolve or file counted before it is built
 # or read into the renderer): ~0.5 kB each through trimesh, Embree and the GPU.
 MAX_TRIANGLES = 2_000_000
+# Objects and lights of a scene: each object costs ~25 kB of host memory and a draw call
+# per pass; every pixel's shading loops over the lights.
+MAX_OBJECTS = 10_000
+MAX_LIGHTS = 1_024
 # Asset files a scene names (meshes, images) and their decoded size.
 MAX_SCENE_BYTES = 16 << 20
 MAX_MESH_BYTES = 256 << 20

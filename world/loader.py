@@ -207,6 +207,11 @@ class _Loader:
             self.fail(key, f"expected an array of tables ([[{key}]]), got {_describe(v)}")
         return v
 
+    def at_most(self, v: list, key: str, most: int) -> list:
+        if len(v) > most:
+            self.fail(key, f"expected at most {most} entries, got {len(v)}")
+        return v
+
     def unit(self, v, key: str) -> np.ndarray:
         n = _normalised(self.vec3(v, key))
         if n is None:
@@ -225,9 +230,11 @@ class _Loader:
         camera = self.camera(self.require(doc, "camera", "", "a [camera] table"))
         render = self.render(doc.get("render", {}))
         lights = [self.light(t, f"lights[{i}]")
-                  for i, t in enumerate(self.array_of_tables(doc.get("lights", []), "lights"), 1)]
+                  for i, t in enumerate(self.at_most(self.array_of_tables(
+                      doc.get("lights", []), "lights"), "lights", limits.MAX_LIGHTS), 1)]
         objects = [self.object(t, i)
-                   for i, t in enumerate(self.array_of_tables(doc.get("objects", []), "objects"), 1)]
+                   for i, t in enumerate(self.at_most(self.array_of_tables(
+                       doc.get("objects", []), "objects"), "objects", limits.MAX_OBJECTS), 1)]
         return Scene(name=name, path=self.path, camera=camera, background=background,
                      ambient=ambient, render=render, lights=lights, objects=objects)
 
