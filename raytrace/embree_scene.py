@@ -31,6 +31,7 @@ from embreex import rtcore_scene as rtcs
 from embreex.mesh_construction import TriangleMesh
 
 from world.scene import Scene, SceneObject
+from world import transforms as tf
 from world.transforms import box_corners
 
 from . import kernels
@@ -275,7 +276,7 @@ class RayScene:
             lo, hi = kernels.world_boxes(ms, self._corners, 1e-4, 1e-6)
             inv, ok = kernels.affine_inverses(ms)
             if not ok:                  # (a determinant too small or too large for it)
-                inv = np.linalg.inv(ms).astype(np.float32)
+                inv = np.stack([tf.limit_inverse(m) for m in ms]).astype(np.float32)
             # Not renormalised, so t stays in world units; a pure translation keeps them.
             self._pose_cache = (key, Poses(lo, hi, inv, kernels.turns_or_scales(inv)))
         return self._pose_cache[1]

@@ -1,5 +1,7 @@
 """glTF entries in the scene tree (scene format v1.2): shared meshes built once, the
 entry's timing keys, animation selection, and what the format leaves out said on stderr."""
+import shutil
+
 import numpy as np
 import pytest
 
@@ -14,6 +16,7 @@ BOX = CONFORMANCE / "gltf" / "BoxAnimated.gltf"
 
 
 def scene_with(tmp_path, entry: str, name="s"):
+    shutil.copy(BOX, tmp_path / BOX.name)     # (a scene names files in its own folder)
     p = tmp_path / f"{name}.toml"
     p.write_text(f"""
 [camera]
@@ -23,7 +26,7 @@ fov_y = 45.0
 shutter = 0.05
 [[objects]]
 name = "a"
-gltf = "{BOX}"
+gltf = "{BOX.name}"
 {entry}
 """)
     return load_scene(p)

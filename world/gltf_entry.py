@@ -71,7 +71,9 @@ def load_entry(loader, t: dict, number: int, first_id: int):
         if node.skin is None and node.mesh in shared:
             arrays = shared[node.mesh]
         else:
+            loader.budget(sum(len(p.faces) for p in asset.meshes[node.mesh]), key)
             arrays = _mesh(loader, asset.meshes[node.mesh], key)
+            loader.triangles += len(arrays["mesh"].faces)
             if node.skin is None:
                 shared[node.mesh] = arrays
         mesh, ranges = arrays["mesh"], arrays["ranges"]
