@@ -44,8 +44,15 @@ class SurfaceTable:
         self.face_offset = np.zeros(max_id + 1, dtype=np.int64)
         verts, vnorms, uvs, faces, fnorms, flat = [], [], [], [], [], []
         nv = nf = 0
+        seen: dict[tuple, int] = {}      # a mesh shared by rigid objects: its faces once
         for o in objs:
             m = o.mesh
+            same = (id(m), o.shading)
+            if o.skin is None and same in seen:
+                self.face_offset[o.id] = seen[same]
+                continue
+            if o.skin is None:
+                seen[same] = nf
             self.face_offset[o.id] = nf
             verts.append(m.vertices)
             vnorms.append(m.vertex_normals)

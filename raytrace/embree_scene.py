@@ -31,6 +31,7 @@ from embreex import rtcore_scene as rtcs
 from embreex.mesh_construction import TriangleMesh
 
 from world.scene import Scene, SceneObject
+from world import transforms as tf
 from world.transforms import box_corners
 
 from . import kernels
@@ -200,9 +201,16 @@ class RayScene:
 
         self._static_hits: StaticHits | None = None
         self.moving: list[tuple[SceneObject, rtcs.EmbreeScene]] = []
+        built: dict[int, rtcs.EmbreeScene] = {}     # a mesh shared by rigid movers: one scene
         for o in scene.objects:
             if o.moving and len(o.mesh.faces):
-                self.moving.append((o, self._mesh_scene(o.vertices_at(0.0), o.mesh.faces)))
+                if o.skin is None and id(o.mesh) in built:
+                    es = built[id(o.mesh)]
+                else:
+                    es = self._mesh_scene(o.vertices_at(0.0), o.mesh.faces)
+                    if o.skin is None:
+                        built[id(o.mesh)] = es
+                self.moving.append((o, es))
         # A skinned mover's scene holds its mesh posed at one time: rebuilt for each new t
         # (embreex has no refit), the time it takes counted in skin_ms.
         self._skinned = [k for k, (o, _) in enumerate(self.moving) if o.skin is not None]
@@ -268,7 +276,7 @@ class RayScene:
             lo, hi = kernels.world_boxes(ms, self._corners, 1e-4, 1e-6)
             inv, ok = kernels.affine_inverses(ms)
             if not ok:                  # (a determinant too small or too large for it)
-                inv = np.linalg.inv(ms).astype(np.float32)
+                inv = np.stack([tf.limit_inverse(m) for m in ms]).astype(np.float32)
             # Not renormalised, so t stays in world units; a pure translation keeps them.
             self._pose_cache = (key, Poses(lo, hi, inv, kernels.turns_or_scales(inv)))
         return self._pose_cache[1]

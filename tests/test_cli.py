@@ -58,7 +58,7 @@ def bad_cases(tmp_path):
         "NaN": (["shot", write(tmp_path, "nan.toml", GOOD.replace("fov_y = 45.0", "fov_y = nan")), "--out", out], "fov_y"),
         "bad --size": (["shot", BASIC, "--size", "12xab", "--out", out], "--size"),
         "zero --size": (["shot", BASIC, "--size", "0x10", "--out", out], "--size"),
-        "size beyond GL limits": (["shot", BASIC, "--size", "100000x10", "--out", out], "GL limit"),
+        "size beyond the frame limit": (["shot", BASIC, "--size", "100000x10", "--out", out], "too large"),
         "unknown --set key": (["shot", BASIC, "--set", "mcguire.nope=3", "--out", out], "nope"),
         "unknown --set group": (["shot", BASIC, "--set", "nope.x=3", "--out", out], "nope"),
         "--set value out of range": (["shot", BASIC, "--set", "reference.samples=0", "--out", out], "at least"),

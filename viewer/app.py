@@ -16,8 +16,8 @@ from pathlib import Path
 import glfw  # noqa: F401  (before imgui_bundle, see viewer/ui/window.py)
 from imgui_bundle import imgui
 
-from .cliargs import Setup, parse_float, parse_int, parse_size
-from world.errors import UserError
+from .cliargs import Setup, parse_float, parse_int, parse_seed, parse_size, parse_time
+from world.errors import UserError, printable
 from .glcontext import device_name
 from .imageio import write_json_atomic, write_png_atomic
 from .render.debug_view import KINDS, DebugView
@@ -244,7 +244,7 @@ class App:
                     a.fail("auto or one of " + ", ".join(KINDS))
                 s.view.kind = args[0]
             elif a.name == "time":
-                s.time = parse_float("time", args[0])
+                s.time = parse_time("time", args[0])
             elif a.name in ("play", "pause"):
                 s.playing = a.name == "play"
             elif a.name == "speed":
@@ -252,7 +252,7 @@ class App:
             elif a.name == "shutter":
                 s.scene.camera.shutter = max(0.0, parse_float("shutter", args[0]))
             elif a.name == "seed":
-                s.seed = parse_int("seed", args[0], 0)
+                s.seed = parse_seed("seed", args[0])
             elif a.name == "open":
                 self.open_scene(args[0])
             elif a.name == "reset":
@@ -267,7 +267,7 @@ class App:
             elif a.name == "overlay":
                 s.overlay = args[0]
             elif a.name == "subframes":
-                s.sub_frames = parse_int("subframes", args[0], 1)
+                s.sub_frames = parse_int("subframes", args[0], 1, 4096)
             elif a.name == "quit":
                 self.window.close()
         except UserError as exc:
@@ -319,7 +319,7 @@ class App:
             self.shown_name = name
         except Exception as exc:      # a shader error, a failing pass: show it, keep going
             if f"{exc}" not in " ".join(s.errors):
-                print(f"hmblur view: {exc.__class__.__name__}: {exc}", file=sys.stderr)
+                print(printable(f"hmblur view: {exc.__class__.__name__}: {exc}"), file=sys.stderr)
             s.report(f"render {s.mode}: {exc}")
             self.progressive.reset()
             screen.use()

@@ -6,9 +6,11 @@ import json
 import math
 import os
 import re
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 
+from world import limits
 from world.errors import SceneError, UserError
 from .params import ParamSet
 from world.scene import Scene
@@ -107,15 +109,21 @@ def check_set_groups(assignments: list[str], modes, mode_groups: dict, flag: str
 
 
 def parse_size(text: str, flag: str = "--size") -> tuple[int, int]:
-    m = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", text or "")
+    m = re.fullmatch(r"\s*(\d{1,9})\s*[xX]\s*(\d{1,9})\s*", text or "")
     if not m or int(m.group(1)) < 1 or int(m.group(2)) < 1:
         raise UserError(f"{flag} {text!r}: expected WIDTHxHEIGHT with positive integers, e.g. 640x360")
-    return int(m.group(1)), int(m.group(2))
+    return check_size(int(m.group(1)), int(m.group(2)), f"{flag} {text!r}")
 
 
-# The largest |frame time| taken, seconds: past it the float32 transforms of p + v t lose
-# every digit of a frame's motion (and far past it overflow).
-MAX_TIME = 1e6
+def check_size(w: int, h: int, where: str) -> tuple[int, int]:
+    """An image size within limits.MAX_FRAME_SIZE a side and MAX_FRAME_PIXELS in all."""
+    if max(w, h) > limits.MAX_FRAME_SIZE or w * h > limits.MAX_FRAME_PIXELS:
+        raise UserError(f"{where}: {w}x{h} is too large: at most {limits.MAX_FRAME_SIZE} px "
+                        f"a side and {limits.MAX_FRAME_PIXELS} pixels (e.g. 2560x1600)")
+    return w, h
+
+
+MAX_TIME = limits.MAX_TIME
 
 
 def parse_time(flag: str, text: str) -> float:
@@ -128,21 +136,39 @@ def parse_time(flag: str, text: str) -> float:
 def parse_float(flag: str, text: str) -> float:
     try:
         v = float(text)
-    except ValueError:
+    except (ValueError, OverflowError):
         raise UserError(f"{flag} {text!r}: expected a number") from None
     if not math.isfinite(v):
         raise UserError(f"{flag} {text!r}: expected a finite number")
     return v
 
 
-def parse_int(flag: str, text: str, lo: int) -> int:
+def parse_int(flag: str, text: str, lo: int, hi: int | None = None) -> int:
+    text = str(text)
+    if len(text) > 40:                     # (int() of thousands of digits is slow, or refused)
+        raise UserError(f"{flag} {text[:20]!r}...: expected an integer of at most 40 characters")
     try:
         v = int(text)
     except ValueError:
         raise UserError(f"{flag} {text!r}: expected an integer") from None
     if v < lo:
         raise UserError(f"{flag} {text!r}: expected an integer >= {lo}")
+    if hi is not None and v > hi:
+        raise UserError(f"{flag} {text!r}: expected an integer from {lo} to {hi}")
     return v
+
+
+def parse_fps(flag: str, text: str) -> float:
+    """Frames per second within limits.MIN_FPS..MAX_FPS."""
+    v = parse_float(flag, text)
+    if not limits.MIN_FPS <= v <= limits.MAX_FPS:
+        raise UserError(f"{flag} {text!r}: expected frames per second from "
+                        f"{limits.MIN_FPS:g} to {limits.MAX_FPS:g}")
+    return v
+
+
+def parse_seed(flag: str, text: str) -> int:
+    return parse_int(flag, text, 0, limits.MAX_SEED)
 
 
 @dataclass
@@ -157,15 +183,19 @@ class Setup:
 
 def read_sidecar(path: str) -> dict:
     """An earlier output's JSON (an image's sidecar, compare's metrics.json, a bench
-    report): anything with a table of parameters."""
+    report): anything with a table of parameters. A regular file of at most
+    limits.MAX_PARAMS_BYTES, checked before reading (not a device, FIFO or folder)."""
+    raw = read_user_file("--params", path, limits.MAX_PARAMS_BYTES, "a sidecar")
     try:
-        data = json.loads(Path(path).read_text())
-    except FileNotFoundError:
-        raise UserError(f"--params {path}: file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise UserError(f"--params {path}: cannot read ({exc.__class__.__name__})") from None
+        data = json.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise UserError(f"--params {path}: not UTF-8 text") from None
     except json.JSONDecodeError as exc:
         raise UserError(f"--params {path}: not JSON ({exc.msg} at line {exc.lineno})") from None
+    except RecursionError:
+        raise UserError(f"--params {path}: JSON nested too deeply to be a sidecar") from None
+    except ValueError as exc:               # an integer of more digits than Python converts
+        raise UserError(f"--params {path}: not a sidecar's JSON ({exc})") from None
     if not isinstance(data, dict) or not isinstance(data.get("params"), dict):
         raise UserError(f"--params {path}: expected the JSON sidecar of an hmblur image "
                         "(an object with a \"params\" table)")
@@ -184,8 +214,44 @@ def sidecar_size(value, source: str) -> tuple[int, int]:
     if (not isinstance(value, list) or len(value) != 2
             or not all(isinstance(x, int) and not isinstance(x, bool) and x >= 1 for x in value)):
         raise UserError(f"{source}: size: expected [width, height], positive integers, "
-                        f"got {value!r}")
-    return value[0], value[1]
+                        f"got {str(value)[:60]}")
+    return check_size(value[0], value[1], f"{source}: size")
+
+
+class _NotRegular(OSError):
+    pass
+
+
+def read_user_file(flag: str, path: str, max_bytes: int, what: str) -> bytes:
+    """The bytes of a file a flag names: a regular file (not a device, FIFO or folder,
+    refused before any read) of at most `max_bytes`; else one line naming the flag."""
+    try:
+        with open(path, "rb", opener=_open_regular) as f:
+            raw = f.read(max_bytes + 1)
+    except FileNotFoundError:
+        raise UserError(f"{flag} {path}: file not found") from None
+    except _NotRegular as exc:
+        raise UserError(f"{flag} {path}: {exc}") from None
+    except (OSError, ValueError) as exc:
+        raise UserError(f"{flag} {path}: cannot read "
+                        f"({getattr(exc, 'strerror', None) or exc.__class__.__name__})") from None
+    if len(raw) > max_bytes:
+        raise UserError(f"{flag} {path}: larger than {max_bytes} bytes: not {what}")
+    return raw
+
+
+def _open_regular(path, flags):
+    """os.open that refuses what is not a regular file before any read (a FIFO is opened
+    without blocking, /dev/zero is never read)."""
+    fd = os.open(path, flags | getattr(os, "O_NONBLOCK", 0))
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise _NotRegular("not a regular file")
+        os.set_blocking(fd, True)
+    except BaseException:
+        os.close(fd)
+        raise
+    return fd
 
 
 def setup(args) -> Setup:
@@ -213,18 +279,28 @@ def setup(args) -> Setup:
             size = sidecar_size(side["size"], src)
         if "time" in side:
             t = parse_time(f"{src}: time", str(side["time"]))
-        seed = parse_int(f"{src}: seed", str(side.get("seed", 0)), 0)
+        seed = parse_seed(f"{src}: seed", str(side.get("seed", 0)))
     if args.size is not None:
         size = parse_size(args.size)
     if args.time is not None:
         t = parse_time("--time", args.time)
     if args.seed is not None:
-        seed = parse_int("--seed", args.seed, 0)
+        seed = parse_seed("--seed", args.seed)
     if getattr(args, "samples", None) is not None:
         params.set("reference.samples", str(parse_int("--samples", args.samples, 1)),
                    label="--samples")
     params.apply(args.set)
     return Setup(scene, size, t, params, seed, side)
+
+
+# What `shot` and `view` render when no mode is given: the blur this project is about.
+DEFAULT_MODE = "hybrid"
+
+
+def pick_mode(flag: str | None, sidecar: dict | None) -> str:
+    """--mode, else the --params file's mode, else DEFAULT_MODE (checked by the caller)."""
+    mode = flag if flag is not None else (sidecar or {}).get("mode")
+    return str(mode) if mode is not None else DEFAULT_MODE
 
 
 def parse_modes(flag: str, text: str, available: list[str]) -> list[str]:

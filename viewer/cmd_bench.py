@@ -11,6 +11,7 @@ import time
 
 import numpy as np
 
+from world import limits
 from . import cliargs
 from .glcontext import create_headless, device_name
 from .imageio import write_json_atomic
@@ -25,6 +26,7 @@ REALTIME = ("off", "mcguire", "ue4", "guertin", "hybrid")
 # Bounds of --speeds and --animate: beyond them a scene's motion is no longer a frame's.
 MAX_SPEED = 1e3
 MIN_FPS, MAX_FPS = 1e-3, 1e6
+MAX_SPEEDS = 64              # --speeds factors (each a set of timed frames)
 
 
 def register(sub):
@@ -210,8 +212,8 @@ def speed_table(r: Renderer, s, speeds: list[float], frames: int) -> list[dict]:
 
 def run(args) -> int:
     s = cliargs.setup(args)
-    frames = cliargs.parse_int("--frames", args.frames, 1)
-    warmup = cliargs.parse_int("--warmup", args.warmup, 0)
+    frames = cliargs.parse_int("--frames", args.frames, 1, limits.MAX_FRAMES)
+    warmup = cliargs.parse_int("--warmup", args.warmup, 0, limits.MAX_FRAMES)
     available = [m for m in REALTIME if m in MODES]
     modes = available if args.modes is None else cliargs.parse_modes("--modes", args.modes,
                                                                      available)
@@ -220,6 +222,8 @@ def run(args) -> int:
     if args.speeds:
         if "hybrid" not in available:
             raise cliargs.UserError("--speeds: needs the hybrid mode")
+        if args.speeds.count(",") >= MAX_SPEEDS:
+            raise cliargs.UserError(f"--speeds: expected at most {MAX_SPEEDS} factors")
         speeds = [cliargs.parse_float("--speeds", x) for x in args.speeds.split(",")]
         if any(abs(v) > MAX_SPEED for v in speeds):
             raise cliargs.UserError(f"--speeds {args.speeds}: expected factors within "

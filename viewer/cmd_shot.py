@@ -27,7 +27,8 @@ def register(sub):
                        "reproduces it byte for byte.")
     cliargs.add_scene_args(p)
     p.add_argument("--mode", default=None,
-                   help=f"one of: {', '.join(MODES)} (default: off, or the --params file's)")
+                   help=f"one of: {', '.join(MODES)} (default: {cliargs.DEFAULT_MODE}, or the "
+                        "--params file's)")
     p.add_argument("--out", required=True, metavar="PATH.png",
                    help="output PNG path (missing folders are made; the .json sidecar goes "
                         "beside it)")
@@ -67,7 +68,7 @@ def sidecar(s: cliargs.Setup, mode: str, result, ctx, scene_arg: str,
 
 def run(args) -> int:
     s = cliargs.setup(args)
-    mode = args.mode or (s.sidecar or {}).get("mode") or "off"
+    mode = cliargs.pick_mode(args.mode, s.sidecar)
     if mode not in MODES:
         raise cliargs.UserError(f"--mode {mode}: expected one of {', '.join(MODES)}")
     cliargs.check_set_groups(args.set, [mode], MODE_GROUPS)

@@ -11,6 +11,7 @@ import io
 import time
 from pathlib import Path
 
+from world import limits
 from . import cliargs
 from .cmd_compare import LABELS
 from .cmd_shot import camera_dict
@@ -23,7 +24,8 @@ from .render.modes import MODES
 from .render.reference import REGIONS
 from .strip import REGION_ORDER, make_strip
 from .temporal import FlickerAccumulator
-from .video_writer import OUT_HELP, VideoPaths, VideoWriter, video_paths
+from .video_writer import (OUT_HELP, VideoPaths, VideoWriter, check_folder_collisions,
+                           video_paths)
 
 DEFAULT_FRAMES = 24
 DEFAULT_FPS = 24.0
@@ -82,8 +84,9 @@ def mode_colours(modes) -> dict:
     return {m: MODE_COLOURS.get(m) or next(spare, (90, 90, 90)) for m in modes}
 
 
-def frame_times(start: float, frames: int, fps: float) -> list[float]:
-    return [start + k / fps for k in range(frames)]
+def frame_times(start: float, frames: int, fps: float):
+    """Frame k's time, k = 0 .. frames - 1, made as it is asked for."""
+    return (start + k / fps for k in range(frames))
 
 
 def compose(images: dict) -> "np.ndarray":
@@ -116,17 +119,20 @@ def run(args) -> int:
     else:
         flag = "--modes" if args.modes is not None else f"{src}: modes"
         modes = cliargs.parse_modes(flag, modes_text, list(MODES))
-    frames = (cliargs.parse_int("--frames", args.frames, 1) if args.frames is not None else
-              cliargs.parse_int(f"{src}: frames", str(side["frames"]), 1) if "frames" in side
-              else DEFAULT_FRAMES)
+    frames = (cliargs.parse_int("--frames", args.frames, 1, limits.MAX_FRAMES)
+              if args.frames is not None else
+              cliargs.parse_int(f"{src}: frames", str(side["frames"]), 1, limits.MAX_FRAMES)
+              if "frames" in side else DEFAULT_FRAMES)
     fps = (parse_fps("--fps", args.fps) if args.fps is not None else
            parse_fps(f"{src}: fps", str(side["fps"])) if "fps" in side else DEFAULT_FPS)
     if args.metrics and modes == ["reference"]:
         raise UserError("--metrics: measures modes against the reference: expected --modes "
                         "with a mode other than reference")
+    cliargs.parse_time("last frame time", repr(s.time + (frames - 1) / fps))
     out = video_paths(args.out, "--out", METRIC_FILES if args.metrics else ())
+    check_gif_memory(out, frames, s.size, len(modes))
+    check_folder_collisions(out, frames, METRIC_FILES if args.metrics else ())
     times = frame_times(s.time, frames, fps)
-    cliargs.parse_time("last frame time", repr(times[-1]))
     from .glcontext import create_headless, device_name
     from .render.renderer import Renderer
     ctx = create_headless()
@@ -170,11 +176,20 @@ def run(args) -> int:
     return 0
 
 
-def parse_fps(flag: str, text: str) -> float:
-    v = cliargs.parse_float(flag, text)
-    if v <= 0:
-        raise UserError(f"{flag} {text!r}: expected frames per second > 0")
-    return v
+parse_fps = cliargs.parse_fps
+# A GIF is written in one piece (one palette for the clip): its frames are held in memory.
+MAX_GIF_BYTES = 1 << 30
+
+
+def check_gif_memory(out: VideoPaths, frames: int, size, n_modes: int):
+    """A GIF's frames, all held until it is written, must fit MAX_GIF_BYTES (an estimate:
+    the modes side by side, 3 bytes a pixel)."""
+    need = frames * size[0] * size[1] * n_modes * 3
+    if out.kind == "gif" and need > MAX_GIF_BYTES:
+        raise UserError(f"{out.flag} {out.video}: a GIF holds every frame in memory until it "
+                        f"is written: {frames} frames of {n_modes} x {size[0]}x{size[1]} are "
+                        f"~{need >> 20} MB, more than {MAX_GIF_BYTES >> 20} MB: write .mp4 or "
+                        "a folder, or fewer frames")
 
 
 def sidecar(s: cliargs.Setup, scene: str, modes, frames: int, fps: float, out: VideoPaths,

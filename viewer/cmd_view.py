@@ -6,6 +6,7 @@ import argparse
 import textwrap
 from pathlib import Path
 
+from world import limits
 from . import cliargs
 from .render.modes import MODES
 from .video_writer import OUT_HELP, video_paths
@@ -39,7 +40,8 @@ def register(sub):
                        epilog=KEYS + "\n\n" + script_help)
     cliargs.add_scene_args(p)
     p.add_argument("--mode", default=None,
-                   help=f"one of: {', '.join(MODES)} (default: off, or the --params file's)")
+                   help=f"one of: {', '.join(MODES)} (default: {cliargs.DEFAULT_MODE}, or the "
+                        "--params file's)")
     p.add_argument("--frames", type=str, default=None, metavar="N",
                    help="run this many frames, then exit (no person needed)")
     p.add_argument("--screenshot", default=None, metavar="PNG",
@@ -62,11 +64,11 @@ def register(sub):
 
 def run(args) -> int:
     s = cliargs.setup(args)
-    if args.mode is None:
-        args.mode = str((s.sidecar or {}).get("mode", "off"))
+    args.mode = cliargs.pick_mode(args.mode, s.sidecar)
     if args.mode not in MODES:
         raise cliargs.UserError(f"--mode {args.mode}: expected one of {', '.join(MODES)}")
-    frames = cliargs.parse_int("--frames", args.frames, 1) if args.frames is not None else None
+    frames = (cliargs.parse_int("--frames", args.frames, 1, limits.MAX_FRAMES)
+              if args.frames is not None else None)
     if args.screenshot is not None and frames is None:
         raise cliargs.UserError("--screenshot needs --frames N (the window is saved at frame N)")
     screenshot = (cliargs.check_output_file(args.screenshot, "--screenshot", suffix=".png")
@@ -75,9 +77,7 @@ def run(args) -> int:
     shot_dir = cliargs.check_output_dir(args.shot_dir, "--shot-dir", create=False)
     if args.record is not None:
         video_paths(args.record, "--record")
-    fps = 30.0 if args.record_fps is None else cliargs.parse_float("--record-fps", args.record_fps)
-    if fps <= 0:
-        raise cliargs.UserError(f"--record-fps {args.record_fps}: expected frames per second > 0")
+    fps = 30.0 if args.record_fps is None else cliargs.parse_fps("--record-fps", args.record_fps)
     from .ui.script import load_script
     script = load_script(args.script) if args.script else []
     # Imported here so that `hmblur shot` and `--help` never load glfw or imgui.

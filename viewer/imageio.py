@@ -8,7 +8,10 @@ but only by accident and with a warning).
 
 Writers go through a temporary file in the destination directory followed by
 `os.replace`, so a reader never sees a half-written file and a failed write leaves the
-previous file (or nothing) in place.
+previous file (or nothing) in place. Every temp file and staging folder that exists is in
+PARTIAL from the instant it is made (signals held meanwhile) until it is renamed or
+removed, so whatever ends the program (an exception, Ctrl-C, SIGTERM) `remove_partials`
+leaves none behind.
 """
 from __future__ import annotations
 
@@ -17,11 +20,14 @@ import json
 import math
 import os
 import secrets
+import shutil
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 from PIL import Image
+
+from .ending import held
 
 _SRGB_LINEAR_MAX = 0.0031308   # linear-side breakpoint of the sRGB curve
 _SRGB_ENCODED_MAX = 0.04045    # encoded-side breakpoint (decoding)
@@ -59,18 +65,47 @@ def srgb8_to_linear(srgb8) -> np.ndarray:
 
 # --- atomic writers ------------------------------------------------------------------
 
+PARTIAL: set[Path] = set()      # temp files and staging folders on disk now
+# A signal that ends the program waits for the block (a file made and entered in PARTIAL,
+# or renamed and taken out, is one step).
+signals_held = held
+
+
+def remove_partials():
+    """Remove every temp file and staging folder still on disk (the CLI's last step)."""
+    for p in list(PARTIAL):
+        if p.is_dir() and not p.is_symlink():
+            shutil.rmtree(p, ignore_errors=True)
+        else:
+            p.unlink(missing_ok=True)
+        PARTIAL.discard(p)
+
+
+def forget_partial(p: Path, remove: bool = True):
+    """`p` is renamed into place (remove False) or no longer wanted."""
+    with signals_held():
+        if remove:
+            if p.is_dir() and not p.is_symlink():
+                shutil.rmtree(p, ignore_errors=True)
+            else:
+                p.unlink(missing_ok=True)
+        PARTIAL.discard(p)
+
+
 def _write_temp(path: Path, write: Callable[[io.BufferedWriter], None]) -> Path:
     """Run `write(fileobj)` on a new temp file beside `path` and fsync it; its path."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
     # os.open with 0o666 lets the umask decide the final mode, as a plain open() would.
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+    with signals_held():
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+        PARTIAL.add(tmp)
     try:
         with os.fdopen(fd, "wb") as f:
             write(f)
             f.flush()
             os.fsync(f.fileno())
     except BaseException:
-        tmp.unlink(missing_ok=True)
+        forget_partial(tmp)
         raise
     return tmp
 
@@ -123,17 +158,24 @@ class OutputSet:
                     missing.append(folder)
                     folder = folder.parent
                 for folder in reversed(missing):
-                    folder.mkdir()
-                    made.append(folder)
+                    with signals_held():
+                        folder.mkdir()
+                        made.append(folder)
             for path, write in self._files:
                 done.append(_write_temp(path, write))
-            for tmp, (path, _) in zip(done, self._files):
-                os.replace(tmp, path)
+            with signals_held():              # the renames: all of them, then a signal
+                for tmp, (path, _) in zip(done, self._files):
+                    os.replace(tmp, path)
+                    PARTIAL.discard(tmp)
         except BaseException:
             for tmp in done:
-                tmp.unlink(missing_ok=True)
+                if tmp in PARTIAL:
+                    forget_partial(tmp)
             for folder in reversed(made):     # deepest first
-                folder.rmdir()
+                try:
+                    folder.rmdir()
+                except OSError:               # (a file renamed into it before a failure)
+                    pass
             raise
 
 

@@ -238,10 +238,13 @@ def _colour_bar(width: int, font) -> np.ndarray:
     return np.concatenate([bar, np.asarray(label)])
 
 
-def error_strip(maps, metrics=None) -> np.ndarray:
+def error_strip(maps, metrics=None, inset_box=None) -> np.ndarray:
     """[(label, (H,W) FLIP error map)] -> the maps side by side as heat colours, labelled,
-    with optional metric lines, and a colour key from 0 to 1 along the bottom."""
-    strip = make_strip([(label, heat(m)) for label, m in maps], metrics=metrics)
+    with optional metric lines, the zoomed inset of `inset_box` as make_strip draws it
+    (compare gives the strip's, so small errors there show), and a colour key from 0 to 1
+    along the bottom."""
+    strip = make_strip([(label, heat(m)) for label, m in maps], inset_box=inset_box,
+                       metrics=metrics)
     h = np.asarray(maps[0][1]).shape[0]
     bar = _colour_bar(strip.shape[1], _font(h))
     gap = np.full((GAP, strip.shape[1], 3), BACKGROUND, np.uint8)

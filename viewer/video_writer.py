@@ -9,8 +9,8 @@ removes the staging folder and leaves the destination as it was.
 """
 from __future__ import annotations
 
+import json
 import os
-import re
 import shutil
 import tempfile
 from dataclasses import dataclass
@@ -22,14 +22,13 @@ from PIL import Image
 
 from . import cliargs
 from world.errors import UserError
-from .imageio import OutputSet, write_png_atomic
+from .imageio import PARTIAL, OutputSet, forget_partial, signals_held, write_png_atomic
 
 KINDS = ("mp4", "gif", "png")
 SUFFIXES = {".mp4": "mp4", ".gif": "gif"}
 OUT_HELP = ("PATH.mp4 (H.264), PATH.gif, or a folder of PNG frames (a path without "
             "extension or ending in /); the JSON sidecar goes to PATH.json, in a folder to "
             "video.json inside it")
-FRAME_NAME = re.compile(r"frame_\d{4,}\.png")
 # H.264 settings: constant quality (CRF 18 is close to visually lossless), 4:2:0 chroma
 # for every player, BT.709 matrix and limited range, tagged so that decoders convert back
 # with the same matrix.
@@ -82,6 +81,54 @@ def video_paths(text: str, flag: str = "--out", extra: tuple[tuple[str, str], ..
     return out
 
 
+def earlier_clip(folder: Path) -> dict | None:
+    """The sidecar of an earlier `hmblur video` into this folder of frames (video.json,
+    format "png", its frame count), else None: what says which files hmblur wrote there."""
+    path = folder / "video.json"
+    try:
+        if not path.is_file() or path.stat().st_size > 1 << 20:
+            return None
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError):
+        return None
+    if not isinstance(doc, dict) or doc.get("format") != "png":
+        return None
+    frames = doc.get("frames")
+    if not isinstance(frames, int) or isinstance(frames, bool) or not 0 < frames <= 10 ** 9:
+        return None
+    return doc
+
+
+def owned_names(folder: Path, extra=()) -> set[str]:
+    """The files in `folder` an earlier hmblur video wrote, by its sidecar: its frames,
+    video.json, and its metrics files where it measured (its sidecar has "flicker")."""
+    doc = earlier_clip(folder)
+    if doc is None:
+        return set()
+    names = {f"frame_{k:04d}.png" for k in range(doc["frames"])} | {"video.json"}
+    if "flicker" in doc:
+        names |= {f"{n}{s}" for n, s in extra}
+    return names
+
+
+def check_folder_collisions(out: VideoPaths, frames: int, extra=()):
+    """A folder of frames may hold files of its own: the ones this run would write over
+    must be an earlier hmblur video's (owned_names), else one line naming them, before any
+    frame is rendered: a user's own frame_0002.png is never replaced or removed."""
+    if out.kind != "png" or not out.video.is_dir():
+        return
+    writes = [f"frame_{k:04d}.png" for k in range(frames)]
+    writes += ["video.json"] + [f"{n}{s}" for n, s in extra]
+    owned = owned_names(out.video, extra)
+    present = {p.name for p in out.video.iterdir()}
+    clash = [n for n in writes if n in present and n not in owned]
+    if clash:
+        more = f" and {len(clash) - 3} more" if len(clash) > 3 else ""
+        raise UserError(f"{out.flag} {out.video}: holds files that no earlier hmblur video "
+                        f"there wrote and this one would replace: {', '.join(clash[:3])}{more}; "
+                        "give an empty or new folder, or move them")
+
+
 def even_size(frame: np.ndarray) -> np.ndarray:
     """4:2:0 chroma needs even sides: repeat the last row / column where one is odd."""
     h, w = frame.shape[:2]
@@ -107,9 +154,14 @@ class VideoWriter:
         parent = out.video.parent if str(out.video.parent) else Path(".")
         while not parent.exists() and parent != parent.parent:
             parent = parent.parent
-        self.stage = Path(tempfile.mkdtemp(prefix=f".{out.video.name}.", suffix=".part",
-                                           dir=parent))
+        with signals_held():
+            self.stage = Path(tempfile.mkdtemp(prefix=f".{out.video.name}.", suffix=".part",
+                                               dir=parent))
+            PARTIAL.add(self.stage)
         self.count = 0
+        # (frames of an earlier hmblur clip in the folder: the only ones removed after)
+        self._earlier = earlier_clip(out.video) if out.kind == "png" and out.video.is_dir() \
+            else None
         self.size: tuple[int, int] | None = None
         self._container = self._stream = None
         self._gif: list[np.ndarray] = []
@@ -201,10 +253,13 @@ class VideoWriter:
             self.abort()
 
     def _remove_stale_frames(self):
-        """Frames past this clip's end left by a longer earlier clip in the same folder."""
-        keep = {self.frame_name(k) for k in range(self.count)}
-        for p in self.out.video.iterdir():
-            if FRAME_NAME.fullmatch(p.name) and p.name not in keep and p.is_file():
+        """Frames past this clip's end that a longer earlier hmblur clip wrote in the same
+        folder (its video.json, read before this one replaced it, says how many); no
+        other file is touched."""
+        earlier = self._earlier["frames"] if self._earlier is not None else 0
+        for k in range(self.count, earlier):
+            p = self.out.video / self.frame_name(k)
+            if p.is_file() and not p.is_symlink():
                 p.unlink()
 
     def abort(self):
@@ -215,7 +270,7 @@ class VideoWriter:
                 pass
             self._container = None
         self._gif = []
-        shutil.rmtree(self.stage, ignore_errors=True)
+        forget_partial(self.stage)
 
     def __enter__(self):
         return self

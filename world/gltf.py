@@ -14,7 +14,14 @@ pygltflib supplies the glTF constants. Accessors are decoded as glTF 2.0 says: b
 matrix column padding, normalized integer components, sparse substitution.
 
 Conventions: matrices are column-vector (p' = M @ p; glTF stores them column-major);
-quaternions are in glTF's (x, y, z, w) order throughout this module.
+quaternions are in glTF's (x, y, z, w) order throughout this module. Decoded arrays are
+read-only and may be shared between primitives (copy before modifying).
+
+What the scene loader does with it (SCENE_FORMAT.md, v1.2): one object per
+`mesh_nodes()` entry, in that order; M(t) = P(t) @ world_matrices(a)[node], with
+a = animation_time(t, ...); a skinned node draws skin_vertices(...) with
+joint_matrices(skin, worlds) and P(t) only (its own World is not applied), and moves when
+`skin_moving(skin, anims)`; `ignored` is printed once.
 
 Sizes are bounded before anything is allocated (MAX_* below), so that a small hostile file
 cannot make the program allocate gigabytes: file sizes, decoded accessor components,
@@ -39,7 +46,7 @@ import numpy as np
 import pygltflib as G
 
 MAX_ASSET_BYTES = 256 * 2**20         # any one .gltf/.glb/.bin/image file or data URI
-MAX_ACCESSOR_COMPONENTS = 2**27        # all decoded accessor components together (1 GiB as float64)
+MAX_ACCESSOR_COMPONENTS = 2**26        # all decoded accessor components together (512 MiB as float64)
 MAX_VERTICES = 2**24                   # vertices of all mesh-node instances of the scene
 MAX_TRIANGLES = 2**24                  # triangles of all mesh-node instances of the scene
 MAX_NODES = 2**16
@@ -76,7 +83,11 @@ _CHUNK_BIN = 0x004E4942
 
 
 class GltfError(Exception):
-    """One line saying what is wrong with the asset, naming the item (no file prefix)."""
+    """One line saying what is wrong with the asset, naming the item (no file prefix).
+    Line breaks that come with names or paths from the asset are escaped."""
+
+    def __init__(self, message: str = ""):
+        super().__init__(str(message).replace("\r", "\\r").replace("\n", "\\n"))
 
 
 # ---------------------------------------------------------------- data classes

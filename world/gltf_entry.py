@@ -25,10 +25,10 @@ def load_entry(loader, t: dict, number: int, first_id: int):
     """(AssetInstance with .nodes, [SceneObject]) of objects entry `number` (a table with
     `gltf`); `loader` is world.loader's _Loader (its checks and fail())."""
     k = loader.entry_key(t, number)
-    loader.table(t, k, ENTRY_KEYS)
-    name = loader.string(t.get("name", f"object{number}"), f"{k}.name")
     if "mesh" in t:
         loader.fail(f"{k}.mesh", "not allowed together with gltf (the asset brings its meshes)")
+    loader.table(t, k, ENTRY_KEYS)
+    name = loader.string(t.get("name", f"object{number}"), f"{k}.name")
     if "parent" in t:
         loader.fail(f"{k}.parent", "not allowed on a gltf entry: place the asset with its own "
                     "position, rotation, scale, velocities or keys")
@@ -64,13 +64,22 @@ def load_entry(loader, t: dict, number: int, first_id: int):
               + ", ".join(asset.ignored), file=sys.stderr)
     materials = _Materials(asset, specular, shininess)
     objects = []
+    shared: dict[int, dict] = {}       # a glTF mesh drawn by several rigid nodes: one Mesh
     for i in asset.mesh_nodes():
         node = asset.nodes[i]
         key = f"{k}.gltf: nodes[{i}] ({node.name})"
-        arrays = _mesh(loader, asset.meshes[node.mesh], key)
+        if node.skin is None and node.mesh in shared:
+            arrays = shared[node.mesh]
+        else:
+            loader.budget(sum(len(p.faces) for p in asset.meshes[node.mesh]), key)
+            arrays = _mesh(loader, asset.meshes[node.mesh], key)
+            loader.triangles += len(arrays["mesh"].faces)
+            if node.skin is None:
+                shared[node.mesh] = arrays
         mesh, ranges = arrays["mesh"], arrays["ranges"]
-        parts = [(first, count, materials.get(m, mesh.uv is not None and has_uv))
-                 for first, count, m, has_uv in ranges]
+        parts = arrays.setdefault("parts", [
+            (first, count, materials.get(m, mesh.uv is not None and has_uv))
+            for first, count, m, has_uv in ranges])
         skin = None
         if node.skin is not None:
             skin = _skin(loader, instance, node.skin, arrays, key)

@@ -10,8 +10,9 @@ in file order (`objects[2]` is the object with id 2, with its name beside it;
 Primitive parameters that the format leaves out are left out of the trimesh call too, so
 trimesh's own defaults apply (sphere radius 1, subdivisions 3; cylinder and revolve
 sections). A cylinder needs `radius` and `height` because trimesh does. Sizes are capped
-(subdivisions <= 7, sections <= 10000, frames <= 16384 px) so that a typo cannot hang the
-program or exhaust memory.
+(subdivisions <= 7, sections <= 10000, frames <= 16384 px, and world/limits.py: numbers,
+triangles, files, texture pixels) so that a typo cannot hang the program or exhaust memory;
+each is checked before the work it bounds.
 """
 from __future__ import annotations
 
@@ -25,7 +26,8 @@ from PIL import Image
 
 import scenes
 
-from world import asset_scene
+from world import asset_scene, limits
+from world.assets import asset_file
 from world.errors import SceneError
 from world.scene import (INTERPOLATIONS, CameraKeys, CameraSpec, Light, Material, Mesh, ObjectKeys,
                     Placement, RenderDefaults, Scene, SceneObject, Texture)
@@ -39,7 +41,7 @@ TEXTURE_KEYS = {
 }
 MAX_SUBDIVISIONS = 7
 MAX_SECTIONS = 10000
-MAX_FRAME_SIZE = 16384
+MAX_FRAME_SIZE = limits.MAX_FRAME_SIZE
 NUMBERING = "objects[k], lights[k] and keys[k] count from 1 in file order"
 # What a keyed object or camera must not also have: its pose comes from the keys.
 OBJECT_UNKEYED = ("position", "rotation", "scale", "velocity", "angular_velocity")
@@ -134,6 +136,7 @@ class _Loader:
     def __init__(self, path: Path, document: dict | None = None):
         self.path = path
         self.document = document        # a scene document made elsewhere, else the file's
+        self.triangles = 0          # of the meshes built so far (limits.MAX_TRIANGLES)
 
     def fail(self, key: str, expected: str):
         if "[" in key:
@@ -151,6 +154,8 @@ class _Loader:
             x = math.inf
         if not math.isfinite(x):
             self.fail(key, f"expected a finite number, got {_describe(v)}")
+        if abs(x) > limits.MAX_SCENE_NUMBER:      # (float32 in the shaders)
+            self.fail(key, f"expected a number within +-{limits.MAX_SCENE_NUMBER:g}, got {x!r}")
         return x
 
     def integer(self, v, key: str) -> int:
@@ -211,6 +216,11 @@ class _Loader:
             self.fail(key, f"expected an array of tables ([[{key}]]), got {_describe(v)}")
         return v
 
+    def at_most(self, v: list, key: str, most: int) -> list:
+        if len(v) > most:
+            self.fail(key, f"expected at most {most} entries, got {len(v)}")
+        return v
+
     def unit(self, v, key: str) -> np.ndarray:
         n = _normalised(self.vec3(v, key))
         if n is None:
@@ -229,11 +239,13 @@ class _Loader:
         camera = self.camera(self.require(doc, "camera", "", "a [camera] table"))
         render = self.render(doc.get("render", {}))
         lights = [self.light(t, f"lights[{i}]")
-                  for i, t in enumerate(self.array_of_tables(doc.get("lights", []), "lights"), 1)]
+                  for i, t in enumerate(self.at_most(self.array_of_tables(
+                      doc.get("lights", []), "lights"), "lights", limits.MAX_LIGHTS), 1)]
         objects, assets = [], []
         # Every earlier object and glTF node by name, for `parent` (v1.2).
         self.named: dict[str, list] = {}
-        entries = self.array_of_tables(doc.get("objects", []), "objects")
+        entries = self.at_most(self.array_of_tables(doc.get("objects", []), "objects"),
+                               "objects", limits.MAX_OBJECTS)
         for i, t in enumerate(entries, 1):
             if "gltf" in t:
                 from world import gltf_entry     # (pygltflib only for scenes that use it)
@@ -245,11 +257,21 @@ class _Loader:
                 made = [self.object(t, i, len(objects) + 1)]
                 self.named.setdefault(made[0].name, []).append(made[0])
             objects.extend(made)
+            if len(objects) > limits.MAX_OBJECTS:
+                self.fail(f"objects[{i}]", f"the scene's objects (glTF mesh nodes included) "
+                          f"pass {limits.MAX_OBJECTS}")
         return Scene(name=name, path=self.path, camera=camera, background=background,
                      ambient=ambient, render=render, lights=lights, objects=objects,
                      assets=assets)
 
     def parse(self) -> dict:
+        try:
+            size = self.path.stat().st_size
+        except OSError as e:
+            self.fail("", f"cannot read the file ({e.strerror or e})")
+        if size > limits.MAX_SCENE_BYTES:
+            self.fail("", f"the file holds {size} bytes, more than the "
+                      f"{limits.MAX_SCENE_BYTES} a scene file may")
         try:
             text = self.path.read_bytes().decode("utf-8")
         except OSError as e:
@@ -372,10 +394,16 @@ class _Loader:
 
     def render(self, v) -> RenderDefaults:
         t = self.table(v, "render", ("width", "height", "time"))
-        return RenderDefaults(
-            width=self.int_in(t.get("width", 1280), "render.width", 1, MAX_FRAME_SIZE),
-            height=self.int_in(t.get("height", 720), "render.height", 1, MAX_FRAME_SIZE),
-            time=self.number(t.get("time", 0.0), "render.time"))
+        width = self.int_in(t.get("width", 1280), "render.width", 1, MAX_FRAME_SIZE)
+        height = self.int_in(t.get("height", 720), "render.height", 1, MAX_FRAME_SIZE)
+        if width * height > limits.MAX_FRAME_PIXELS:
+            self.fail("render", f"expected at most {limits.MAX_FRAME_PIXELS} pixels "
+                      f"(e.g. 2560x1600), got {width}x{height}")
+        time = self.number(t.get("time", 0.0), "render.time")
+        if abs(time) > limits.MAX_TIME:           # the bound of --time (world/limits.py)
+            self.fail("render.time", f"expected seconds within +-{limits.MAX_TIME:g}, "
+                      f"got {time!r}")
+        return RenderDefaults(width=width, height=height, time=time)
 
     def light(self, t: dict, k: str) -> Light:
         self.table(t, k, ("direction", "color"))
@@ -490,20 +518,26 @@ class _Loader:
     # -- files
 
     def file(self, rel: str, key: str, what: str) -> Path:
-        path = self.path.parent / rel
-        if not rel or not _is_file(path):
-            self.fail(key, f"{what} file not found: {path}")
-        return path
+        """world/assets.asset_file's rule: inside the scene's folder, a regular file,
+        within the size limit of its kind."""
+        cap = limits.MAX_IMAGE_BYTES if what == "image" else limits.MAX_MESH_BYTES
+        return asset_file(self.path, rel, key, what, cap)
 
     def image(self, path: Path, key: str) -> np.ndarray:
         try:
-            with Image.open(path) as im:
-                srgb = image_srgb(im)
+            with Image.open(path) as im:          # (lazy: the header only, so far)
+                w, h = im.size
+                if w * h > limits.MAX_IMAGE_PIXELS:
+                    self.fail(key, f"expected an image of at most {limits.MAX_IMAGE_PIXELS} "
+                              f"pixels (e.g. 4096x4096), {path} is {w}x{h}")
+                linear = image_linear(im)
+        except SceneError:
+            raise
         except Exception as e:   # Pillow raises many types for bad files
             self.fail(key, f"expected a readable image, {path} failed: {type(e).__name__}: {e}")
-        if srgb.size == 0:
+        if linear.size == 0:
             self.fail(key, f"expected a non-empty image, {path} has no pixels")
-        return srgb_to_linear(srgb).astype(np.float32)
+        return linear
 
     # -- meshes
 
@@ -569,6 +603,7 @@ class _Loader:
                 if "sections" in v:
                     args["sections"] = self.int_in(v["sections"], f"{k}.sections", 3,
                                                    MAX_SECTIONS)
+                self.budget(2 * len(points) * args.get("sections", 32), pk)
                 tm = trimesh.creation.revolve(linestring=points, **args)
         except SceneError:
             raise
@@ -589,9 +624,19 @@ class _Loader:
             pts.append((r, z))
         return np.array(pts, dtype=np.float64)
 
+    def budget(self, triangles: int, k: str):
+        """Count a mesh's triangles (an upper estimate before it is built) against the
+        scene's limits.MAX_TRIANGLES, all meshes together."""
+        used = self.triangles
+        if used + triangles > limits.MAX_TRIANGLES:
+            self.fail(k, f"{triangles} triangles here would make the scene's "
+                      f"{used + triangles}, more than the {limits.MAX_TRIANGLES} it may hold")
+
     def mesh_arrays(self, tm, k: str, what: str) -> Mesh:
         if not isinstance(tm, trimesh.Trimesh) or len(tm.faces) == 0 or len(tm.vertices) == 0:
             self.fail(k, f"expected a mesh with triangles, {what} has none")
+        self.budget(len(tm.faces), k)
+        self.triangles += len(tm.faces)
         try:
             with np.errstate(all="ignore"):
                 vertices = np.array(tm.vertices, dtype=np.float64)
@@ -652,6 +697,22 @@ def merge_camera(spec: CameraSpec, data: dict, source: str) -> CameraSpec:
         merged.setdefault("look_at", spec.look_at.tolist())
     merged.update(data)
     return check_camera(merged, source)
+
+
+# The linear value of each 8-bit sRGB code: an 8-bit image decodes through this table to
+# float32 (4 bytes a channel; the same values as srgb_to_linear(code / 255) in float64).
+_SRGB8_LINEAR = None
+
+
+def image_linear(im: Image.Image) -> np.ndarray:
+    """An image's linear values, (H, W, 3) float32: 8-bit modes through a 256-entry table
+    (no float64 copy of the image), others through image_srgb."""
+    global _SRGB8_LINEAR
+    if im.mode in _WIDE_GREY:
+        return srgb_to_linear(image_srgb(im)).astype(np.float32)
+    if _SRGB8_LINEAR is None:
+        _SRGB8_LINEAR = srgb_to_linear(np.arange(256) / 255.0).astype(np.float32)
+    return _SRGB8_LINEAR[np.asarray(im.convert("RGB"))]
 
 
 def srgb_to_linear(c: np.ndarray) -> np.ndarray:

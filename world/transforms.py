@@ -69,9 +69,69 @@ def perspective(fov_y_deg: float, aspect: float, near: float, far: float) -> np.
         float(fov_y_deg), float(aspect), float(near), float(far), dtype=np.float64).T.copy()
 
 
+# Largest entry of a normal matrix handed on: the shaders take it as float32 and dot
+# normals with themselves (1e15^2 is far below float32's 3e38).
+NORMAL_MATRIX_MAX = 1e15
+
+
 def normal_matrix(m4: np.ndarray) -> np.ndarray:
-    """Inverse transpose of the upper 3x3: how normals go to world space."""
-    return np.linalg.inv(m4[:3, :3]).T
+    """Inverse transpose of the upper 3x3: how normals go to world space. Where the 3x3 is
+    singular or nearly so (a keyed scale passing through zero), its limit: the cofactor
+    matrix (det * inverse transpose, defined at det = 0) signed by det and scaled to a
+    largest entry of 1: the same directions, which are normalised after (a flattened
+    object's normals all become its plane's)."""
+    m3 = _f64(m4)[:3, :3]
+    with np.errstate(all="ignore"):
+        try:
+            n = np.linalg.inv(m3).T
+        except np.linalg.LinAlgError:
+            n = None
+        if n is not None and np.all(np.abs(n) <= NORMAL_MATRIX_MAX):
+            return n
+        return cofactor_direction(m3)
+
+
+# A singular pose's thinnest extent, for the ray tracer (which needs an inverse): this
+# fraction of its largest, at least LIMIT_MIN_EXTENT (a scale of exactly 0 on every axis).
+LIMIT_THICKNESS = 1e-6
+LIMIT_MIN_EXTENT = 1e-9
+# Inverse entries up to this are taken as they are (float32 holds them).
+INVERSE_MAX = 1e30
+
+
+def limit_inverse(m4: np.ndarray) -> np.ndarray:
+    """The inverse of an affine 4x4; where it is singular or its inverse leaves float32
+    (a keyed scale through zero), the inverse of its limit: each singular value of the
+    3x3 raised to LIMIT_THICKNESS of the largest (at least LIMIT_MIN_EXTENT), so a
+    flattened object is a sheet that thin, as the rasteriser draws it with none."""
+    m4 = _f64(m4)
+    with np.errstate(all="ignore"):
+        try:
+            inv = np.linalg.inv(m4)
+        except np.linalg.LinAlgError:
+            inv = None
+        if inv is not None and np.all(np.abs(inv) <= INVERSE_MAX):
+            return inv
+        u, s, vt = np.linalg.svd(np.nan_to_num(m4[:3, :3]))
+        s = np.maximum(s, max(LIMIT_THICKNESS * float(s.max()), LIMIT_MIN_EXTENT))
+        out = np.eye(4)
+        out[:3, :3] = (vt.T / s) @ u.T
+        out[:3, 3] = -out[:3, :3] @ m4[:3, 3]
+        return out
+
+
+def cofactor_direction(m3: np.ndarray) -> np.ndarray:
+    """sign(det) * cofactor(m3), scaled to a largest entry of 1 (zeros for a 3x3 of rank
+    below 2, whose normals are undefined: such an object covers no area)."""
+    peak = float(np.max(np.abs(m3)))
+    if not (np.isfinite(peak) and peak > 0.0):
+        return np.zeros((3, 3))
+    a = m3 / peak                                # cof(k a) = k^2 cof(a): direction kept
+    c = np.cross(a[[1, 2, 0]], a[[2, 0, 1]])     # row i: a[i+1] x a[i+2], the cofactors
+    det = float(a[0] @ c[0])
+    c = -c if det < 0.0 else c
+    big = float(np.max(np.abs(c)))
+    return c / big if big > 0.0 else np.zeros((3, 3))
 
 
 # ---------------------------------------------------------------- unit quaternions

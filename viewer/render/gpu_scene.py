@@ -152,10 +152,17 @@ class GpuScene:
             self.light_texture = ctx.texture(texels.shape[1::-1], 3, texels.tobytes(),
                                              dtype="f4")
             self.light_texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
-        # Rigid meshes uploaded once; a skinned one's buffer is posed per draw (pose()).
-        self.buffers = [ctx.buffer(vertex_data(o).tobytes()) if o.skin is None
-                        else ctx.buffer(reserve=3 * len(o.mesh.faces) * SKINNED_FLOATS * 4)
-                        for o in scene.objects]
+        # Rigid meshes uploaded once (one buffer for the objects that share a mesh); a
+        # skinned one's buffer is posed per draw (pose()).
+        self.buffers, shared = [], {}
+        for o in scene.objects:
+            if o.skin is not None:
+                self.buffers.append(ctx.buffer(reserve=3 * len(o.mesh.faces) * SKINNED_FLOATS * 4))
+                continue
+            key = (id(o.mesh), o.shading)
+            if key not in shared:
+                shared[key] = ctx.buffer(vertex_data(o).tobytes())
+            self.buffers.append(shared[key])
         self._posed: dict[int, tuple] = {}          # object id -> the times its buffer holds
         # Image textures by the Texture they draw (one object may draw several: parts).
         self.images: dict[int, moderngl.Texture] = {}
@@ -342,7 +349,7 @@ class GpuScene:
     def release(self):
         for v in self._vaos.values():
             v.release()
-        for b in self.buffers:
+        for b in {id(b): b for b in self.buffers}.values():
             b.release()
         for t in self.images.values():
             t.release()

@@ -205,19 +205,24 @@ def parse_json(data, source: str) -> list[Action]:
     return out
 
 
+MAX_SCRIPT_BYTES = 1 << 20      # a script of actions is a few hundred bytes
+
+
 def load_script(path: str) -> list[Action]:
+    from ..cliargs import read_user_file
     p = Path(path)
+    raw = read_user_file("--script", path, MAX_SCRIPT_BYTES, "a script")
     try:
-        text = p.read_text()
-    except FileNotFoundError:
-        raise UserError(f"--script {path}: file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise UserError(f"--script {path}: cannot read ({exc.__class__.__name__})") from None
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise UserError(f"--script {path}: not UTF-8 text") from None
     if text.lstrip().startswith("["):
         try:
             data = json.loads(text)
         except json.JSONDecodeError as exc:
             raise UserError(f"--script {path}: not JSON ({exc.msg} at line {exc.lineno})") from None
+        except (RecursionError, ValueError) as exc:
+            raise UserError(f"--script {path}: not a script's JSON ({exc.__class__.__name__})") from None
         actions = parse_json(data, p.name)
     else:
         actions = parse_text(text, p.name)

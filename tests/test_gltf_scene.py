@@ -1,0 +1,114 @@
+"""glTF entries in the scene tree (scene format v1.2): shared meshes built once, the
+entry's timing keys, animation selection, and what the format leaves out said on stderr."""
+import shutil
+
+import numpy as np
+import pytest
+
+from raytrace import RayScene
+from viewer.render.gpu_scene import GpuScene
+from world.loader import load_scene
+
+from conftest import CONFORMANCE, _context
+from gltf_builder import Builder
+
+BOX = CONFORMANCE / "gltf" / "BoxAnimated.gltf"
+
+
+def scene_with(tmp_path, entry: str, name="s"):
+    shutil.copy(BOX, tmp_path / BOX.name)     # (a scene names files in its own folder)
+    p = tmp_path / f"{name}.toml"
+    p.write_text(f"""
+[camera]
+position = [0.0, 1.0, 6.0]
+look_at = [0.0, 0.5, 0.0]
+fov_y = 45.0
+shutter = 0.05
+[[objects]]
+name = "a"
+gltf = "{BOX.name}"
+{entry}
+""")
+    return load_scene(p)
+
+
+def test_mesh_used_by_several_nodes_is_built_and_uploaded_once():
+    sc = load_scene("rover")
+    wheels = [o for o in sc.objects if "/wheel_" in o.name]
+    assert len(wheels) == 4 and all(o.mesh is wheels[0].mesh for o in wheels)
+    gpu = GpuScene(_context(), sc)
+    try:
+        assert len({id(gpu.buffers[o.id - 1]) for o in wheels}) == 1
+    finally:
+        gpu.release()
+    rs = RayScene(sc)
+    scenes = {id(es) for o, es in rs.moving if o in wheels}
+    assert len(scenes) == 1
+    assert len({int(rs.surfaces.face_offset[o.id]) for o in wheels}) == 1
+
+
+def test_timing_keys_drive_the_animation_time(tmp_path):
+    plain = scene_with(tmp_path, "", "plain")
+    timed = scene_with(tmp_path, "time_offset = 0.5\ntime_scale = 2.0", "timed")
+    inner_plain, inner_timed = plain.objects[1], timed.objects[1]
+    assert inner_plain.moving and inner_timed.moving
+    for t in (0.6, 0.9, 1.3):
+        np.testing.assert_allclose(inner_timed.matrix(t), inner_plain.matrix((t - 0.5) * 2.0),
+                                   atol=1e-12)
+
+
+def test_loop_wraps_into_the_key_range(tmp_path):
+    looped = scene_with(tmp_path, "loop = true", "looped")
+    inner = looped.objects[1]
+    a0, a1 = looped.assets[0].asset.time_range(looped.assets[0].animations)
+    assert a1 > a0
+    np.testing.assert_allclose(inner.matrix(a0 + 0.3 + 2 * (a1 - a0)), inner.matrix(a0 + 0.3),
+                               atol=1e-9)
+    clamped = scene_with(tmp_path, "", "clamped").objects[1]
+    np.testing.assert_allclose(clamped.matrix(a1 + 5.0), clamped.matrix(a1), atol=1e-12)
+
+
+def test_animation_none_keeps_the_asset_still(tmp_path):
+    still = scene_with(tmp_path, 'animation = "none"', "still")
+    assert not any(o.moving for o in still.objects)
+    np.testing.assert_allclose(still.objects[1].matrix(0.0), still.objects[1].matrix(1.7))
+
+
+def test_features_left_out_are_named_once_on_stderr(tmp_path, capsys):
+    b = Builder()
+    b.triangle_mesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32))
+    b.add("nodes", {"mesh": 0})
+    b.add("cameras", {"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}})
+    b.doc["scenes"] = [{"nodes": [0]}]
+    b.write(tmp_path, "cam.gltf")
+    p = tmp_path / "cam.toml"
+    p.write_text("""
+[camera]
+position = [0.0, 0.0, 3.0]
+look_at = [0.0, 0.0, 0.0]
+fov_y = 45.0
+[[objects]]
+name = "tri"
+gltf = "cam.gltf"
+""")
+    sc = load_scene(p)
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "camera" in err and "objects[1] (tri)" in err
+    assert sc.objects[0].name == "tri/node0"
+
+
+@pytest.mark.parametrize("entry, words", [
+    ('animation = "Walk"', "no animation named 'Walk'"),
+    ("animation = 3", "index 3 out of range"),
+    ("time_scale = 0.0", "time_scale: expected a number > 0"),
+    ('loop = "yes"', "loop: expected true or false"),
+    ('mesh = { box = [1.0, 1.0, 1.0] }', "mesh: not allowed together with gltf"),
+    ('parent = "x"', "parent: not allowed on a gltf entry"),
+    ("material = { albedo = [1.0, 0.0, 0.0] }", "material.albedo: unknown key"),
+])
+def test_entry_mistakes_one_line(tmp_path, entry, words):
+    from world.errors import SceneError
+    with pytest.raises(SceneError) as e:
+        scene_with(tmp_path, entry)
+    assert words in str(e.value) and "objects[1] (a)" in str(e.value)
+    assert "\n" not in str(e.value)

@@ -1,0 +1,34 @@
+"""What the program can hold: every count, size and rate a user can give (flags, scene
+keys, sidecar keys, asset files) is checked against these before work starts, and a value
+past one is a one-line error naming it (docs/scene-format.md, "Limits")."""
+
+# Scene numbers: the shaders compute in float32 (7 significant digits, at most 3.4e38), a
+# position or velocity past 1e7 loses every centimetre and products of two overflow.
+MAX_SCENE_NUMBER = 1e7
+# Frame times, seconds (flags, [render] time, key times, sidecars): past it the float32
+# transforms of p + v t lose every digit of a frame's motion.
+MAX_TIME = 1e6
+# Image sides and pixels (flags, [render], sidecars): a hybrid frame of 4.2 Mpx (2560x1600
+# fits) peaks at ~1.2 GB on llvmpipe, a 3840x2160 one at 2.4 GB.
+MAX_FRAME_SIZE = 16384
+MAX_FRAME_PIXELS = 2048 * 2048
+# Triangles of a scene, all meshes together (a revolve or file counted before it is built
+# or read into the renderer): ~0.5 kB each through trimesh, Embree and the GPU.
+MAX_TRIANGLES = 2_000_000
+# Objects and lights of a scene: each object costs ~25 kB of host memory and a draw call
+# per pass; every pixel's shading loops over the lights.
+MAX_OBJECTS = 10_000
+MAX_LIGHTS = 1_024
+# Asset files a scene names (meshes, images) and their decoded size.
+MAX_SCENE_BYTES = 16 << 20
+MAX_MESH_BYTES = 256 << 20
+MAX_IMAGE_BYTES = 256 << 20
+MAX_IMAGE_PIXELS = 4096 * 4096          # a texture: 16.8 Mpx, 200 MB as float32 RGB
+# `--params FILE.json`: a sidecar is a few kB; JSON nesting and integers beyond these are
+# not a sidecar's.
+MAX_PARAMS_BYTES = 4 << 20
+# Frames of a video, a bench or a viewer run, and a video's rate.
+MAX_FRAMES = 100_000
+MIN_FPS, MAX_FPS = 1e-3, 1e3
+# Seeds: the jitter keys use the low 32 bits.
+MAX_SEED = 2 ** 32 - 1
