@@ -20,6 +20,7 @@ FILL = 0.6                     # the asset's box: within the middle 60% of the f
 VIEW = np.array([0.6, 0.45, 1.0])   # centre -> eye: in front (+Z), right (+X), above (+Y)
 FRAME_TIMES = 9                # times over the animation range that the bounds cover
 SHUTTER = 1.0 / 60.0
+MIN_DISTANCE = 1e-3            # m: an asset with no extent is still looked at from somewhere
 BACKGROUND = [0.3, 0.31, 0.33]
 AMBIENT = [0.18, 0.18, 0.2]
 LIGHTS = [{"direction": [0.45, -1.0, -0.55], "color": [0.85, 0.83, 0.8]},    # key: above left
@@ -99,8 +100,7 @@ def frame(doc: dict, scene) -> None:
     toward = corners @ back
     need = np.maximum(np.abs(corners @ right) / (FILL * tan * aspect),
                       np.abs(corners @ up) / (FILL * tan)) + toward
-    extent = max(float(np.linalg.norm(hi - lo)), 1e-3)       # a point-like asset: 1 mm
-    distance = max(float(need.max()), extent * 1e-3)
+    distance = max(float(need.max()), MIN_DISTANCE)
     depth = distance - toward
     cam = doc["camera"]
     cam["position"] = [_round(x) for x in centre + distance * back]
@@ -112,8 +112,9 @@ def frame(doc: dict, scene) -> None:
 
 
 def _round(x: float) -> float:
-    """6 significant digits: the written file stays readable, and it loads back exactly."""
-    return float(f"{float(x):.6g}")
+    """8 significant digits: the written file stays readable (the scene is made from the
+    rounded values, so the file loads back to it exactly)."""
+    return float(f"{float(x):.8g}")
 
 
 def load_asset_scene(path: Path, loader_class):
