@@ -214,7 +214,7 @@ class RayScene:
         # A skinned mover's scene holds its mesh posed at one time: rebuilt for each new t
         # (embreex has no refit), the time it takes counted in skin_ms.
         self._skinned = [k for k, (o, _) in enumerate(self.moving) if o.skin is not None]
-        self._skin_time = 0.0
+        self._skin_time = tuple(self.moving[k][0].skin.stamp(0.0) for k in self._skinned)
         self.skin_ms, self.skin_builds = 0.0, 0
         # The corners of each moving mesh's local bounding box: at time t their world
         # box culls the rays that cannot hit the object before any Embree call.
@@ -230,7 +230,10 @@ class RayScene:
 
     def pose_skins(self, t: float):
         """The skinned movers' scenes and boxes posed at time t (kept while t holds)."""
-        if not self._skinned or t == self._skin_time:
+        if not self._skinned:
+            return
+        stamp = tuple(self.moving[k][0].skin.stamp(t) for k in self._skinned)
+        if stamp == self._skin_time:
             return
         t0 = time.perf_counter()
         for k in self._skinned:
@@ -238,7 +241,7 @@ class RayScene:
             v = obj.vertices_at(t)
             self.moving[k] = (obj, self._mesh_scene(v, obj.mesh.faces))
             self._corners[k] = box_corners(v)
-        self._skin_time = t
+        self._skin_time = stamp
         self.skin_ms += (time.perf_counter() - t0) * 1e3
         self.skin_builds += 1
 
@@ -271,7 +274,7 @@ class RayScene:
         if matrices is None:
             matrices = [obj.matrix(t) for obj, _ in self.moving]
         ms = np.stack(matrices) if len(matrices) else np.zeros((0, 4, 4))
-        key = (ms.tobytes(), t if self._skinned else None)
+        key = (ms.tobytes(), self._skin_time if self._skinned else None)
         if self._pose_cache is None or self._pose_cache[0] != key:
             lo, hi = kernels.world_boxes(ms, self._corners, 1e-4, 1e-6)
             inv, ok = kernels.affine_inverses(ms)

@@ -27,7 +27,10 @@ SCENES = [("living_room", "living_room"), ("spinner", "spinner"), ("thin", "thin
           ("basic", str(CONFORMANCE / "basic.toml")),
           ("vase_pan", str(CONFORMANCE / "vase_pan.toml")),
           ("keys_arc", str(CONFORMANCE / "keys_arc.toml")),
-          ("shapes", str(CONFORMANCE / "shapes.toml"))]
+          ("shapes", str(CONFORMANCE / "shapes.toml")),
+          ("rover", "rover"),
+          ("gltf_box", str(CONFORMANCE / "gltf" / "gltf_box.toml")),
+          ("gltf_skin", str(CONFORMANCE / "gltf" / "gltf_skin.toml"))]
 # Curved motion, on the scenes whose motion bends: the hybrid's default (curve steps:
 # 2 sub-frames where the paths bend), the linear hybrid (one chord, one frame), the
 # linear hybrid with 2 path segments, and every real-time mode with 4 sub-exposure steps.

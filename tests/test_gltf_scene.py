@@ -112,3 +112,24 @@ def test_entry_mistakes_one_line(tmp_path, entry, words):
         scene_with(tmp_path, entry)
     assert words in str(e.value) and "objects[1] (a)" in str(e.value)
     assert "\n" not in str(e.value)
+
+
+def test_bench_speeds_retime_the_animation_about_the_frame_time(tmp_path):
+    sc = scene_with(tmp_path, "")
+    inner, instance = sc.objects[1], sc.assets[0]
+    t0 = 0.6
+    before = [inner.matrix(t) for t in (0.5, 0.7)]
+    instance.retime = (t0, 0.0)          # held at the pose of t0
+    np.testing.assert_allclose(inner.matrix(0.5), inner.matrix(0.7), atol=1e-12)
+    instance.retime = (t0, 2.0)          # twice as fast about t0
+    np.testing.assert_allclose(inner.matrix(0.65), _plain(instance, inner, 0.7), atol=1e-12)
+    instance.retime = None
+    np.testing.assert_allclose(inner.matrix(0.5), before[0], atol=1e-12)
+
+
+def _plain(instance, obj, t):
+    saved, instance.retime = instance.retime, None
+    try:
+        return obj.matrix(t)
+    finally:
+        instance.retime = saved

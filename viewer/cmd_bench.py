@@ -186,13 +186,17 @@ def speed_table(r: Renderer, s, speeds: list[float], frames: int) -> list[dict]:
     rows = []
     # Velocities scale by f; keyed paths run f times as fast about the frame time (the pose
     # at the frame time stays, the motion over the exposure scales as a velocity's would).
-    base = [(o.velocity.copy(), o.angular_velocity.copy(), o.keys) for o in s.scene.objects]
+    # glTF entries: their placements as any object's, their animations retimed the same way.
+    nodes = [*s.scene.objects, *(a.root for a in s.scene.assets)]
+    base = [(o.velocity.copy(), o.angular_velocity.copy(), o.keys) for o in nodes]
     try:
         for f in speeds:
-            for o, (v, w, keys) in zip(s.scene.objects, base):
+            for o, (v, w, keys) in zip(nodes, base):
                 o.velocity, o.angular_velocity = v * f, w * f
                 if keys is not None:
                     o.keys = keys.retimed(s.time, f)
+            for a in s.scene.assets:
+                a.retime = (s.time, f)
             ms, masked, rays = [], [], []
             for _ in range(frames):
                 # timing=True: finish() around every pass, so reveal_ms is the reveal's own
@@ -205,8 +209,10 @@ def speed_table(r: Renderer, s, speeds: list[float], frames: int) -> list[dict]:
             rows.append({"speed": f, "masked_pixels": int(np.median(masked)),
                          "rays": int(np.median(rays)), "reveal_ms": float(np.median(ms))})
     finally:
-        for o, (v, w, keys) in zip(s.scene.objects, base):
+        for o, (v, w, keys) in zip(nodes, base):
             o.velocity, o.angular_velocity, o.keys = v, w, keys
+        for a in s.scene.assets:
+            a.retime = None
     return rows
 
 

@@ -36,12 +36,18 @@ class AssetInstance:
         self.root = root
         self.node_moving = asset.moving(animations)        # (N,) the animated subtrees
         self._worlds: dict[float, np.ndarray] = {}
+        # (t0, f): the animation runs f times as fast about t0 (hmblur bench --speeds, as
+        # keyed paths are retimed); None: as written.
+        self.retime: tuple[float, float] | None = None
 
     @property
     def animated(self) -> bool:
         return bool(self.node_moving.any())
 
     def animation_time(self, t: float) -> float:
+        if self.retime is not None:
+            t0, f = self.retime
+            t = t0 + f * (t - t0)
         return self.asset.animation_time(t, self.animations, self.time_offset,
                                          self.time_scale, self.loop)
 
@@ -95,6 +101,12 @@ class Skin:
         joint_nodes = np.asarray(instance.asset.skins[skin].joints, np.int64)
         self.moving = bool(instance.node_moving[joint_nodes].any())
         self._memo: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+
+    def stamp(self, *times) -> tuple:
+        """What the poses at `times` depend on (their animation times): a key for what is
+        kept of them (posed buffers, Embree scenes)."""
+        return tuple(self.instance.animation_time(t) if self.moving else 0.0
+                     for t in times if t is not None)
 
     def deformed(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         """(positions, unit normals) at time t, (n, 3) float64 each, read-only."""

@@ -223,7 +223,7 @@ class GpuScene:
         hold); nothing for a rigid one."""
         if obj.skin is None:
             return
-        key = (t, t_open, t_close, None if times is None else tuple(times))
+        key = obj.skin.stamp(t, t_open, t_close, *(times or ()))
         if self._posed.get(obj.id) != key:
             data = skinned_vertex_data(obj, t, t_open, t_close, times)
             self.buffers[obj.id - 1].write(data.tobytes())

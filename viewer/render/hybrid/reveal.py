@@ -217,7 +217,7 @@ class RevealState:
         normal) at t in the face texture, their positions at shutter open and close in
         the motion texture (SKINNED_FACES: per corner (open, 0), (close, 0)); only their
         rows are written."""
-        key = (t, t_open, t_close)
+        key = tuple(o.skin.stamp(t, t_open, t_close) for o in self.skinned)
         if not self.skinned or self._faces_posed == key:
             return
         self.face_texture()
