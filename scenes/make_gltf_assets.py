@@ -2,12 +2,15 @@
 Run `python -m scenes.make_gltf_assets` (or `--out DIR`); the output is committed, and
 tests/test_gltf_assets.py checks that this script rebuilds it byte for byte.
 
-The asset (metres, Y-up, the rover's front is +X, its right +Z):
+The asset (metres, Y-up, the rover's front faces +Z as glTF's assets do, its right -X).
+The geometry below is designed in a frame whose front is +X and right +Z (the design
+frame), and turned into the asset's by TO_ASSET (90 degrees about Y) as it is written:
 
-    vehicle                   root; animation "drive": translation + rotation keys
+    vehicle                   root; animation "drive": translation + rotation keys (the
+                              first key turns the rover to face +X, along its path)
       body                    chassis + cabin (two materials) + side decals (PNG texture)
       steer_fl -> wheel_fl    front wheels: "drive" steers the knuckle about Y (Ackermann)
-      steer_fr -> wheel_fr      and spins the wheel about its axle, local Z
+      steer_fr -> wheel_fr      and spins the wheel about its axle, local X
       wheel_rl, wheel_rr      rear wheels: spin only
       arm_j0 -> arm_j1 -> arm_j2 -> arm_tip
                               the crane's joints; animation "swing" turns them; arm_tip is
@@ -45,9 +48,11 @@ KEY_RATE = 30                   # keys per second
 DURATION = 5.0                  # both animations: [0, DURATION] s
 FINE = 3000                     # integration steps per second for the path
 
-# The rover (in the vehicle node's frame; origin on the ground under the rear axle).
+# The rover in the design frame (front +X, right +Z; origin on the ground under the rear
+# axle). TO_ASSET turns design vectors into the asset's frame (front +Z, right -X).
+TO_ASSET = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
 WHEEL_R = 0.3                   # wheel radius
-WHEEL_W = 0.18                  # wheel width (along its axle, local Z)
+WHEEL_W = 0.18                  # wheel width (along its axle)
 WHEELBASE = 1.3                 # rear axle x = 0, front axle x = WHEELBASE
 HALF_TRACK = 0.55               # wheel centres at z = +-HALF_TRACK
 BODY_AT = (0.65, 0.55, 0.0)     # the body node's translation
@@ -75,6 +80,14 @@ LINEAR_FILTER, LINEAR_MIPMAP_LINEAR, REPEAT = 9729, 9987, 10497
 def smoothstep(a: float, b: float, x):
     u = np.clip((np.asarray(x, np.float64) - a) / (b - a), 0.0, 1.0)
     return u * u * (3.0 - 2.0 * u)
+
+
+def to_asset(v) -> np.ndarray:
+    """Design-frame vectors (..., 3) in the asset's frame (-0.0 written as 0.0)."""
+    return np.asarray(v, np.float64) @ TO_ASSET.T + 0.0
+
+
+AXLE = to_asset([0.0, 0.0, 1.0])      # the wheels' axle and the arm's bending axis: -X
 
 
 def quat_axis(axis, angle) -> np.ndarray:
@@ -128,7 +141,7 @@ def key_times() -> np.ndarray:
 
 def drive() -> dict:
     """The rover's motion sampled at the key times: vehicle position and yaw, the front
-    knuckles' steering angles, each wheel's spin angle (radians, about its local Z)."""
+    knuckles' steering angles, each wheel's spin angle (radians, about its axle)."""
     n = int(round(DURATION * FINE))
     t = np.arange(n + 1, dtype=np.float64) / FINE
     dt = 1.0 / FINE
@@ -158,7 +171,7 @@ def drive() -> dict:
         px = x + np.cos(yaw) * wx + np.sin(yaw) * wz
         pz = z - np.sin(yaw) * wx + np.cos(yaw) * wz
         d = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(px), np.diff(pz)))])
-        spins[name] = -d / WHEEL_R        # rolling forward (+X) turns the top forward: -Z
+        spins[name] = -d / WHEEL_R        # design frame: rolling to +X turns about -Z
     at = np.arange(0, n + 1, FINE // KEY_RATE)
     return {"position": np.stack([x[at], np.full(len(at), START[1]), z[at]], axis=1),
             "yaw": yaw[at], "steer_fl": steer_l[at], "steer_fr": steer_r[at],
@@ -173,15 +186,15 @@ def wheel_offsets() -> dict:
 
 def swing() -> dict:
     """The crane's joint rotations at the key times (x y z w): arm_j0 yaws about Y and
-    pitches about Z, arm_j1 and arm_j2 bend about Z a little later each (a travelling wave
-    up the arm)."""
+    pitches about the axle's direction, arm_j1 and arm_j2 bend about it a little later each
+    (a travelling wave up the arm)."""
     t = key_times()
     w = 2.0 * math.pi / 2.5                                   # a 2.5 s period
     yaw = math.radians(50.0) * np.sin(w * t)
     pitch = math.radians(-20.0) + math.radians(12.0) * np.sin(2.0 * w * t + 0.5)
-    j0 = quat_mul(quat_axis([0, 1, 0], yaw), quat_axis([0, 0, 1], pitch))
-    j1 = quat_axis([0, 0, 1], math.radians(30.0) * np.sin(w * t - 0.9))
-    j2 = quat_axis([0, 0, 1], math.radians(35.0) * np.sin(w * t - 1.8))
+    j0 = quat_mul(quat_axis([0, 1, 0], yaw), quat_axis(AXLE, pitch))
+    j1 = quat_axis(AXLE, math.radians(30.0) * np.sin(w * t - 0.9))
+    j2 = quat_axis(AXLE, math.radians(35.0) * np.sin(w * t - 1.8))
     return {"arm_j0": continuous(j0), "arm_j1": continuous(j1), "arm_j2": continuous(j2)}
 
 
@@ -216,7 +229,7 @@ def box_faces(ranges, uv_sides: bool = False):
 
 
 def wheel_parts(sections: int = 40, spokes: int = 5):
-    """The wheel about local Z (its axle): a tread and tyre walls (dark, the tread with
+    """The wheel about the design frame's Z (its axle): a tread and tyre walls (dark, the tread with
     light grooves), and on both faces a hub disc in two colours, `spokes` light sectors on
     dark, so its turn shows. Returns {material: (positions, normals, indices)}."""
     r_out, r_hub, h = WHEEL_R, 0.2, WHEEL_W / 2.0
@@ -258,7 +271,7 @@ def wheel_parts(sections: int = 40, spokes: int = 5):
 
 
 def tube(rings: int = 11, sides: int = 12):
-    """The crane arm in its bind pose: a tube up local Y from 0 to ARM_LENGTH (radius
+    """The crane arm in its bind pose (design frame): a tube up Y from 0 to ARM_LENGTH (radius
     0.055 tapering to 0.035), capped, in bands of two materials; vertex weights to the
     three joints (blended over 0.08 m about each inner joint). Returns {material:
     (positions, normals, joints, weights, indices)} with positions about the joint base."""
@@ -458,8 +471,9 @@ def rover() -> bytes:
         "metallicFactor": 0.0, "roughnessFactor": 0.5}})
 
     def primitive(material: str, pos, nrm, idx, uv=None, joints=None, weights=None) -> dict:
-        attrs = {"POSITION": g.accessor(pos, FLOAT, "VEC3", ARRAY_BUFFER, bounds=True),
-                 "NORMAL": g.accessor(nrm, FLOAT, "VEC3", ARRAY_BUFFER)}
+        attrs = {"POSITION": g.accessor(to_asset(pos), FLOAT, "VEC3", ARRAY_BUFFER,
+                                        bounds=True),
+                 "NORMAL": g.accessor(to_asset(nrm), FLOAT, "VEC3", ARRAY_BUFFER)}
         if uv is not None:
             attrs["TEXCOORD_0"] = g.accessor(uv, FLOAT, "VEC2", ARRAY_BUFFER)
         if joints is not None:
@@ -491,10 +505,10 @@ def rover() -> bytes:
 
     vehicle = node("vehicle", children=[])
     kids = nodes[vehicle]["children"]
-    kids.append(node("body", mesh=body, translation=list(BODY_AT)))
+    kids.append(node("body", mesh=body, translation=to_asset(BODY_AT).tolist()))
     wheel_node, steer_node = {}, {}
     for name, (wx, wz) in wheel_offsets().items():
-        centre = [wx, WHEEL_R, wz]
+        centre = to_asset([wx, WHEEL_R, wz]).tolist()
         if name.startswith("wheel_f"):
             steer = steer_node[name] = node("steer_" + name[-2:], translation=centre,
                                             children=[])
@@ -505,7 +519,7 @@ def rover() -> bytes:
             wheel_node[name] = node(name, mesh=wheel, translation=centre)
             kids.append(wheel_node[name])
     step = ARM_LENGTH / ARM_JOINTS
-    joints = [node("arm_j0", translation=list(ARM_BASE), children=[])]
+    joints = [node("arm_j0", translation=to_asset(ARM_BASE).tolist(), children=[])]
     kids.append(joints[0])
     for j in range(1, ARM_JOINTS):
         joints.append(node(f"arm_j{j}", translation=[0.0, step, 0.0], children=[]))
@@ -517,7 +531,7 @@ def rover() -> bytes:
     # up. The tube's vertices are placed there, and inverseBindMatrices undo each joint's
     # world matrix in that pose.
     base = np.array(ARM_BASE)
-    bind_worlds = [translate(base + [0.0, j * step, 0.0]) for j in range(ARM_JOINTS)]
+    bind_worlds = [translate(to_asset(base + [0.0, j * step, 0.0])) for j in range(ARM_JOINTS)]
     ibm = np.stack([np.linalg.inv(m).T.reshape(16) for m in bind_worlds])   # column-major
     skin = g.add("skins", {"name": "arm", "joints": joints, "skeleton": joints[0],
                            "inverseBindMatrices": g.accessor(ibm, FLOAT, "MAT4")})
@@ -544,12 +558,13 @@ def rover() -> bytes:
 
     d = drive()
     up = [0.0, 1.0, 0.0]
+    # the path is in the scene's frame; the +Z-facing rover turns 90 degrees more to follow
     tracks = [(vehicle, "translation", d["position"]),
-              (vehicle, "rotation", continuous(quat_axis(up, d["yaw"])))]
+              (vehicle, "rotation", continuous(quat_axis(up, d["yaw"] + math.pi / 2.0)))]
     for name, steer in steer_node.items():
         tracks.append((steer, "rotation", continuous(quat_axis(up, d["steer_" + name[-2:]]))))
     for name, w in wheel_node.items():
-        tracks.append((w, "rotation", continuous(quat_axis([0, 0, 1], d["spin"][name]))))
+        tracks.append((w, "rotation", continuous(quat_axis(AXLE, d["spin"][name]))))
     animation("drive", tracks)
     animation("swing", [(joints[i], "rotation", q) for i, q in
                         enumerate(swing().values())])

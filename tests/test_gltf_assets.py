@@ -62,9 +62,9 @@ class Glb:
 
 
 def spin(glb: Glb, wheel: str) -> np.ndarray:
-    """A wheel's key angles about its local Z, radians, unwrapped."""
+    """A wheel's key angles about its axle (local -X), radians, unwrapped."""
     _, q = glb.track("drive", wheel, "rotation")
-    return np.unwrap(2.0 * np.arctan2(q[:, 2], q[:, 3]))
+    return np.unwrap(2.0 * np.arctan2(-q[:, 0], q[:, 3]))
 
 
 @pytest.fixture(scope="module")
@@ -143,7 +143,7 @@ def test_wheels_roll_about_their_axles_at_the_distance_travelled(glb):
     for w in WHEELS:
         tw, q = glb.track("drive", w, "rotation")
         np.testing.assert_array_equal(tw, t)
-        assert np.all(q[:, :2] == 0.0)                     # about local Z only: the axle
+        assert np.all(q[:, 1:3] == 0.0)                    # about local X only: the axle
         assert np.all(np.diff(spin(glb, w)) < 0)           # always rolling forward
     # a straight stretch: 3 m/s over a 0.3 m radius is 10 rad/s
     k = np.searchsorted(t, 1.0)
@@ -153,10 +153,11 @@ def test_wheels_roll_about_their_axles_at_the_distance_travelled(glb):
     # in the turn the inner (left) wheels roll slower than the outer ones
     k = np.searchsorted(t, 2.9)
     assert -np.diff(spin(glb, "wheel_rl"))[k] < 0.8 * -np.diff(spin(glb, "wheel_rr"))[k]
-    # the whole drive turns the vehicle 90 degrees left (about +Y)
+    # the +Z-facing rover first turns to face +X, along its path (90 degrees about +Y),
+    # and the drive turns it 90 degrees further left
     _, q = glb.track("drive", "vehicle", "rotation")
-    assert np.allclose(q[0], [0, 0, 0, 1])
-    assert np.allclose(np.abs(q[-1]), [0, np.sqrt(0.5), 0, np.sqrt(0.5)], atol=1e-4)
+    assert np.allclose(q[0], [0, np.sqrt(0.5), 0, np.sqrt(0.5)])
+    assert np.allclose(np.abs(q[-1]), [0, 1, 0, 0], atol=1e-4)
 
 
 def test_skin_binds_the_tube_to_three_joints(glb):
@@ -172,7 +173,7 @@ def test_skin_binds_the_tube_to_three_joints(glb):
         pos = glb.accessor(p["attributes"]["POSITION"])
         # at the bind pose every joint matrix J_j = World_bind(j) @ IBM_j is the identity:
         # the joints stand straight up from ARM_BASE, the vehicle at its static pose
-        base = np.array(make_gltf_assets.ARM_BASE)
+        base = make_gltf_assets.to_asset(make_gltf_assets.ARM_BASE)
         for k in range(3):
             world = np.eye(4)
             world[:3, 3] = base + [0.0, k * make_gltf_assets.ARM_LENGTH / 3, 0.0]
@@ -223,9 +224,9 @@ def test_wheel_matrices_turn_about_the_axle_by_the_keys(scene, glb):
         for t in (0.5, 1.234, 2.88, 2.9, 2.92, 4.51):
             rel = np.linalg.inv(inst.node_matrix(parent, t)) @ obj.matrix(t)
             a = np.interp(t, times, angle)      # slerp about one axis: the angle is linear
-            c, s = np.cos(a), np.sin(a)
-            expect = np.array([[c, -s, 0, offset[0]], [s, c, 0, offset[1]],
-                               [0, 0, 1, offset[2]], [0, 0, 0, 1]])
+            c, s = np.cos(a), np.sin(a)         # a turn by a about -X
+            expect = np.array([[1, 0, 0, offset[0]], [0, c, s, offset[1]],
+                               [0, -s, c, offset[2]], [0, 0, 0, 1]])
             np.testing.assert_allclose(rel, expect, atol=1e-5)
 
 
@@ -240,8 +241,8 @@ def test_blur_lengths_at_the_frame_time(scene):
 
     # a wheel's rim against the hub: the wheel's own turn alone smears it across a spoke
     wheel = by["rover/wheel_rr"]
-    rim = np.array([[0.2 * np.cos(a), 0.2 * np.sin(a), 0.09] for a in np.linspace(0, 6, 12)])
-    hub = np.array([[0.0, 0.0, 0.09]])
+    rim = np.array([[0.09, 0.2 * np.cos(a), 0.2 * np.sin(a)] for a in np.linspace(0, 6, 12)])
+    hub = np.array([[0.09, 0.0, 0.0]])
     assert (travel(wheel, rim) - travel(wheel, hub)).max() > 12.0
     assert travel(wheel, rim).max() > 40.0
     # the arm: skinned; its tip (the lamp) moves a moderate distance relative to the body
