@@ -148,3 +148,15 @@ def test_skinned_path_renders_like_rigid_path(pair, mode, params):
     # left in its bind pose puts 3 pixels 0.3 off.
     assert (diff > 1 / 255).sum() == 0, f"{mode}: {(diff > 1 / 255).sum()} pixels differ"
     assert diff.mean() < 1e-5
+
+
+def test_screen_path_bend_reads_the_posed_vertices(pair):
+    from world.camera import Camera
+    from world.path_bend import screen_bend
+    bends = []
+    for sc in pair:
+        cam = Camera(sc.camera, 960, 640)      # (px scale with the image: 10x the render)
+        bends.append(screen_bend(sc, cam, sc.render.time, sc.camera.shutter))
+    rigid, skinned = bends
+    assert rigid > 1.0                        # the slab's turn bends its screen paths
+    assert skinned == pytest.approx(rigid, rel=1e-6)

@@ -108,6 +108,16 @@ class Skin:
         return tuple(self.instance.animation_time(t) if self.moving else 0.0
                      for t in times if t is not None)
 
+    def points(self, t: float, step: int) -> np.ndarray:
+        """Every `step`-th vertex posed at t (the screen-path bend's samples): only those
+        skinned, or taken from the whole pose where that is kept already."""
+        a = self.instance.animation_time(t) if self.moving else 0.0
+        if a in self._memo:
+            return self._memo[a][0][::step]
+        mats = self.instance.asset.joint_matrices(self.skin, self.instance.worlds(t))
+        return skin_vertices(self.positions[::step], None, self.joints[::step],
+                             self.weights[::step], mats)[0]
+
     def deformed(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         """(positions, unit normals) at time t, (n, 3) float64 each, read-only."""
         a = self.instance.animation_time(t) if self.moving else 0.0

@@ -41,8 +41,7 @@ def object_points(obj, t: float = 0.0) -> np.ndarray:
     mesh's kept on the object (a frame asks once per mode and step count; 32 movers'
     points cost ~1 ms to build), a skinned mesh's from its pose at t."""
     if obj.skin is not None:
-        v = obj.vertices_at(t)
-        v = v[::max(1, -(-len(v) // MAX_POINTS))]
+        v = obj.skin.points(t, max(1, -(-len(obj.mesh.vertices) // MAX_POINTS)))
         return np.vstack([v.T, np.ones(len(v))])
     kept = obj.__dict__.get("_bend_points")
     if kept is None or kept[0] is not obj.mesh:
