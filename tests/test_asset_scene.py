@@ -144,28 +144,24 @@ def same_scene(a, b):
             assert np.array_equal(oa.vertices_at(t), ob.vertices_at(t))
 
 
-def test_printed_scene_loads_back_to_the_same_scene(asset, tmp_path, capsys):
+def test_printed_scene_loads_back_to_the_same_scene(asset, tmp_path, capsys, monkeypatch):
     from world.loader import load_scene
     scene, doc = asset
     out = tmp_path / "edit" / "rover.toml"
     assert main(["scene", str(GLB), "--out", str(out)]) == 0
-    text = out.read_text()
-    written = tomllib.loads(text)
+    written = tomllib.loads(out.read_text())
     assert written["objects"][0]["gltf"] == os.path.relpath(GLB, out.parent)
     assert {k: v for k, v in written.items() if k != "objects"} == {
         k: v for k, v in doc.items() if k != "objects"}
     same_scene(load_scene(out), scene)
     # to stdout: the asset's path relative to the current folder
-    os.chdir(tmp_path)
-    try:
-        capsys.readouterr()
-        assert main(["scene", os.path.relpath(GLB)]) == 0
-        printed = capsys.readouterr().out
-        assert printed.startswith(f"# Written by `hmblur scene {os.path.relpath(GLB)}`:\n")
-        (tmp_path / "here.toml").write_text(printed)
-        same_scene(load_scene(tmp_path / "here.toml"), scene)
-    finally:
-        os.chdir(ROOT)
+    monkeypatch.chdir(tmp_path)
+    capsys.readouterr()
+    assert main(["scene", os.path.relpath(GLB)]) == 0
+    printed = capsys.readouterr().out
+    assert printed.startswith(f"# Written by `hmblur scene {os.path.relpath(GLB)}`:\n")
+    (tmp_path / "here.toml").write_text(printed)
+    same_scene(load_scene(tmp_path / "here.toml"), scene)
 
 
 def one_line_error(args, *words):
