@@ -277,11 +277,11 @@ def test_a_write_that_fails_is_one_line_and_leaves_no_output(tmp_path, capsys, m
     real = io._write_temp
     calls = []
 
-    def failing(path, write):
+    def failing(path, write, made=None):
         calls.append(path)
         if len(calls) == 3:
             raise OSError(28, "No space left on device", str(path))
-        return real(path, write)
+        return real(path, write, made)
     monkeypatch.setattr(io, "_write_temp", failing)
     out = tmp_path / "c" / "d"                   # two missing folders: both made, both undone
     assert main(["compare", BASIC, "--size", "32x20", "--samples", "2", "--modes", "mcguire",
