@@ -3,6 +3,8 @@ in every mode: no LinAlgError, finite pixels, the image at the singular instant 
 instant later; invertible poses keep their exact matrices (byte-identical images)."""
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
@@ -119,3 +121,39 @@ def test_every_mode_renders_a_scale_through_zero_as_its_limit(ctx, tmp_path, eye
             assert (diff < 2e-3).mean() > 0.995 and diff.mean() < 1e-3, (mode, diff.max())
     finally:
         r.release()
+
+
+CROSSING_CAMERA = """
+    [camera]
+    fov_y = 45.0
+    shutter = 0.04
+    [[camera.keys]]
+    time = 0.0
+    position = [0.0, 0.0, 0.0]
+    look_at = [0.0, 0.0, -1.0]
+    [[camera.keys]]
+    time = 1.0
+    position = [0.0, 0.0, -2.0]
+    look_at = [0.0, 0.0, -1.0]
+    [render]
+    width = 32
+    height = 18
+    time = {t}
+    [[objects]]
+    mesh = {{ box = [1.0, 1.0, 1.0] }}
+    position = [0.0, 0.0, -5.0]
+"""
+
+
+def test_a_keyed_camera_whose_look_at_meets_its_eye_is_one_line(tmp_path, capsys):
+    # The eye passes through look_at at t = 0.5: no view exists there (it flips), so no
+    # limit either: one line naming the keys and the time; other times render.
+    from viewer.cli import main
+    p = tmp_path / "cam.toml"
+    p.write_text(textwrap.dedent(CROSSING_CAMERA.format(t=0.5)))
+    assert main(["shot", str(p), "--mode", "off", "--out", str(tmp_path / "a.png")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("hmblur: error: camera.keys: at t = 0.5 s")
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["cam.toml"]
+    assert main(["shot", str(p), "--mode", "off", "--time", "0.2", "--out",
+                 str(tmp_path / "a.png")]) == 0

@@ -342,7 +342,8 @@ def display():
 def view(display, tmp_path, *args, script=None, frames=6, size=f"{W}x{H}", name="win", rc=0):
     shot, stats = tmp_path / f"{name}.png", tmp_path / f"{name}.json"
     cmd = [sys.executable, "-m", "viewer", "view", SCENE, "--size", size, "--frames", str(frames),
-           "--screenshot", str(shot), "--stats-json", str(stats), "--shot-dir", str(tmp_path), *args]
+           "--screenshot", str(shot), "--stats-json", str(stats), "--shot-dir", str(tmp_path),
+           "--mode", "off", *args]          # (the sharp frame unless a test asks; later wins)
     if script is not None:
         path = tmp_path / f"{name}.script"
         path.write_text(script)

@@ -92,13 +92,17 @@ def forget_partial(p: Path, remove: bool = True):
         PARTIAL.discard(p)
 
 
-def _write_temp(path: Path, write: Callable[[io.BufferedWriter], None]) -> Path:
-    """Run `write(fileobj)` on a new temp file beside `path` and fsync it; its path."""
+def _write_temp(path: Path, write: Callable[[io.BufferedWriter], None],
+                made: list | None = None) -> Path:
+    """Run `write(fileobj)` on a new temp file beside `path` and fsync it; its path, also
+    appended to `made` the moment the file exists."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
     # os.open with 0o666 lets the umask decide the final mode, as a plain open() would.
     with signals_held():
         fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
         PARTIAL.add(tmp)
+        if made is not None:
+            made.append(tmp)
     try:
         with os.fdopen(fd, "wb") as f:
             write(f)
@@ -162,7 +166,7 @@ class OutputSet:
                         folder.mkdir()
                         made.append(folder)
             for path, write in self._files:
-                done.append(_write_temp(path, write))
+                _write_temp(path, write, done)
             with signals_held():              # the renames: all of them, then a signal
                 for tmp, (path, _) in zip(done, self._files):
                     os.replace(tmp, path)

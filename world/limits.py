@@ -18,7 +18,7 @@ MAX_TRIANGLES = 2_000_000
 # Objects and lights of a scene: each object costs ~25 kB of host memory and a draw call
 # per pass; every pixel's shading loops over the lights.
 MAX_OBJECTS = 10_000
-MAX_LIGHTS = 1_024
+MAX_LIGHTS = 4_096
 # Asset files a scene names (meshes, images) and their decoded size.
 MAX_SCENE_BYTES = 16 << 20
 MAX_MESH_BYTES = 256 << 20

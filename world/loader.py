@@ -145,7 +145,8 @@ class _Loader:
 
     # -- scalars and vectors
 
-    def number(self, v, key: str) -> float:
+    def number(self, v, key: str, bound: float = limits.MAX_SCENE_NUMBER,
+               what: str = "a number") -> float:
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             self.fail(key, f"expected a number, got {_describe(v)}")
         try:
@@ -154,8 +155,8 @@ class _Loader:
             x = math.inf
         if not math.isfinite(x):
             self.fail(key, f"expected a finite number, got {_describe(v)}")
-        if abs(x) > limits.MAX_SCENE_NUMBER:      # (float32 in the shaders)
-            self.fail(key, f"expected a number within +-{limits.MAX_SCENE_NUMBER:g}, got {x!r}")
+        if abs(x) > bound:                        # (float32 in the shaders)
+            self.fail(key, f"expected {what} within +-{bound:g}, got {x!r}")
         return x
 
     def integer(self, v, key: str) -> int:
@@ -399,10 +400,8 @@ class _Loader:
         if width * height > limits.MAX_FRAME_PIXELS:
             self.fail("render", f"expected at most {limits.MAX_FRAME_PIXELS} pixels "
                       f"(e.g. 2560x1600), got {width}x{height}")
-        time = self.number(t.get("time", 0.0), "render.time")
-        if abs(time) > limits.MAX_TIME:           # the bound of --time (world/limits.py)
-            self.fail("render.time", f"expected seconds within +-{limits.MAX_TIME:g}, "
-                      f"got {time!r}")
+        # the bound of --time (world/limits.py)
+        time = self.number(t.get("time", 0.0), "render.time", limits.MAX_TIME, "seconds")
         return RenderDefaults(width=width, height=height, time=time)
 
     def light(self, t: dict, k: str) -> Light:

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from world import conventions
+from world.errors import UserError
 from world import transforms as tf
 
 
@@ -170,7 +171,14 @@ class CameraKeys:
         smooth = self.interpolation == "smooth"
         eye = key_curve(self.positions, i, u, smooth)
         fwd = key_curve(self.look_ats, i, u, smooth) - eye
-        return eye, fwd / np.linalg.norm(fwd), key_curve(self.ups, i, u, smooth)
+        n, up = np.linalg.norm(fwd), key_curve(self.ups, i, u, smooth)
+        # Keys each with a view can pass through none (look_at crossing the eye, up
+        # turning through the view): no limit exists there (the view flips), so a line.
+        if not (0.0 < n < np.inf) or np.linalg.norm(np.cross(fwd / n, up)) <= 1e-9 * np.linalg.norm(up):
+            raise UserError(f"camera.keys: at t = {t!r} s the keyed camera has no view "
+                            "(look_at meets the eye, or up lies along the view): add a key "
+                            "that keeps them apart")
+        return eye, fwd / n, up
 
     def to_dicts(self) -> list[dict]:
         return [{"time": float(t), "position": p.tolist(), "look_at": a.tolist(),
