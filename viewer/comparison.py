@@ -40,8 +40,9 @@ class Variant:
         return p
 
 
-def check_variant(v: Variant, label: str, available=REALTIME):
-    """One line naming `label` for a bad name, mode or a group the mode does not read."""
+def check_variant(v: Variant, label: str, available=REALTIME, values: bool = True):
+    """One line naming `label` for a bad name, mode, a group the mode does not read or
+    (with `values`) a value of the wrong type or out of range."""
     if not NAME.fullmatch(v.name):
         raise UserError(f"{label}: variant name {v.name!r}: expected letters, digits and "
                         "_ . + - (a file name), starting with a letter or digit")
@@ -56,6 +57,8 @@ def check_variant(v: Variant, label: str, available=REALTIME):
             readers = [m for m, gs in MODE_GROUPS.items() if group in gs]
             raise UserError(f"{label}: {key}: mode {v.mode} does not use the {group} "
                             f"parameters (used by {', '.join(readers) or 'no mode'})")
+    if values:                           # every value's type and range, before any render
+        v.params(ParamSet(), label)
 
 
 def parse_variant(text: str, available=REALTIME) -> Variant:

@@ -95,6 +95,7 @@ def _renderer(bundle: Bundle, size):
     if _state.ctx is None:
         _state.ctx = create_headless()
         _state.renderers = OrderedDict()
+    _state.ctx.__enter__()        # current again (a caller may have made another one current)
     kept = _state.renderers
     if bundle.digest not in kept:
         scene = load_scene(materialise(bundle))

@@ -11,6 +11,7 @@ again on the next run. SIGINT and SIGTERM stop the sweep between files.
 from __future__ import annotations
 
 import json
+import logging
 import os
 import signal
 import sys
@@ -143,7 +144,7 @@ def run_on_dask(tasks, on_result, workers: int, scheduler: str | None):
                                 f"({type(exc).__name__}: {' '.join(str(exc).split())})") from None
         else:
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs="error")
+                                   dashboard_address=None, silence_logs=logging.ERROR)
             client = Client(cluster)
         engine = (f"dask scheduler {scheduler}" if scheduler else "dask LocalCluster") + \
             f", {len(client.scheduler_info()['workers'])} workers"

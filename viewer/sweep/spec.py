@@ -257,7 +257,7 @@ def load_sweep(path) -> Sweep:
                 grid[key] = c.list_of(value, f"{k}.set.{key}", lambda x, _k: x, False)
             else:
                 fixed[key] = value
-        check_variant(Variant(family, mode, dict(sets)), f"{path}: {k}")
+        check_variant(Variant(family, mode, dict(sets)), f"{path}: {k}", values=False)
         for values in itertools.product(*grid.values()):
             point = dict(zip(grid, values))
             v = SweepVariant(grid_name(family, point), mode, {**fixed, **point},
