@@ -371,3 +371,37 @@ def test_a_local_dask_cluster_gives_the_in_process_table(tmp_path):
     assert all(c["worker"].split(":")[1] != str(__import__("os").getpid()) for c in facts["ran"])
     assert (tmp_path / "dask/table.csv").read_bytes() == (tmp_path / "here/table.csv").read_bytes()
     assert "dask LocalCluster, 2 workers" in (tmp_path / "dask/summary.md").read_text()
+
+
+def test_a_gltf_entry_with_external_files_renders_on_a_worker_from_its_bundle(tmp_path):
+    """A scene whose glTF entry keeps its buffer in a .bin beside it (a uri with a space),
+    one folder up: the cell, run from the bundle's copy, gives the numbers of the same cell
+    run on a scene whose glTF holds its buffer inline."""
+    import base64
+    (tmp_path / "scenes").mkdir()
+    (tmp_path / "assets").mkdir()
+    doc = json.loads((CONFORMANCE / "gltf/BoxAnimated.gltf").read_text())
+    head, data = doc["buffers"][0]["uri"].split(",", 1)
+    (tmp_path / "assets/box data.bin").write_bytes(base64.b64decode(data))
+    doc["buffers"][0]["uri"] = "box%20data.bin"
+    (tmp_path / "assets/box.gltf").write_text(json.dumps(doc))
+    scene = (CONFORMANCE / "gltf/gltf_box.toml").read_text()
+    scene = scene.replace('gltf = "BoxAnimated.gltf"', 'gltf = "../assets/box.gltf"')
+    shutil.copy(CONFORMANCE / "gltf/BoxTextured.gltf", tmp_path / "assets")
+    scene = scene.replace('gltf = "BoxTextured.gltf"', 'gltf = "../assets/BoxTextured.gltf"')
+    (tmp_path / "scenes/ext.toml").write_text(scene)
+    p = tmp_path / "sweep.toml"
+    p.write_text(textwrap.dedent(f"""
+        scenes = ["scenes/ext.toml", "{CONFORMANCE / 'gltf/gltf_box.toml'}"]
+        size = "32x18"
+        samples = 4
+        [variants.hybrid]
+        mode = "hybrid"
+    """))
+    spec = load_sweep(p)
+    tasks = sweep_run.tasks_of(spec, version(), False, False)
+    assert [rel for rel, _ in tasks[0].bundle.files] == [
+        "assets/BoxTextured.gltf", "assets/box data.bin", "assets/box.gltf", "scenes/ext.toml"]
+    a, b = run_cell(tasks[0]), run_cell(tasks[1])
+    assert a["error"] is None and b["error"] is None, (a["error"], b["error"])
+    assert a["rows"] == b["rows"] and a["time"] == 1.6
