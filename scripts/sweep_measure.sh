@@ -15,9 +15,9 @@ mkdir -p "$M"
 export PYTHONPATH="$PWD${PYTHONPATH:+:$PYTHONPATH}"     # workers import this tree
 
 wall() {   # wall NAME CMD...: run, keep stderr, print seconds
-    local t0=$(date +%s.%N)
+    local t0=$(date +%s%N)
     "${@:2}" > "$M/$1.stdout" 2> "$M/$1.stderr"
-    echo "$1: $(echo "$(date +%s.%N) - $t0" | bc) s"
+    echo "$1: $(( ($(date +%s%N) - t0) / 1000000 )) ms (load average after: $(cut -d" " -f1-3 /proc/loadavg))"
 }
 cells() { ls "$1/cells" 2>/dev/null | wc -l; }
 check() {  # check DIR: the table's cells, rows, repeated rows, failed cells
@@ -62,17 +62,23 @@ check $M/kill
 grep -E '^- (engine|cells run now|peak memory)' $M/kill/summary.md
 cmp -s $M/w1/table.csv $M/kill/table.csv && echo "kill: table.csv identical to w1's"
 
-echo "== interrupted (SIGINT) and run again"
-"$PY" -m viewer sweep $SWEEP --out $M/int --workers 2 > $M/int1.stdout 2> $M/int1.stderr &
-MAIN=$!
-until [ "$(cells $M/int)" -ge 5 ]; do sleep 0.2; done
-kill -INT $MAIN
-wait $MAIN && echo "int: exit 0" || echo "int: exit $?"
-echo "int: left $(cells $M/int) cell files, $(find $M/int -name '*.tmp' | wc -l) temporary files, table: $(ls $M/int/table.csv 2>/dev/null || echo none)"
-"$PY" -m viewer sweep $SWEEP --out $M/int --workers 2 > $M/int2.stdout 2> $M/int2.stderr
-grep -E '^- (cells run now|cells from earlier runs)' $M/int/summary.md
-check $M/int
-cmp -s $M/w1/table.csv $M/int/table.csv && echo "int: table.csv identical to w1's"
+for SIG in INT TERM; do
+    echo "== interrupted (SIG$SIG) after 5 cells, and run again"
+    D=$M/int-$SIG
+    set -m          # job control: a background job does not ignore SIGINT
+    "$PY" -m viewer sweep $SWEEP --out $D --workers 2 > $D.1.stdout 2> $D.1.stderr &
+    MAIN=$!
+    set +m
+    until [ "$(cells $D)" -ge 5 ]; do sleep 0.2; done
+    kill -$SIG $MAIN
+    wait $MAIN && echo "exit 0" || echo "exit $?"
+    tail -1 $D.1.stderr
+    echo "left $(cells $D) cell files, $(find $D -name '*.tmp' | wc -l) temporary files, table: $(ls $D/table.csv 2>/dev/null || echo none)"
+    "$PY" -m viewer sweep $SWEEP --out $D --workers 2 > $D.2.stdout 2> $D.2.stderr
+    grep -E '^- (cells run now|cells from earlier runs)' $D/summary.md
+    check $D
+    cmp -s $M/w1/table.csv $D/table.csv && echo "table.csv identical to w1's"
+done
 
 echo "== a bad scene among good ones"
 mkdir -p $M/bad

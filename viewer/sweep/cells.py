@@ -27,7 +27,6 @@ from ..params import ParamSet
 from ..render.modes import MODE_GROUPS
 from ..strip import REGION_ORDER, choose_inset, make_strip, region_picture
 from .bundle import Bundle, copy_root, materialise
-from .spec import SweepVariant
 
 TIMING_FRAMES = 5          # warm frames per variant whose median is frame_ms (--timing)
 RENDERERS_KEPT = 3         # per worker: scenes whose GPU scene and ray tracer stay built
@@ -196,4 +195,4 @@ def _images(task: CellTask, c) -> dict:
     return out
 
 
-__all__ = ["CellTask", "SweepVariant", "run_cell", "cell_key"]
+__all__ = ["CellTask", "run_cell", "cell_key"]

@@ -47,7 +47,8 @@ def finished(out: Path, task: CellTask) -> dict | None:
         return None
     if c.get("error") is not None or (task.timing and not c.get("timing")):
         return None
-    if task.images and not all((out / p).is_file() for p in c.get("image_files") or [None]):
+    if task.images and not (c.get("image_files")
+                            and all((out / p).is_file() for p in c["image_files"])):
         return None
     return c
 
@@ -147,7 +148,7 @@ def run_on_dask(tasks, on_result, workers: int, scheduler: str | None):
                                    dashboard_address=None, silence_logs=logging.ERROR)
             client = Client(cluster)
         engine = (f"dask scheduler {scheduler}" if scheduler else "dask LocalCluster") + \
-            f", {len(client.scheduler_info()['workers'])} workers"
+            _workers(len(client.scheduler_info()["workers"]))
         try:
             by_key, futures = {}, []
             for task in tasks:
@@ -233,3 +234,7 @@ def run_sweep(spec: Sweep, out: Path, version: str, workers: int, scheduler: str
     facts["total"] = len(cells)
     facts["ran"] = ran
     return facts
+
+
+def _workers(n: int) -> str:
+    return f", {n} worker" + ("" if n == 1 else "s")

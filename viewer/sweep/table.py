@@ -169,6 +169,10 @@ def _fmt(v, digits=4) -> str:
     return f"{v:.{digits}f}" if math.isfinite(v) else ("inf" if v > 0 else "-inf")
 
 
+def _own(v) -> str:
+    return "the scene's" if v is None else f"{v:g}"
+
+
 def summary(spec: Sweep, rows: list[dict], cells: list[dict], facts: dict,
             plot_names: list[str], timing: bool) -> str:
     ok = [r for r in rows if r["error"] is None]
@@ -202,7 +206,8 @@ def summary(spec: Sweep, rows: list[dict], cells: list[dict], facts: dict,
     lines.append("")
     if failed:
         lines += ["## Failed cells", ""]
-        lines += [f"- {c['scene']} t={c['time']} shutter={c['shutter']}: {c['error']}"
+        lines += [f"- {c['scene']}, t = {_own(c['time'])}, shutter {_own(c['shutter'])}, "
+                  f"{'x'.join(map(str, c['size'])) if c['size'] else _own(None)}: {c['error']}"
                   for c in failed]
         lines.append("")
     if plot_names:
