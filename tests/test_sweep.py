@@ -405,3 +405,10 @@ def test_a_gltf_entry_with_external_files_renders_on_a_worker_from_its_bundle(tm
     a, b = run_cell(tasks[0]), run_cell(tasks[1])
     assert a["error"] is None and b["error"] is None, (a["error"], b["error"])
     assert a["rows"] == b["rows"] and a["time"] == 1.6
+
+
+def test_a_worker_of_another_version_gives_an_error_not_numbers(tmp_path):
+    spec = load_sweep(sweep_file(tmp_path))
+    task = sweep_run.tasks_of(spec, "0.0.0-other", False, False)[0]
+    got = run_cell(task)
+    assert got["rows"] == [] and "the sweep was started with 0.0.0-other" in got["error"]

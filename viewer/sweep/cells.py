@@ -119,6 +119,7 @@ def run_cell(task: CellTask) -> dict:
            "seed": task.seed, "rows": [], "images": {}, "error": None,
            "timing": task.timing, "worker": f"{socket.gethostname()}:{os.getpid()}"}
     try:
+        _check_version(task)
         _run(task, out)
     except UserError as exc:
         out["error"] = _unplace(str(exc), task.bundle)
@@ -130,6 +131,14 @@ def run_cell(task: CellTask) -> dict:
     out["cell_s"] = time.perf_counter() - t_start
     out["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return out
+
+
+def _check_version(task: CellTask):
+    """A worker of another version would file its numbers under this version's key."""
+    from ..cli import version
+    if version() != task.version:
+        raise UserError(f"this worker runs hmblur {version()}, the sweep was started with "
+                        f"{task.version}: install the same version on every worker")
 
 
 def _unplace(text: str, bundle: Bundle) -> str:
