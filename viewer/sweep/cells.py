@@ -106,6 +106,12 @@ def _renderer(bundle: Bundle, size):
     return kept[bundle.digest]
 
 
+def _forget(bundle: Bundle):
+    kept = getattr(_state, "renderers", None) or {}
+    if bundle.digest in kept:
+        kept.pop(bundle.digest)[1].release()
+
+
 def scene_size(scene) -> tuple[int, int]:
     return scene.render.width, scene.render.height
 
@@ -124,6 +130,7 @@ def run_cell(task: CellTask) -> dict:
     except UserError as exc:
         out["error"] = _unplace(str(exc), task.bundle)
     except Exception as exc:      # a failed render is this cell's error; the sweep goes on
+        _forget(task.bundle)      # (its renderer may be half-way through a frame)
         out["error"] = (f"{type(exc).__name__}: {_unplace(str(exc), task.bundle)} "
                         f"({traceback.extract_tb(exc.__traceback__)[-1].name})")
     if out["error"] is not None:
@@ -148,7 +155,9 @@ def _unplace(text: str, bundle: Bundle) -> str:
 
 
 def _run(task: CellTask, out: dict):
+    from ..glcontext import device_name
     scene, r, shutter0 = _renderer(task.bundle, task.size)
+    out["device"] = device_name(_state.ctx)
     size = tuple(task.size) if task.size else scene_size(scene)
     if r.size != size:
         r.resize(size)

@@ -226,6 +226,9 @@ def run_sweep(spec: Sweep, out: Path, version: str, workers: int, scheduler: str
             peak[c["worker"]] = max(peak.get(c["worker"], 0.0), c.get("peak_rss_mb", 0.0))
     facts = {"cells run now": len(ran), "cells from earlier runs": len(tasks) - len(todo),
              **engine, "wall time": f"{time.perf_counter() - t0:.1f} s (this run)"}
+    devices = sorted({c["device"] for c in cells if c.get("device")})
+    if devices:
+        facts["devices"] = "; ".join(devices)
     if peak:
         facts["peak memory per worker (RSS)"] = ", ".join(
             f"{w} {mb:.0f} MB" for w, mb in sorted(peak.items()))
