@@ -295,6 +295,8 @@ def test_a_scene_travels_with_its_meshes_images_and_gltf_files(tmp_path):
         "scenes/room.toml", "assets/quad.obj", "assets/quad.mtl", "assets/tex.png",
         "assets/p.png", "assets/box.gltf", "assets/box data.bin", "assets/wood.png",
         "assets/b.glb", "assets/glb.bin"])
+    assert [rel for rel, _ in scene_bundle(src / "assets/box.gltf").files] == [
+        "box data.bin", "box.gltf", "wood.png"]            # a bare glTF as the scene
     copy = materialise(b)
     assert copy.read_bytes() == scene.read_bytes()
     assert (copy.parent.parent / "assets/box data.bin").read_bytes() == b"bin"
@@ -375,20 +377,19 @@ def test_a_local_dask_cluster_gives_the_in_process_table(tmp_path):
 
 def test_a_gltf_entry_with_external_files_renders_on_a_worker_from_its_bundle(tmp_path):
     """A scene whose glTF entry keeps its buffer in a .bin beside it (a uri with a space),
-    one folder up: the cell, run from the bundle's copy, gives the numbers of the same cell
+    in a folder below the scene's: the cell, run from the bundle's copy, gives the numbers of the same cell
     run on a scene whose glTF holds its buffer inline."""
     import base64
-    (tmp_path / "scenes").mkdir()
-    (tmp_path / "assets").mkdir()
+    (tmp_path / "scenes/assets").mkdir(parents=True)
     doc = json.loads((CONFORMANCE / "gltf/BoxAnimated.gltf").read_text())
     head, data = doc["buffers"][0]["uri"].split(",", 1)
-    (tmp_path / "assets/box data.bin").write_bytes(base64.b64decode(data))
+    (tmp_path / "scenes/assets/box data.bin").write_bytes(base64.b64decode(data))
     doc["buffers"][0]["uri"] = "box%20data.bin"
-    (tmp_path / "assets/box.gltf").write_text(json.dumps(doc))
+    (tmp_path / "scenes/assets/box.gltf").write_text(json.dumps(doc))
     scene = (CONFORMANCE / "gltf/gltf_box.toml").read_text()
-    scene = scene.replace('gltf = "BoxAnimated.gltf"', 'gltf = "../assets/box.gltf"')
-    shutil.copy(CONFORMANCE / "gltf/BoxTextured.gltf", tmp_path / "assets")
-    scene = scene.replace('gltf = "BoxTextured.gltf"', 'gltf = "../assets/BoxTextured.gltf"')
+    scene = scene.replace('gltf = "BoxAnimated.gltf"', 'gltf = "assets/box.gltf"')
+    shutil.copy(CONFORMANCE / "gltf/BoxTextured.gltf", tmp_path / "scenes/assets")
+    scene = scene.replace('gltf = "BoxTextured.gltf"', 'gltf = "assets/BoxTextured.gltf"')
     (tmp_path / "scenes/ext.toml").write_text(scene)
     p = tmp_path / "sweep.toml"
     p.write_text(textwrap.dedent(f"""
@@ -401,7 +402,7 @@ def test_a_gltf_entry_with_external_files_renders_on_a_worker_from_its_bundle(tm
     spec = load_sweep(p)
     tasks = sweep_run.tasks_of(spec, version(), False, False)
     assert [rel for rel, _ in tasks[0].bundle.files] == [
-        "assets/BoxTextured.gltf", "assets/box data.bin", "assets/box.gltf", "scenes/ext.toml"]
+        "assets/BoxTextured.gltf", "assets/box data.bin", "assets/box.gltf", "ext.toml"]
     a, b = run_cell(tasks[0]), run_cell(tasks[1])
     assert a["error"] is None and b["error"] is None, (a["error"], b["error"])
     assert a["rows"] == b["rows"] and a["time"] == 1.6

@@ -1,12 +1,13 @@
 """A scene file and every file it references, as bytes, so that a worker without the
 sweep's disk can rebuild them in a folder of its own and load the scene from there.
 
-References are found by reading the TOML (scene format v1.2): `mesh = "file"`, image
+References are found by reading the TOML (scene format v1.2; a bare .gltf/.glb scene is
+its own asset): `mesh = "file"`, image
 textures' `path`, glTF entries' `gltf = "file"`; inside those, an OBJ's `mtllib` and the
 material's texture maps, a .gltf's external `uri`s (buffers, images) and a .glb's JSON
 chunk's. A reference that is missing or unreadable is left out: the worker's loader then
 reports it as the scene's error, one row of the table. Everything sits under the common
-folder of the files, so `../assets/x.png` still resolves after the rebuild.
+folder of the files, so every relative path resolves after the rebuild as before.
 """
 from __future__ import annotations
 
@@ -40,9 +41,10 @@ class Bundle:
 def scene_bundle(scene: Path) -> Bundle:
     scene = Path(scene).resolve()
     found: dict[Path, bytes] = {}
-    _add(found, scene)
-    for ref in scene_references(scene, found.get(scene, b"")):
-        _add_asset(found, ref)
+    _add_asset(found, scene)          # (a bare .gltf/.glb scene brings its uris' files)
+    if scene.suffix.lower() not in (".gltf", ".glb"):
+        for ref in scene_references(scene, found.get(scene, b"")):
+            _add_asset(found, ref)
     root = Path(os.path.commonpath([str(p.parent) for p in found] or [str(scene.parent)]))
     files = tuple(sorted((str(p.relative_to(root)), data) for p, data in found.items()))
     return Bundle(str(scene.relative_to(root)), files, str(root))
