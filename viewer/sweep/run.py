@@ -27,6 +27,9 @@ from .spec import Sweep
 from .table import write_outputs
 
 
+WAIT_FOR_WORKERS_S = 30
+
+
 def tasks_of(spec: Sweep, version: str, images: bool, timing: bool) -> list[CellTask]:
     bundles = {s.path: scene_bundle(s.path) for s in spec.scenes}
     return [CellTask(scene.label, bundles[scene.path], t, shutter, size, samples, seed,
@@ -143,6 +146,13 @@ def run_on_dask(tasks, on_result, workers: int, scheduler: str | None):
             except (OSError, TimeoutError, ValueError) as exc:
                 raise UserError(f"--scheduler {scheduler}: cannot connect "
                                 f"({type(exc).__name__}: {' '.join(str(exc).split())})") from None
+            try:                         # tasks would wait for ever on a cluster of none
+                client.wait_for_workers(1, timeout=WAIT_FOR_WORKERS_S)
+            except TimeoutError:
+                client.close()
+                raise UserError(f"--scheduler {scheduler}: no worker joined within "
+                                f"{WAIT_FOR_WORKERS_S} s (start `dask worker {scheduler} "
+                                "--nthreads 1` on the machines that render)") from None
         else:
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                    dashboard_address=None, silence_logs=logging.ERROR)
