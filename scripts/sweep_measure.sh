@@ -30,7 +30,7 @@ print(f"{sys.argv[1]}: {len({r['cell'] for r in rows})} cells, {len(rows)} rows,
 EOF
 }
 
-echo "== wall time (15 cells x 5 variants, 320x180, 64 sub-frames)"
+echo "== wall time (18 cells x 5 variants, 320x180, 64 sub-frames)"
 wall w1 "$PY" -m viewer sweep $SWEEP --out $M/w1 --workers 1
 wall w2 "$PY" -m viewer sweep $SWEEP --out $M/w2 --workers 2
 "$DASK" scheduler --host 127.0.0.1 --port 8786 --no-dashboard > $M/scheduler.log 2>&1 &
