@@ -377,8 +377,9 @@ def test_a_local_dask_cluster_gives_the_in_process_table(tmp_path):
 
 def test_a_gltf_entry_with_external_files_renders_on_a_worker_from_its_bundle(tmp_path):
     """A scene whose glTF entry keeps its buffer in a .bin beside it (a uri with a space),
-    in a folder below the scene's: the cell, run from the bundle's copy, gives the numbers of the same cell
-    run on a scene whose glTF holds its buffer inline."""
+    in a folder below the scene's: the cell, run from the bundle's copy, gives the numbers
+    of the same cell run on a scene whose glTF holds its buffer inline; the .gltf alone as
+    a scene travels with its .bin too."""
     import base64
     (tmp_path / "scenes/assets").mkdir(parents=True)
     doc = json.loads((CONFORMANCE / "gltf/BoxAnimated.gltf").read_text())
@@ -393,7 +394,8 @@ def test_a_gltf_entry_with_external_files_renders_on_a_worker_from_its_bundle(tm
     (tmp_path / "scenes/ext.toml").write_text(scene)
     p = tmp_path / "sweep.toml"
     p.write_text(textwrap.dedent(f"""
-        scenes = ["scenes/ext.toml", "{CONFORMANCE / 'gltf/gltf_box.toml'}"]
+        scenes = ["scenes/ext.toml", "{CONFORMANCE / 'gltf/gltf_box.toml'}",
+                  "scenes/assets/box.gltf"]
         size = "32x18"
         samples = 4
         [variants.hybrid]
@@ -406,6 +408,9 @@ def test_a_gltf_entry_with_external_files_renders_on_a_worker_from_its_bundle(tm
     a, b = run_cell(tasks[0]), run_cell(tasks[1])
     assert a["error"] is None and b["error"] is None, (a["error"], b["error"])
     assert a["rows"] == b["rows"] and a["time"] == 1.6
+    bare = run_cell(tasks[2])                 # the asset alone, as a scene made around it
+    assert [rel for rel, _ in tasks[2].bundle.files] == ["box data.bin", "box.gltf"]
+    assert bare["error"] is None and len(bare["rows"]) == 4 and tasks[2].scene == "box"
 
 
 def test_a_worker_of_another_version_gives_an_error_not_numbers(tmp_path):
