@@ -15,7 +15,8 @@ from .ending import Terminated, catch_signals, received, restore_signals
 from .imageio import remove_partials
 from .progress import end_line
 
-COMMANDS = ("shot", "compare", "bench", "view", "params", "graph", "video", "scene")
+COMMANDS = ("shot", "compare", "bench", "view", "params", "graph", "video", "scene",
+            "sweep")
 
 EPILOG = """\
 MODE is one of {modes} (shot and view: hybrid by default).

@@ -200,6 +200,9 @@ def _png_bytes(image) -> bytes:
     return buf.getvalue()
 
 
+png_bytes = _png_bytes           # (public: a worker sends an image's file as bytes)
+
+
 def write_png_atomic(path, image) -> Path:
     """Write a uint8 (H,W,3) RGB or (H,W) grey image as PNG (_png_bytes), atomically."""
     data = _png_bytes(image)

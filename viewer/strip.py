@@ -280,9 +280,10 @@ def _fmt(value, digits: int) -> str:
     return f"{value:.{digits}f}"
 
 
-def metrics_markdown(table) -> str:
-    """The rows as a Markdown table: PSNR in dB (2 decimals), SSIM and FLIP (4 decimals)."""
-    out = ["| mode | region | pixels | PSNR (dB) | SSIM | FLIP |",
+def metrics_markdown(table, key: str = "mode") -> str:
+    """The rows as a Markdown table: PSNR in dB (2 decimals), SSIM and FLIP (4 decimals);
+    `key` heads the first column ("variant" where names are not bare modes)."""
+    out = [f"| {key} | region | pixels | PSNR (dB) | SSIM | FLIP |",
            "| --- | --- | ---: | ---: | ---: | ---: |"]
     for r in metrics_rows(table):
         out.append(f"| {r['mode']} | {r['region']} | {r['pixels']} | {_fmt(r['psnr'], 2)} "

@@ -1,0 +1,1 @@
+"""`hmblur sweep`: many comparisons (scenes x times x shutters x sizes x variants) on Dask."""
