@@ -40,7 +40,8 @@ HOST_TOP = 3                # the hybrid's largest host-CPU passes listed per ro
 
 # The README's rows: (file stem, label); one row per size found, the animated ratio beside.
 README_ROWS = [("living_room", "living_room"), ("thin", "thin"), ("basic", "basic (conformance)"),
-               ("spinner", "spinner"), ("wheel", "wheel (keyed)"), ("vase_pan", "vase_pan (conformance, camera moves)"),
+               ("spinner", "spinner"), ("wheel", "wheel (keyed)"), ("rover", "rover (glTF: parents, skin)"),
+               ("vase_pan", "vase_pan (conformance, camera moves)"),
                ("pan", "pan (camera moves)"), ("crowd", "crowd (32 movers, bench scene)"),
                ("crowd_pan", "crowd_pan (32 movers, camera moves)")]
 README_SIZES = ("640x360",)     # (1280x720: docs/performance.md)
