@@ -103,7 +103,8 @@ def _exists(p: Path) -> bool:
 
 # ---------------------------------------------------------------- value checks
 
-def _describe(v) -> str:
+def describe_value(v) -> str:
+    """A TOML value as an error names it: its kind and a short view of it."""
     if isinstance(v, bool):
         return f"the boolean {str(v).lower()}"
     if isinstance(v, (int, float)):
@@ -148,30 +149,30 @@ class _Loader:
     def number(self, v, key: str, bound: float = limits.MAX_SCENE_NUMBER,
                what: str = "a number") -> float:
         if isinstance(v, bool) or not isinstance(v, (int, float)):
-            self.fail(key, f"expected a number, got {_describe(v)}")
+            self.fail(key, f"expected a number, got {describe_value(v)}")
         try:
             x = float(v)
         except OverflowError:
             x = math.inf
         if not math.isfinite(x):
-            self.fail(key, f"expected a finite number, got {_describe(v)}")
+            self.fail(key, f"expected a finite number, got {describe_value(v)}")
         if abs(x) > bound:                        # (float32 in the shaders)
             self.fail(key, f"expected {what} within +-{bound:g}, got {x!r}")
         return x
 
     def integer(self, v, key: str) -> int:
         if isinstance(v, bool) or not isinstance(v, int):
-            self.fail(key, f"expected an integer, got {_describe(v)}")
+            self.fail(key, f"expected an integer, got {describe_value(v)}")
         return v
 
     def string(self, v, key: str) -> str:
         if not isinstance(v, str):
-            self.fail(key, f"expected a string, got {_describe(v)}")
+            self.fail(key, f"expected a string, got {describe_value(v)}")
         return v
 
     def table(self, v, key: str, allowed) -> dict:
         if not isinstance(v, dict):
-            self.fail(key, f"expected a table, got {_describe(v)}")
+            self.fail(key, f"expected a table, got {describe_value(v)}")
         for k in v:
             if k not in allowed:
                 self.fail(_join(key, k), "unknown key; allowed here: " + ", ".join(allowed))
@@ -184,7 +185,7 @@ class _Loader:
 
     def vec3(self, v, key: str) -> np.ndarray:
         if not isinstance(v, list) or len(v) != 3:
-            self.fail(key, f"expected an array of 3 numbers, got {_describe(v)}")
+            self.fail(key, f"expected an array of 3 numbers, got {describe_value(v)}")
         return np.array([self.number(x, f"{key}[{i}]") for i, x in enumerate(v)],
                         dtype=np.float64)
 
@@ -214,7 +215,7 @@ class _Loader:
 
     def array_of_tables(self, v, key: str) -> list:
         if not isinstance(v, list) or not all(isinstance(x, dict) for x in v):
-            self.fail(key, f"expected an array of tables ([[{key}]]), got {_describe(v)}")
+            self.fail(key, f"expected an array of tables ([[{key}]]), got {describe_value(v)}")
         return v
 
     def at_most(self, v: list, key: str, most: int) -> list:
@@ -351,7 +352,7 @@ class _Loader:
         keys = t["keys"]
         if not isinstance(keys, list) or not all(isinstance(x, dict) for x in keys):
             self.fail(f"{k}.keys", f"expected an array of key tables ([[keys]]), got "
-                      f"{_describe(keys)}")
+                      f"{describe_value(keys)}")
         if not keys:
             self.fail(f"{k}.keys", "expected at least one key")
         return interpolation
@@ -473,7 +474,7 @@ class _Loader:
         elif isinstance(v, (int, float)) and not isinstance(v, bool):
             scale = np.full(3, self.number(v, key))
         else:
-            self.fail(key, f"expected a number or 3 numbers, got {_describe(v)}")
+            self.fail(key, f"expected a number or 3 numbers, got {describe_value(v)}")
         if np.any(scale == 0):
             self.fail(key, f"expected non-zero scale factors, got {scale.tolist()}")
         return scale
@@ -491,7 +492,7 @@ class _Loader:
 
     def texture(self, v, k: str, mesh: Mesh) -> Texture:
         if not isinstance(v, dict):
-            self.fail(k, f"expected a table, got {_describe(v)}")
+            self.fail(k, f"expected a table, got {describe_value(v)}")
         kind = self.string(self.require(v, "kind", k, "\"checker\", \"stripes\" or \"image\""),
                            f"{k}.kind")
         if kind not in TEXTURE_KEYS:
@@ -558,7 +559,7 @@ class _Loader:
             return self.mesh_arrays(tm, k, str(path))
         if not isinstance(v, dict):
             self.fail(k, f"expected a file path or a primitive table ({', '.join(PRIMITIVES)}), "
-                      f"got {_describe(v)}")
+                      f"got {describe_value(v)}")
         kinds = [p for p in PRIMITIVES if p in v]
         unknown = [key for key in v if key not in PRIMITIVES and key != "sections"]
         if unknown:
@@ -612,11 +613,11 @@ class _Loader:
 
     def profile(self, v, k: str) -> np.ndarray:
         if not isinstance(v, list) or len(v) < 2:
-            self.fail(k, f"expected an array of at least 2 [r, z] points, got {_describe(v)}")
+            self.fail(k, f"expected an array of at least 2 [r, z] points, got {describe_value(v)}")
         pts = []
         for i, p in enumerate(v):
             if not isinstance(p, list) or len(p) != 2:
-                self.fail(f"{k}[{i}]", f"expected an [r, z] pair, got {_describe(p)}")
+                self.fail(f"{k}[{i}]", f"expected an [r, z] pair, got {describe_value(p)}")
             r, z = self.number(p[0], f"{k}[{i}][0]"), self.number(p[1], f"{k}[{i}][1]")
             if r < 0:
                 self.fail(f"{k}[{i}][0]", f"expected a radius >= 0, got {r!r}")

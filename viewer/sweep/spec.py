@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from world.errors import UserError
-from world.loader import builtin_scene_names, builtin_scene_path
+from world.loader import builtin_scene_names, builtin_scene_path, describe_value
 from ..cliargs import MAX_TIME, other_scene, parse_size
 from ..comparison import REALTIME, Variant, check_variant
 from ..params import ParamSet
@@ -80,7 +80,7 @@ class _Checker:
         if not isinstance(v, list):
             if allow_scalar:
                 return [check(v, key)]
-            self.fail(key, f"expected a list, got {_describe(v)}")
+            self.fail(key, f"expected a list, got {describe_value(v)}")
         if not v:
             self.fail(key, "expected at least one value, got an empty list")
         out = [check(x, f"{key}[{i + 1}]") for i, x in enumerate(v)]
@@ -91,7 +91,7 @@ class _Checker:
 
     def number(self, v, key: str) -> float:
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-            self.fail(key, f"expected a finite number, got {_describe(v)}")
+            self.fail(key, f"expected a finite number, got {describe_value(v)}")
         return float(v)
 
     def time(self, v, key: str) -> float:
@@ -109,13 +109,13 @@ class _Checker:
     def integer(self, lo: int):
         def check(v, key):
             if isinstance(v, bool) or not isinstance(v, int) or v < lo:
-                self.fail(key, f"expected an integer >= {lo}, got {_describe(v)}")
+                self.fail(key, f"expected an integer >= {lo}, got {describe_value(v)}")
             return v
         return check
 
     def size(self, v, key: str) -> tuple[int, int]:
         if not isinstance(v, str):
-            self.fail(key, f"expected \"WxH\", e.g. \"320x180\", got {_describe(v)}")
+            self.fail(key, f"expected \"WxH\", e.g. \"320x180\", got {describe_value(v)}")
         try:
             return parse_size(v, key)
         except UserError:
@@ -123,7 +123,7 @@ class _Checker:
 
     def scene(self, v, key: str) -> list[SceneRef]:
         if not isinstance(v, str) or not v:
-            self.fail(key, f"expected a scene file, a built-in name or a glob, got {_describe(v)}")
+            self.fail(key, f"expected a scene file, a built-in name or a glob, got {describe_value(v)}")
         here = self.path.parent
         if any(c in v for c in "*?["):
             found = sorted(glob.glob(str(here / v), recursive=True))
@@ -149,20 +149,6 @@ def _rel(p: Path, here: Path) -> str:
         return str(p.relative_to(here))
     except ValueError:
         return str(p)
-
-
-def _describe(v) -> str:
-    if isinstance(v, bool):
-        return f"the boolean {str(v).lower()}"
-    if isinstance(v, (int, float)):
-        return f"the number {v!r}"
-    if isinstance(v, str):
-        return f"the string {v[:40]!r}"
-    if isinstance(v, list):
-        return f"an array of {len(v)}"
-    if isinstance(v, dict):
-        return "a table"
-    return f"a {type(v).__name__}"
 
 
 def _value_text(v) -> str:
@@ -222,7 +208,7 @@ def load_sweep(path) -> Sweep:
 
     common = doc.get("set", {})
     if not isinstance(common, dict):
-        c.fail("set", f"expected a table {{ \"group.field\" = value }}, got {_describe(common)}")
+        c.fail("set", f"expected a table {{ \"group.field\" = value }}, got {describe_value(common)}")
     probe = ParamSet()
     for key, value in common.items():
         if isinstance(value, list):
@@ -238,7 +224,7 @@ def load_sweep(path) -> Sweep:
     for family, vt in table.items():
         k = f"variants.{family}"
         if not isinstance(vt, dict):
-            c.fail(k, f"expected a table with mode and set, got {_describe(vt)}")
+            c.fail(k, f"expected a table with mode and set, got {describe_value(vt)}")
         for key in vt:
             if key not in VARIANT_KEYS:
                 c.fail(f"{k}.{key}", f"unknown key (expected {', '.join(VARIANT_KEYS)})")
@@ -246,11 +232,11 @@ def load_sweep(path) -> Sweep:
             c.fail(f"{k}.mode", f"required: one of {', '.join(REALTIME)}")
         mode = vt["mode"]
         if not isinstance(mode, str):
-            c.fail(f"{k}.mode", f"expected one of {', '.join(REALTIME)}, got {_describe(mode)}")
+            c.fail(f"{k}.mode", f"expected one of {', '.join(REALTIME)}, got {describe_value(mode)}")
         sets = vt.get("set", {})
         if not isinstance(sets, dict):
             c.fail(f"{k}.set", f"expected a table {{ \"group.field\" = value or [values] }}, "
-                   f"got {_describe(sets)}")
+                   f"got {describe_value(sets)}")
         fixed, grid = {}, {}
         for key, value in sets.items():
             if isinstance(value, list):
