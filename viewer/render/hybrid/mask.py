@@ -73,13 +73,13 @@ class SurfaceTests(FullscreenPass):
         written as ray_mask; with it the targets of the three steps' first two."""
         self._any = AnyTiles()
         self.range_check = config.range_check
-        if not self.range_check:
+        if self.range_check:
+            self.inputs = ("hybrid_front", "normal", *config.paths)
+            self.produces = RANGE_TARGETS
+            self.host_outputs = (PROBE_TILES, SURVIVOR_TILES)
+            self.reads_back = (ReadBack("mask_survivors", "most tiles moving"),)
+        else:
             self.inputs, self.produces = ("hybrid_front", *config.paths), ("ray_mask",)
-            return
-        self.inputs = ("hybrid_front", "normal", *config.paths)
-        self.produces = RANGE_TARGETS
-        self.host_outputs = (PROBE_TILES, SURVIVOR_TILES)
-        self.reads_back = (ReadBack("mask_survivors", "most tiles moving"),)
 
     def defines(self, frame: Frame):
         return {"SEGMENTS": segments(frame)}
