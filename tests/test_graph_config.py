@@ -183,10 +183,20 @@ def test_read_backs_go_through_declared_passes(synthetic_frame):
         Pipeline("x", [Source(), bad], output="a")
 
 
-def test_every_mode_runs_under_its_checks(ctx):
+def test_every_mode_runs_under_its_checks(ctx, monkeypatch):
     """Every mode's default frame and the hybrid's other configurations run with every
     texture access and read-back checked (a pass touching what it does not declare
-    raises)."""
+    raises); each read-back the graph lists as every frame's happens, and no other than
+    it lists."""
+    from viewer.render.pool import ResourcePool
+    seen = []
+    read_back = ResourcePool.read_back
+
+    def record(pool, name, *args, **kw):
+        if pool._pass is not None:          # (not the caller's read of the image)
+            seen.append((name, pool._pass.name))
+        return read_back(pool, name, *args, **kw)
+    monkeypatch.setattr(ResourcePool, "read_back", record)
     r = Renderer(ctx, load_scene(CONFORMANCE / "basic.toml"), (64, 36))
     try:
         for m in MODES:
@@ -194,6 +204,10 @@ def test_every_mode_runs_under_its_checks(ctx):
         for sets in (("hybrid.segments=2", "hybrid.range_check=true"),
                      ("hybrid.segments=4", "hybrid.composite=split"),
                      ("hybrid.composite=time",)):
+            seen.clear()
             assert r.render("hybrid", 0.0, params(*sets)).image.any()
+            declared = r.pipeline("hybrid", params(*sets)).read_backs()
+            every = {(b.name, p.name) for b, p in declared if not b.when}
+            assert every <= set(seen) <= {(b.name, p.name) for b, p in declared}, sets
     finally:
         r.release()
