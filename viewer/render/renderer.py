@@ -98,7 +98,8 @@ class Renderer:
             return bend["px"]
         n = step_count(mode, params, shutter, measure_bend)
         pose = self._pose(float(t), shutter, n) if self.scene.assets else None
-        frame = run_steps(make_frame, self.pipeline(mode, params), float(t), shutter, seed, n, measure)
+        frame = run_steps(make_frame, self.pipeline(mode, params), float(t), shutter, seed, n,
+                          measure)
         if pose is not None:   # (host work before the first pass: reported as one of them)
             frame.pass_ms["scene_pose"], frame.pass_cpu_ms["scene_pose"] = pose[:2]
             frame.stats["skinned_vertices"] = pose[2]

@@ -163,7 +163,8 @@ def edge_tiles(frame: Frame) -> np.ndarray:
     """Which FINE tiles (GL rows) hold a ray-mask edge: mask_edge_ids read back, for the
     range check's tile list under a moving camera."""
     ids = frame.pool.get("mask_edge_ids")
-    return np.frombuffer(frame.pool.read_back("mask_edge_ids"), np.uint32).reshape(ids.size[1], ids.size[0], -1)[..., 0] != 0
+    data = np.frombuffer(frame.pool.read_back("mask_edge_ids"), np.uint32)
+    return data.reshape(ids.size[1], ids.size[0], -1)[..., 0] != 0
 
 
 def reach_test(frame: Frame) -> bool:
