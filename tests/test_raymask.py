@@ -329,7 +329,8 @@ def wide_bar_masks(synthetic_frame, bg_disp):
     for tiled in (True, False):
         frame = synthetic_frame((w, h), params())
         upload(frame, depth, ids, disp, normal)
-        for p in (selection_passes() if tiled else []) + raymask_passes(HybridConfig.of(frame.params)):
+        mask = raymask_passes(HybridConfig.of(frame.params))
+        for p in (selection_passes() if tiled else []) + mask:
             p.allocate(frame)
             p.execute(frame)
         got.append({n: to_image(frame.read(n)) for n in ("mask_displacement", "ray_mask")})
