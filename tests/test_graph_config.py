@@ -48,6 +48,8 @@ def test_default_hybrid_holds_only_what_runs():
     made = textures(pipe)
     assert not made & (PATHS | {"normal", "mask_edge", "mask_edge_near", "ray_mask_tiles"})
     assert pipe.passes[0].produces == ("color", "hybrid_front")
+    # Nothing made that no later pass reads but a pass's own intermediates.
+    assert pipe.unread() == ["motion_tiles_x", "static_color", "static_hybrid_front"]
     assert read_backs(pipe) == [("static_raster", "gbuffer"), ("motion_tiles", "select_tiles"),
                                 ("hybrid_neighbormax", "hybrid_neighbormax_read"),
                                 ("ray_mask", "reveal")]
@@ -89,6 +91,10 @@ def test_graph_shows_the_configuration_and_counts(capsys):
     assert main(["graph", "hybrid"]) == 0
     out = capsys.readouterr().out.splitlines()
     assert out[2] == "11 passes (8 gpu, 3 cpu); read-backs: 3 every frame, 1 at times"
+    assert main(["graph", "off"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[1:3] == ["config NoConfig()", "1 pass (1 gpu, 0 cpu); read-backs: 0 every "
+                        "frame, 1 at times"]
     assert main(["graph", "ue4", "--set", "hybrid.segments=2"]) == 2
     assert "mode ue4 does not use the hybrid parameters" in capsys.readouterr().err
 

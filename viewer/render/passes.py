@@ -148,6 +148,16 @@ class Pipeline:
         return [(r, p, [q for q in self.passes if r in q.host_inputs])
                 for p in self.passes for r in p.host_outputs]
 
+    def unread(self) -> list[str]:
+        """Textures made that no later pass reads and that are not the output: a pass's
+        own intermediates (a reduction's first stage) and buffers kept for `--buffers`."""
+        later: set[str] = set()
+        out = []
+        for p in reversed(self.passes):
+            out += [n for n in reversed(p.produces) if n not in later and n != self.output]
+            later |= set(p.inputs)
+        return out[::-1]
+
     def read_backs(self) -> list[tuple[ReadBack, Pass]]:
         """(read-back, pass) of every GPU-to-host read the passes declare, in order."""
         return [(r, p) for p in self.passes for r in p.reads_back]
@@ -155,7 +165,8 @@ class Pipeline:
     def describe(self) -> str:
         """The whole graph: the configuration it was built for and a count of its passes
         and read-backs, each pass (GPU or CPU) with what it reads and makes, textures and
-        host resources (marked `host:`), then every read-back with its pass, then every
+        host resources (marked `host:`), the textures no later pass reads, then every
+        read-back with its pass, then every
         host resource with its type, its producer and its readers ("the caller": read
         after the frame, e.g. by compare)."""
         cpu = sum(p.runs_on == "cpu" for p in self.passes)
@@ -164,13 +175,17 @@ class Pipeline:
         lines = [f"mode {self.mode} -> {self.output}"]
         if self.config is not None:
             lines.append(f"config {self.config}")
-        lines.append(f"{len(self.passes)} passes ({len(self.passes) - cpu} gpu, {cpu} cpu); "
+        n = len(self.passes)
+        lines.append(f"{n} pass{'es' if n != 1 else ''} ({n - cpu} gpu, {cpu} cpu); "
                      f"read-backs: {every} every frame, {len(backs) - every} at times")
         for p in self.passes:
             ins = [*p.inputs, *(f"host:{r.name}" for r in p.host_inputs)]
             outs = [*p.produces, *(f"host:{r.name}" for r in p.host_outputs)]
             kind = " (cpu)" if p.runs_on == "cpu" else ""
             lines.append(f"  {p.name}{kind}: {', '.join(ins) or '-'} -> {', '.join(outs) or '-'}")
+        unread = self.unread()
+        if unread:
+            lines.append(f"  (not read by a later pass: {', '.join(unread)})")
         if backs:
             lines.append("read-backs:")
             for r, p in backs:
