@@ -327,7 +327,7 @@ def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys, ct
     assert back.params["hybrid"].range_check is True and back.size == (96, 54)
     # The driver's own method (CPU clock on software GL, timer queries on a GPU); times are
     # the bench's to report, not the tests' to judge: only their bookkeeping is checked.
-    from viewer.render.modes import MODES
+    from viewer.render.registry import build
     from viewer.render.timing import PassClock, describe
     assert rep["pass_timing"] == describe(PassClock(ctx).method)
     assert set(rep["modes"]) == {"off", "mcguire", "ue4", "guertin", "hybrid"}
@@ -337,7 +337,8 @@ def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys, ct
         # Every pass of the mode timed, in wall and in host CPU time; the bend measure
         # where the mode's curve steps can start (the hybrid's default).
         bend = {"motion_bend"} if mode == "hybrid" else set()
-        assert set(r["passes"]) == {p.name for p in MODES[mode]().passes} | bend
+        # (the passes of the configuration measured: the range check's)
+        assert set(r["passes"]) == {p.name for p in build(mode, back.params).passes} | bend
         assert set(r["passes_cpu"]) == set(r["passes"]) and "frame_cpu_ms" in r
     hyb = rep["modes"]["hybrid"]
     assert {"select_tiles", "ray_mask", "reveal", "reveal_shade", "hybrid_composite"} <= set(hyb["passes"])

@@ -10,6 +10,7 @@ from viewer.render.host import HostResource, HostResources
 from viewer.render.kept import KeptSlot, KeptState
 from viewer.render.modes import MODES
 from viewer.render.passes import Pass, Pipeline
+from viewer.render.registry import build
 from viewer.render.hybrid.mask import SurfaceTests
 from viewer.render.reference import REGIONS
 from viewer.render.renderer import Renderer
@@ -21,8 +22,9 @@ from conftest import CONFORMANCE
 
 GBUFFER = ("hybrid_front", "normal", "hybrid_path", "hybrid_path2")   # what they read of it
 
-# What each host resource of the hybrid is made by and read by, written from the passes'
-# roles (module docs of tile_lists, hybrid/composite, hybrid/mask, hybrid/reveal).
+# What each host resource of the hybrid with the range check is made by and read by,
+# written from the passes' roles (module docs of tile_lists, hybrid/composite, hybrid/mask,
+# hybrid/reveal).
 HYBRID_HOST = {
     "tile_lists": ("TileLists", "select_tiles",
                    "hybrid_tilemax_x, mask_displacement, mask_edge_near, ray_mask, hybrid_composite"),
@@ -33,10 +35,17 @@ HYBRID_HOST = {
     "reveal_hits": ("LayerHits | None", "reveal", "reveal_shade"),
     "reveal_batch": ("dict", "reveal", "the caller"),
 }
+RANGE_ONLY = {"edge_probe_tiles", "survivor_tiles"}    # (the mask's range check)
+
+
+def range_check_pipeline():
+    p = ParamSet()
+    p.set("hybrid.range_check", True)
+    return build("hybrid", p)
 
 
 def test_hybrid_describe_lists_host_resources_with_producer_and_readers():
-    text = MODES["hybrid"]().describe()
+    text = range_check_pipeline().describe()
     head, table = text.split("\nhost resources:\n")
     rows = table.splitlines()
     assert rows == [f"  {name} ({kind}): {made} -> {read}"
@@ -46,8 +55,11 @@ def test_hybrid_describe_lists_host_resources_with_producer_and_readers():
     assert cpu == ["select_tiles", "hybrid_neighbormax_read", "reveal"]
     assert "  select_tiles (cpu): motion_tiles -> host:tile_lists" in head.splitlines()
     # No host resource passes for a texture any more.
-    textures = {n for p in MODES["hybrid"]().passes for n in (*p.inputs, *p.produces)}
+    textures = {n for p in range_check_pipeline().passes for n in (*p.inputs, *p.produces)}
     assert not textures & set(HYBRID_HOST)
+    # Without the range check its passes and their host resources are not in the graph.
+    text = MODES["hybrid"]().describe()
+    assert not any(f"  {n} (" in text for n in RANGE_ONLY) and "mask_edge_near" not in text
 
 
 def test_reference_describe_shows_regions_for_the_caller():
@@ -140,7 +152,7 @@ def test_renderer_owns_the_kept_state_and_frames_carry_only_declared_results(ctx
         res = r.render("hybrid", 0.0)
         assert {"hybrid_reveal", "tile_lists"} <= set(r.kept.names())
         # The frame's results are exactly the hybrid's declared host resources.
-        assert sorted(res.host.names()) == sorted(HYBRID_HOST)
+        assert sorted(res.host.names()) == sorted(set(HYBRID_HOST) - RANGE_ONLY)
         assert res.stats["masked_pixels"] == len(res.host[MASKED_PIXELS]) > 0
         # Request flags are frame fields: regions only where asked for.
         p = ParamSet()

@@ -19,6 +19,7 @@ from world.conventions import to_image
 from viewer.params import ParamSet
 from viewer.render.gbuffer import GBUFFER, path_targets, path_times
 from viewer.render.hybrid.composite import composite_passes
+from viewer.render.hybrid.config import HybridConfig
 from viewer.render.hybrid.mask import raymask_passes
 from viewer.render.renderer import Renderer
 from viewer.render.hybrid.reveal import BACK, PACKED
@@ -148,7 +149,7 @@ def bar(paths_bar, paths_bg=None):
 
 
 def run_mask(frame):
-    for p in raymask_passes():
+    for p in raymask_passes(HybridConfig.of(frame.params)):
         p.allocate(frame)
         p.execute(frame)
     return to_image(frame.read("ray_mask"))
@@ -246,7 +247,7 @@ def test_a_reversal_is_blurred_by_the_composite(synthetic_frame):
             upload_front(frame, depth, ids, paths)
         for name in BACK:
             upload(frame, name, np.zeros((H, W, 4)))
-        for p in composite_passes():
+        for p in composite_passes(HybridConfig.of(frame.params)):
             p.allocate(frame)
             p.execute(frame)
         images[segments] = to_image(frame.read("hybrid"))[..., :3]

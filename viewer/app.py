@@ -121,7 +121,8 @@ class App:
 
     def is_progressive(self) -> bool:
         try:
-            return accumulating_pass(self.renderer.pipeline(self.state.mode)) is not None
+            pipe = self.renderer.pipeline(self.state.mode, self.state.params)
+            return accumulating_pass(pipe) is not None
         except Exception:  # a mode that fails to build is reported when rendered
             return False
 
@@ -136,7 +137,7 @@ class App:
         held from modes shown earlier."""
         pool = set(self.renderer.pool.names())
         try:
-            passes = self.renderer.pipeline(self.state.mode).passes
+            passes = self.renderer.pipeline(self.state.mode, self.state.params).passes
         except Exception:
             passes = []
         current = list(dict.fromkeys(n for p in passes for n in p.produces if n in pool))

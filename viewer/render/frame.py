@@ -81,11 +81,13 @@ class Frame:
         return conventions.sample_times(self.time, self.shutter, n)
 
     def read(self, name: str) -> np.ndarray:
-        """A pool texture as numpy, image orientation (top row first), (H, W) or (H, W, C)."""
-        return read_texture(self.pool.get(name))
+        """A pool texture read back (ResourcePool.read_back: a pass must declare it) as
+        numpy, image orientation (top row first), (H, W) or (H, W, C)."""
+        return texture_array(self.pool.get(name), self.pool.read_back(name))
 
     def write(self, name: str, array: np.ndarray):
         """Upload an image-orientation array into the pool texture `name` (already allocated)."""
+        self.pool.check_write((name,))
         tex = self.pool.get(name)
         a = np.asarray(array, dtype=_NP[tex.dtype])
         if a.ndim == 2:
@@ -101,8 +103,14 @@ _NP = {"f4": np.float32, "f2": np.float16, "u4": np.uint32, "u1": np.uint8, "i4"
 
 
 def read_texture(tex: moderngl.Texture) -> np.ndarray:
+    """A texture as numpy, image orientation (the caller's read, after a frame)."""
+    return texture_array(tex, tex.read())
+
+
+def texture_array(tex: moderngl.Texture, data: bytes) -> np.ndarray:
+    """`data`, the whole of `tex` read back, as numpy in image orientation."""
     w, h = tex.size
-    a = np.frombuffer(tex.read(), dtype=_NP[tex.dtype]).reshape(h, w, tex.components)
+    a = np.frombuffer(data, dtype=_NP[tex.dtype]).reshape(h, w, tex.components)
     a = to_image(a)
     return a[..., 0] if tex.components == 1 else a
 

@@ -50,7 +50,7 @@ def half_extents(frame: Frame, paths: tuple[str, ...]) -> np.ndarray:
     points = []
     for name in paths:
         tex = frame.pool.get(name)
-        points.append(np.frombuffer(tex.read(), np.float32)
+        points.append(np.frombuffer(frame.pool.read_back(name), np.float32)
                       .reshape(tex.size[1], tex.size[0], 2, 2).astype(np.float64))
     o = np.concatenate(points, axis=2)
     half = np.sqrt((o * o).sum(-1).max(-1))
@@ -60,7 +60,7 @@ def half_extents(frame: Frame, paths: tuple[str, ...]) -> np.ndarray:
 def read_tiles(frame: Frame, name: str) -> np.ndarray:
     """A small pool texture read back: (rows, columns, components) float32, GL rows."""
     tex = frame.pool.get(name)
-    return np.frombuffer(tex.read(), np.float32).reshape(tex.size[1], tex.size[0],
+    return np.frombuffer(frame.pool.read_back(name), np.float32).reshape(tex.size[1], tex.size[0],
                                                          tex.components)
 
 
@@ -105,7 +105,7 @@ def draw_gather(pass_, frame: Frame, output: str, textures: dict, uniforms: dict
         pass_.draw(frame, (output,), textures, uniforms, clear=False)
         return
     frame.ctx.copy_framebuffer(frame.pool.framebuffer((output,)),
-                               frame.pool.framebuffer(("color",)))
+                               frame.pool.framebuffer(("color",), read=True))
     frame.pool.mark_written((output,))
     for tl, defines in ((tiles, None), *variants):
         pass_.draw(frame, (output,), textures, uniforms, tiles=tl, clear=False,

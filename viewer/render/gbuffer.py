@@ -5,6 +5,9 @@ still over the exposure the static objects' pixels come from a raster kept per v
 (static_raster.py) and only the movers are drawn; the targets are the full draw's."""
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import ClassVar
+
 import moderngl
 
 from world.conventions import glsl_defines
@@ -13,7 +16,7 @@ from . import depth, static_raster
 from .frame import Frame
 from .gpu_scene import set_uniform
 from .passes import Pass
-from .pool import TexSpec
+from .pool import ReadBack, TexSpec
 
 GBUFFER = {
     "color": TexSpec(4, "f4"),
@@ -26,6 +29,8 @@ GBUFFER = {
     "hybrid_path": TexSpec(4, "f4"),
     "hybrid_path2": TexSpec(4, "f4"),
 }
+
+STATIC_RASTER_READ = ReadBack("static_raster", "once per still view", kept=True)
 
 # Segments a path may have (glsl/path.glsl): 1 is the chord alone (no path targets).
 SEGMENT_CHOICES = (1, 2, 4)
@@ -45,6 +50,18 @@ def segments_in(group: str):
         names = frame.pool.names()
         return k if all(n in names for n in path_targets(k)) else 1
     return segments
+
+
+@dataclass(frozen=True)
+class PathConfig:
+    """A real-time blur's configuration (viewer/render/registry.py): the path segments
+    (GROUP.segments), which decide the path targets and the shader variants."""
+    segments: int = 1
+    group: ClassVar[str] = ""
+
+    @classmethod
+    def of(cls, params) -> "PathConfig":
+        return cls(int(params[cls.group].segments))
 
 
 def segments_param(default: int = 1):
@@ -84,30 +101,29 @@ class GBufferPass(Pass):
     name = "gbuffer"
 
     def __init__(self, prefix: str = "", layout: str = "full", static_only: bool = False,
-                 segments_group: str | None = None):
+                 segments: int | None = None):
         """`prefix` names a second set of targets (the reference's sub-frames use "sub_");
         `layout` writes fewer targets where the rest would be thrown away; `static_only`
-        draws the objects that never move alone; `segments_group`: the parameter group
-        whose `segments` field says how many path pieces to write (None: the chord only)."""
+        draws the objects that never move alone; `segments`: the path pieces written (the
+        mode's configuration; 1 the chord alone), None for a mode without paths."""
         self.prefix = prefix
         self.static_only = static_only
         self.layout_name = layout
-        self.segments_group = segments_group
-        self.produces = self.targets(layout, max(SEGMENT_CHOICES) if segments_group else 1)
+        self.path_segments = segments
+        self.produces = self.targets(layout, segments or 1)
+        # The kept static raster's depth and ranks, read once a view where movers are
+        # drawn over it (static_raster.py); a static-only pass copies it whole.
+        self.reads_back = () if static_only else (STATIC_RASTER_READ,)
 
     def targets(self, layout: str, segments: int = 1) -> tuple[str, ...]:
         return tuple(self.prefix + n for n in LAYOUTS[layout][1] + path_targets(segments))
 
     def segments(self, frame: Frame) -> int:
-        """Path segments this frame writes (1: the chord D alone; a subclass may choose
-        by the frame's parameters)."""
-        if self.segments_group is None:
-            return 1
-        return int(frame.params[self.segments_group].segments)
+        """Path segments this frame writes (1: the chord D alone)."""
+        return self.path_segments or 1
 
     def layout(self, frame: Frame) -> str:
-        """The layout this frame writes (a subclass may choose by the frame's parameters,
-        among sets within `produces`)."""
+        """The layout this frame writes."""
         return self.layout_name
 
     def outputs(self, frame: Frame):
@@ -120,8 +136,10 @@ class GBufferPass(Pass):
         layout = self.layout(frame)
         segments = self.segments(frame)
         names = self.targets(layout, segments)
-        for stale in set(self.produces) - set(names):
-            frame.pool.discard(stale)      # (written under other parameters: not this frame's)
+        if self.path_segments is not None:
+            # (a path written under another configuration: not this frame's)
+            for stale in set(self.targets(layout, max(SEGMENT_CHOICES))) - set(names):
+                frame.pool.discard(stale)
         defines = {**glsl_defines(), **frame.gpu.light_defines(), **layout_defines(layout),
                    "SEGMENTS": segments, "PATH_LOCATION": len(LAYOUTS[layout][1]),
                    "PATH_LOCATION1": len(LAYOUTS[layout][1]) + 1}
@@ -175,7 +193,7 @@ class GBufferPass(Pass):
             if reach is not None:
                 draw.objects(draw.program(fbo), movers)
             return
-        raster.prepare(len(order) - len(movers))
+        raster.prepare(frame.pool, len(order) - len(movers))
         ctx.copy_framebuffer(fbo, raster.far_fbo)
         depth_only = frame.pool.framebuffer((), depth=True)
         prog = draw.program(fbo)

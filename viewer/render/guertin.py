@@ -23,17 +23,20 @@ on every scene (docs/algorithms.md 2). Departures from Appendix A, by measuremen
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import ClassVar
+
 from ..params import group, param
 from .blur_common import max_radius_px
 from .frame import Frame
 from .gather_tiles import draw_gather, gather_tiles, jitter_reach
-from .gbuffer import GBufferPass, segments_in, segments_param
+from .gbuffer import GBufferPass, PathConfig, path_targets, segments_in, segments_param
 from .motion_params import curve_steps_param
-from .half_velocity import EARLY_OUT_PX, GBUFFER_PATHS, VelocityPrep, path_bindings
+from .half_velocity import EARLY_OUT_PX, VelocityPrep, path_bindings
 from .registry import mode
 from .passes import FullscreenPass, Pipeline
-from .pool import TexSpec
-from .tiles import tile_passes
+from .pool import ReadBack, TexSpec
+from .tiles import PATH_SUFFIXES, tile_passes
 
 # The tap jitter is glsl/noise.glsl's interleaved gradient noise at offset TAP_NOISE (a
 # low-discrepancy pattern, the paper's Halton jitter); the NeighborMax lookup shift and
@@ -77,15 +80,25 @@ class GuertinParams:
 segments = segments_in("guertin")
 
 
+@dataclass(frozen=True)
+class GuertinConfig(PathConfig):
+    group: ClassVar[str] = "guertin"
+
+
 class Gather(FullscreenPass):
     name = "guertin_gather"
     fragment = "guertin_gather.frag"
-    inputs = ("color", "depth", "guertin_velocity", "guertin_neighbormax", *GBUFFER_PATHS,
-              "guertin_neighbormax_path", "guertin_neighbormax_path2")
     produces = ("guertin",)
 
-    def __init__(self, tiled: bool = True):
+    def __init__(self, tiled: bool = True, config: GuertinConfig = GuertinConfig()):
         self.tiled = tiled
+        paths = path_targets(config.segments)
+        tile_paths = tuple(f"guertin_neighbormax{s}" for s in PATH_SUFFIXES[:len(paths)])
+        self.inputs = ("color", "depth", "guertin_velocity", "guertin_neighbormax", *paths,
+                       *tile_paths)
+        # The tiles to draw: NeighborMax read back (its path's extent where it has one).
+        lookups = tile_paths or ("guertin_neighbormax",)
+        self.reads_back = tuple(ReadBack(n) for n in lookups) if tiled else ()
 
     def defines(self, frame: Frame):
         return {"EARLY_OUT_PX": EARLY_OUT_PX, "TAP_NOISE": f"{TAP_NOISE!r}",
@@ -113,15 +126,17 @@ class Gather(FullscreenPass):
                     tiles)
 
 
-def guertin_passes(tiled: bool = True) -> list:
-    """The filter's passes after a G-buffer (colour, depth, velocity) exists."""
+def guertin_passes(tiled: bool = True, config: GuertinConfig = GuertinConfig()) -> list:
+    """The filter's passes after a G-buffer (colour, depth, velocity; the path of
+    config.segments pieces) exists."""
     return [VelocityPrep("guertin_velocity"),
             *tile_passes("guertin_velocity", "guertin", segments=segments,
-                         paths=GBUFFER_PATHS, diagonal_toward=True), Gather(tiled)]
+                         paths=path_targets(config.segments), diagonal_toward=True),
+            Gather(tiled, config)]
 
 
-@mode("guertin", groups=("blur", "guertin"))
-def guertin_pipeline() -> Pipeline:
-    return Pipeline("guertin", [GBufferPass(layout="motion", segments_group="guertin"),
-                                *guertin_passes()],
-                    output="guertin")
+@mode("guertin", groups=("blur", "guertin"), config=GuertinConfig)
+def guertin_pipeline(config: GuertinConfig = GuertinConfig()) -> Pipeline:
+    return Pipeline("guertin", [GBufferPass(layout="motion", segments=config.segments),
+                                *guertin_passes(config=config)],
+                    output="guertin", config=config)

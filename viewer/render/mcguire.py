@@ -12,19 +12,22 @@ the K segments (glsl/mcguire_gather.frag); K = 1 is the paper's filter.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import ClassVar
+
 from ..params import group, param
 from .blur_common import max_radius_px
 from .frame import Frame
 from .gather_reach import mcguire_maps
 from .gather_tiles import draw_gather, gather_tiles, tile_list
-from .gbuffer import GBufferPass, segments_in, segments_param
+from .gbuffer import GBufferPass, PathConfig, path_targets, segments_in, segments_param
 from .motion_params import curve_steps_param
-from .half_velocity import EARLY_OUT_PX, GBUFFER_PATHS, VelocityPrep, path_bindings
+from .half_velocity import EARLY_OUT_PX, VelocityPrep, path_bindings
 from .registry import mode
 from .passes import FullscreenPass, Pipeline
-from .pool import TexSpec
+from .pool import ReadBack, TexSpec
 from .tile_lists import FINE
-from .tiles import tile_passes
+from .tiles import PATH_SUFFIXES, tile_passes
 
 # Which noise stream of glsl/noise.glsl's hash01 the per-pixel tap jitter uses.
 JITTER_STREAM = 1
@@ -49,6 +52,13 @@ class McGuireParams:
 
 
 segments = segments_in("mcguire")
+
+
+@dataclass(frozen=True)
+class McGuireConfig(PathConfig):
+    group: ClassVar[str] = "mcguire"
+
+
 class Gather(FullscreenPass):
     """The reconstruction; tiled: drawn only on the FINE tiles where a pixel's blur reaches
     and the NeighborMax lookup fails the early out, the CENTRE_ONLY variant where only
@@ -56,12 +66,18 @@ class Gather(FullscreenPass):
     whose lookup fails the early out (viewer/render/gather_tiles.py): the same image."""
     name = "mcguire_gather"
     fragment = "mcguire_gather.frag"
-    inputs = ("color", "depth", "mcguire_velocity", "mcguire_tilemax_x", "mcguire_neighbormax",
-              *GBUFFER_PATHS, "mcguire_neighbormax_path", "mcguire_neighbormax_path2")
     produces = ("mcguire",)
 
-    def __init__(self, tiled: bool = True):
+    def __init__(self, tiled: bool = True, config: McGuireConfig = McGuireConfig()):
         self.tiled = tiled
+        paths = path_targets(config.segments)
+        tile_paths = tuple(f"mcguire_neighbormax{s}" for s in PATH_SUFFIXES[:len(paths)])
+        # The tiles to draw come from tile textures read back: the NeighborMax path's
+        # extent, or without a path NeighborMax and the TileMax strips (gather_reach.py).
+        lookups = tile_paths or ("mcguire_neighbormax", "mcguire_tilemax_x")
+        self.inputs = ("color", "depth", "mcguire_velocity", "mcguire_neighbormax", *paths,
+                       *(lookups if tiled else tile_paths))
+        self.reads_back = tuple(ReadBack(n) for n in lookups) if tiled else ()
 
     def defines(self, frame: Frame):
         return {"EARLY_OUT_PX": EARLY_OUT_PX, "JITTER_STREAM": f"{JITTER_STREAM}u",
@@ -100,13 +116,16 @@ class Gather(FullscreenPass):
                 ((tile_list(frame, "mcguire_centre", centre, FINE), {"CENTRE_ONLY": 1}),))
 
 
-def mcguire_passes(tiled: bool = True) -> list:
-    """The filter's passes after a G-buffer (colour, depth, velocity) exists."""
+def mcguire_passes(tiled: bool = True, config: McGuireConfig = McGuireConfig()) -> list:
+    """The filter's passes after a G-buffer (colour, depth, velocity; the path of
+    config.segments pieces) exists."""
     return [VelocityPrep(), *tile_passes("mcguire_velocity", "mcguire", segments=segments,
-                                         paths=GBUFFER_PATHS), Gather(tiled)]
+                                         paths=path_targets(config.segments)),
+            Gather(tiled, config)]
 
 
-@mode("mcguire", groups=("blur", "mcguire"))
-def mcguire_pipeline() -> Pipeline:
-    return Pipeline("mcguire", [GBufferPass(layout="motion", segments_group="mcguire"),
-                                *mcguire_passes()], output="mcguire")
+@mode("mcguire", groups=("blur", "mcguire"), config=McGuireConfig)
+def mcguire_pipeline(config: McGuireConfig = McGuireConfig()) -> Pipeline:
+    return Pipeline("mcguire", [GBufferPass(layout="motion", segments=config.segments),
+                                *mcguire_passes(config=config)], output="mcguire",
+                    config=config)

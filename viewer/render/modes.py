@@ -5,14 +5,14 @@ from __future__ import annotations
 from .gbuffer import GBufferPass
 from .motion_params import MotionParams  # noqa: F401  (registers the "motion" group)
 from .passes import Pipeline
-from .registry import MODE_GROUPS, MODES, mode
+from .registry import MODE_GROUPS, MODES, NoConfig, mode
 
 __all__ = ["MODES", "MODE_GROUPS"]
 
 
 @mode("off", steps=False)
-def _off() -> Pipeline:
-    return Pipeline("off", [GBufferPass()], output="color")
+def _off(config: NoConfig = NoConfig()) -> Pipeline:
+    return Pipeline("off", [GBufferPass()], output="color", config=config)
 
 
 # Each mode module registers itself with @mode on import (add new ones here).

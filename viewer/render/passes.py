@@ -1,7 +1,9 @@
-"""Pass and pipeline: a pass names its inputs and its outputs (with formats), and the
-host-side resources it reads and makes (viewer/render/host.py), takes its parameters
-from the frame, and executes; a pipeline is the passes of one mode, in order, checked
-when built so every input, texture or host resource, is produced earlier."""
+"""Pass and pipeline: a pass names its inputs and its outputs (with formats), the
+host-side resources it reads and makes (viewer/render/host.py) and the textures it reads
+back to the host (ResourcePool.read_back), takes its parameters from the frame, and
+executes; a pipeline is the passes of one mode's configuration (viewer/render/registry.py),
+in order, checked when built so every input, texture or host resource, is produced
+earlier, and checked as it runs so each pass touches only what it declares."""
 from __future__ import annotations
 
 import moderngl
@@ -10,7 +12,7 @@ from world.conventions import glsl_defines
 from .frame import Frame, PassTimer
 from .gpu_scene import set_uniform
 from .host import HostResource
-from .pool import TexSpec
+from .pool import ReadBack, TexSpec
 
 
 class Pass:
@@ -20,6 +22,7 @@ class Pass:
     host_inputs: tuple[HostResource, ...] = ()
     host_outputs: tuple[HostResource, ...] = ()
     runs_on: str = "gpu"                  # "cpu": host work (read-backs, rays), no draw
+    reads_back: tuple[ReadBack, ...] = ()  # textures read to the host (pool.read_back)
 
     def outputs(self, frame: Frame) -> dict[str, TexSpec]:
         return {}
@@ -99,14 +102,21 @@ class FullscreenPass(Pass):
 
 
 class Pipeline:
-    def __init__(self, mode: str, passes: list[Pass], output: str, produced=()):
-        self.mode, self.passes, self.output = mode, passes, output
+    def __init__(self, mode: str, passes: list[Pass], output: str, produced=(),
+                 config=None):
+        """`config`: the mode's configuration this pipeline was built for (registry.py)."""
+        self.mode, self.passes, self.output, self.config = mode, passes, output, config
         have = set(produced)
         host: dict[str, Pass] = {}          # host resource name -> its producer
         for p in passes:
             missing = [n for n in p.inputs if n not in have]
             if missing:
                 raise ValueError(f"pipeline {mode}: pass {p.name} needs {missing}, not produced before it")
+            missing = [r.name for r in p.reads_back
+                       if not r.kept and r.name not in (*p.inputs, *p.produces)]
+            if missing:
+                raise ValueError(f"pipeline {mode}: pass {p.name} reads back {missing}, "
+                                 f"not among its inputs or outputs")
             missing = [r.name for r in p.host_inputs if host_producer(host, r) is None]
             if missing:
                 raise ValueError(f"pipeline {mode}: pass {p.name} needs host resources "
@@ -123,10 +133,14 @@ class Pipeline:
     def run(self, frame: Frame, measure=PassTimer, start: int = 0, stop: int | None = None):
         """The one executor: allocate each pass's outputs, then run it inside
         `measure(frame, name)` (a context manager that times it: PassTimer by default,
-        timing.PassClock.measure for GL timer queries), passes [start, stop) only."""
+        timing.PassClock.measure for GL timer queries), passes [start, stop) only. The
+        frame's parameters must make the configuration the pipeline was built for."""
+        if self.config is not None and type(self.config).of(frame.params) != self.config:
+            raise RuntimeError(f"pipeline {self.mode} built for {self.config} run with the "
+                               f"parameters of {type(self.config).of(frame.params)}")
         for p in self.passes[start:stop]:
             p.allocate(frame)
-            with measure(frame, p.name), frame.host.opened_to(p):
+            with measure(frame, p.name), frame.host.opened_to(p), frame.pool.opened_to(p):
                 p.execute(frame)
 
     def host_resources(self) -> list[tuple[HostResource, Pass, list[Pass]]]:
@@ -134,16 +148,49 @@ class Pipeline:
         return [(r, p, [q for q in self.passes if r in q.host_inputs])
                 for p in self.passes for r in p.host_outputs]
 
+    def unread(self) -> list[str]:
+        """Textures made that no later pass reads and that are not the output: a pass's
+        own intermediates (a reduction's first stage) and buffers kept for `--buffers`."""
+        later: set[str] = set()
+        out = []
+        for p in reversed(self.passes):
+            out += [n for n in reversed(p.produces) if n not in later and n != self.output]
+            later |= set(p.inputs)
+        return out[::-1]
+
+    def read_backs(self) -> list[tuple[ReadBack, Pass]]:
+        """(read-back, pass) of every GPU-to-host read the passes declare, in order."""
+        return [(r, p) for p in self.passes for r in p.reads_back]
+
     def describe(self) -> str:
-        """The whole graph: each pass (GPU or CPU) with what it reads and makes, textures
-        and host resources (marked `host:`), then every host resource with its type, its
-        producer and its readers ("the caller": read after the frame, e.g. by compare)."""
+        """The whole graph: the configuration it was built for and a count of its passes
+        and read-backs, each pass (GPU or CPU) with what it reads and makes, textures and
+        host resources (marked `host:`), the textures no later pass reads, then every
+        read-back with its pass, then every
+        host resource with its type, its producer and its readers ("the caller": read
+        after the frame, e.g. by compare)."""
+        cpu = sum(p.runs_on == "cpu" for p in self.passes)
+        backs = self.read_backs()
+        every = sum(not r.when for r, _ in backs)
         lines = [f"mode {self.mode} -> {self.output}"]
+        if self.config is not None:
+            lines.append(f"config {self.config}")
+        n = len(self.passes)
+        lines.append(f"{n} pass{'es' if n != 1 else ''} ({n - cpu} gpu, {cpu} cpu); "
+                     f"read-backs: {every} every frame, {len(backs) - every} at times")
         for p in self.passes:
             ins = [*p.inputs, *(f"host:{r.name}" for r in p.host_inputs)]
             outs = [*p.produces, *(f"host:{r.name}" for r in p.host_outputs)]
             kind = " (cpu)" if p.runs_on == "cpu" else ""
             lines.append(f"  {p.name}{kind}: {', '.join(ins) or '-'} -> {', '.join(outs) or '-'}")
+        unread = self.unread()
+        if unread:
+            lines.append(f"  (not read by a later pass: {', '.join(unread)})")
+        if backs:
+            lines.append("read-backs:")
+            for r, p in backs:
+                lines.append(f"  {r.name}{' (kept)' if r.kept else ''}: {p.name}"
+                             + (f" ({r.when})" if r.when else ""))
         rows = self.host_resources()
         if rows:
             lines.append("host resources:")

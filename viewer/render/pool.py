@@ -3,9 +3,17 @@
 The pool owns every render target. A pass asks for a texture by name with its spec; a
 changed spec or frame size reallocates it (so a resize needs no bookkeeping elsewhere), and
 framebuffers that used it are dropped. Nothing else holds a GL texture across frames.
+
+While a pipeline runs a pass (`opened_to`), the pool checks each access against the pass's
+declarations, as Frame.host does for host resources: a texture bound or read must be
+one of its `inputs` or `produces`, a texture drawn into, cleared, written or allocated
+one of its `produces`, and a read-back to the host (`read_back`, the one way a pass reads
+GPU data) one of its `reads_back`. Outside a pipeline (a pass run on its own, as unit
+tests do, the sub-exposure accumulation, the caller reading results) nothing is checked.
 """
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import moderngl
@@ -26,6 +34,16 @@ class TexSpec:
         return (-(-full[0] // self.tile), -(-full[1] // self.tile))
 
 
+@dataclass(frozen=True)
+class ReadBack:
+    """A GPU-to-host read a pass makes: a pool texture by name, or (kept) a texture the
+    renderer keeps across frames, labelled; `when` says when it happens where that is
+    not every frame."""
+    name: str
+    when: str = ""
+    kept: bool = False
+
+
 class ResourcePool:
     def __init__(self, ctx: moderngl.Context):
         self.ctx = ctx
@@ -39,11 +57,55 @@ class ResourcePool:
         # name -> (tile geometry, boolean tile map): the tiles a tiled pass wrote whole, the
         # texture zero elsewhere (mark_tiles); dropped by any other write.
         self._tiles: dict[str, tuple] = {}
+        self._pass = None                  # the pass a pipeline is running, if any
+
+    @contextmanager
+    def opened_to(self, p):
+        """While pass `p` runs: its texture accesses are checked (module doc)."""
+        before, self._pass = self._pass, p
+        try:
+            yield self
+        finally:
+            self._pass = before
+
+    def _check(self, names, write: bool):
+        p = self._pass
+        if p is None:
+            return
+        allowed = p.produces if write else (*p.inputs, *p.produces)
+        bad = [n for n in names if n not in allowed]
+        if bad:
+            what, where = ("writes", "produces") if write else ("reads", "inputs")
+            raise RuntimeError(f"pass {p.name} {what} texture {', '.join(bad)}, which it "
+                               f"does not declare in {where}")
+
+    def check_write(self, names):
+        """Raise unless the open pass (if any) declares every one of `names` it writes."""
+        self._check(names, write=True)
+
+    def read_back(self, name: str, texture: moderngl.Texture | None = None,
+                  viewport=None, components: int | None = None, dtype: str | None = None
+                  ) -> bytes:
+        """Texture `name` read to the host (inside `viewport`, x, y, w, h GL pixels, where
+        given): the one GPU-to-host read of a pass, which must declare it in
+        `reads_back`. `texture`: a kept texture (not the pool's), labelled `name`."""
+        p = self._pass
+        if p is not None and name not in {r.name for r in p.reads_back}:
+            raise RuntimeError(f"pass {p.name} reads texture {name} back to the host, "
+                               f"which it does not declare in reads_back")
+        if texture is not None:
+            return texture.read()
+        if viewport is None:
+            return self.get(name).read()
+        return self.framebuffer((name,), read=True).read(
+            viewport=viewport, components=components or self.spec(name).components,
+            dtype=dtype or self.spec(name).dtype)
 
     def resize(self, size: tuple[int, int]):
         self.size = (int(size[0]), int(size[1]))
 
     def texture(self, name: str, spec: TexSpec) -> moderngl.Texture:
+        self._check((name,), write=True)
         size = spec.size(self.size)
         have = self._tex.get(name)
         if have and have[0] == spec and have[1] == size:
@@ -57,6 +119,9 @@ class ResourcePool:
         return tex
 
     def get(self, name: str) -> moderngl.Texture:
+        """Texture `name`, to bind or read (a pass writes through framebuffer() or
+        check_write() first)."""
+        self._check((name,), write=False)
         return self._tex[name][2]
 
     def spec(self, name: str) -> TexSpec:
@@ -73,11 +138,15 @@ class ResourcePool:
             self._depth = {self.size: depth.depth_texture(self.ctx, self.size)}
         return self._depth[self.size]
 
-    def framebuffer(self, names: tuple[str, ...], depth: bool = False) -> moderngl.Framebuffer:
+    def framebuffer(self, names: tuple[str, ...], depth: bool = False, read: bool = False
+                    ) -> moderngl.Framebuffer:
+        """The framebuffer of textures `names` (and the depth buffer), to draw into, or
+        with `read` to copy or read from."""
+        self._check(names, write=not read)
         key = (names, depth, self.size if depth else None)
         fbo = self._fbo.get(key)
         if fbo is None:
-            fbo = self.ctx.framebuffer([self.get(n) for n in names],
+            fbo = self.ctx.framebuffer([self._tex[n][2] for n in names],
                                        self.depth_buffer() if depth else None)
             self._fbo[key] = fbo
         return fbo

@@ -8,11 +8,11 @@ import numpy as np
 from ..params import group, param
 from ..regions import RegionAccumulator
 from .frame import Frame
-from .gbuffer import GBufferPass
+from .gbuffer import STATIC_RASTER_READ, GBufferPass
 from .host import HostResource
-from .registry import mode
+from .registry import NoConfig, mode
 from .passes import FullscreenPass, Pass, Pipeline
-from .pool import TexSpec
+from .pool import ReadBack, TexSpec
 
 
 @group("reference")
@@ -32,13 +32,18 @@ class Accumulate(FullscreenPass):
 class ReferencePass(Pass):
     name = "reference"
     inputs = ("id", "depth")
-    produces = ("reference",)
     host_outputs = (REGIONS,)
+    # The regions: the frame time's visibility and every sub-frame's, read back.
+    reads_back = (*(ReadBack(n, "recording visibility (compare)")
+                    for n in ("id", "depth", "sub_id", "sub_depth")), STATIC_RASTER_READ)
 
     def __init__(self):
         self.sub_color = GBufferPass(prefix="sub_", layout="color")
         self.sub_visibility = GBufferPass(prefix="sub_", layout="visibility")
         self.acc = Accumulate()
+        # The sub-frames' G-buffer targets, drawn by this pass (the visibility's when
+        # recording it).
+        self.produces = ("reference", *self.sub_visibility.produces)
 
     def outputs(self, frame: Frame):
         return {"reference": TexSpec(4, "f4")}
@@ -97,5 +102,6 @@ class ReferencePass(Pass):
 
 
 @mode("reference", groups=("reference",), steps=False)
-def reference_pipeline() -> Pipeline:
-    return Pipeline("reference", [GBufferPass(), ReferencePass()], output="reference")
+def reference_pipeline(config: NoConfig = NoConfig()) -> Pipeline:
+    return Pipeline("reference", [GBufferPass(), ReferencePass()], output="reference",
+                    config=config)

@@ -21,6 +21,7 @@ from .gpu_scene import GpuScene
 from .host import HostResources
 from .kept import KeptState
 from .modes import MODES
+from .registry import mode_config
 from .pool import ResourcePool
 from .steps import MakeFrame, Measure, run_steps, step_count, sub_exposures
 
@@ -62,12 +63,15 @@ class Renderer:
     def size(self) -> tuple[int, int]:
         return self.pool.size
 
-    def pipeline(self, mode: str):
+    def pipeline(self, mode: str, params: ParamSet | None = None):
+        """`mode`'s pipeline for its configuration under `params` (None: the defaults),
+        built once per (mode, configuration) (viewer/render/registry.py)."""
         if mode not in MODES:
             raise UserError(f"--mode {mode}: expected one of {', '.join(MODES)}")
-        if mode not in self._pipelines:
-            self._pipelines[mode] = MODES[mode]()
-        return self._pipelines[mode]
+        key = (mode, mode_config(mode, params))
+        if key not in self._pipelines:
+            self._pipelines[key] = MODES[mode](key[1])
+        return self._pipelines[key]
 
     def frame(self, t: float, params: ParamSet, seed: int = 0, timing: bool = False,
               shutter: float | None = None, record_visibility: bool = False,
@@ -94,7 +98,8 @@ class Renderer:
             return bend["px"]
         n = step_count(mode, params, shutter, measure_bend)
         pose = self._pose(float(t), shutter, n) if self.scene.assets else None
-        frame = run_steps(make_frame, self.pipeline(mode), float(t), shutter, seed, n, measure)
+        frame = run_steps(make_frame, self.pipeline(mode, params), float(t), shutter, seed, n,
+                          measure)
         if pose is not None:   # (host work before the first pass: reported as one of them)
             frame.pass_ms["scene_pose"], frame.pass_cpu_ms["scene_pose"] = pose[:2]
             frame.stats["skinned_vertices"] = pose[2]
@@ -119,7 +124,7 @@ class Renderer:
                read_image: bool = True, progress=None) -> RenderResult:
         """`progress(k, n)` is called as long passes (the reference) advance."""
         params = params or ParamSet()
-        pipe = self.pipeline(mode)
+        pipe = self.pipeline(mode, params)
 
         def make_frame(tk, shutter, seed_k):
             return self.frame(tk, params, seed_k, timing, shutter=shutter,
@@ -129,7 +134,7 @@ class Renderer:
         return RenderResult(mode, image, frame.stats, frame.pass_ms, frame.host)
 
     def output_name(self, mode: str) -> str:
-        return self.pipeline(mode).output
+        return self.pipeline(mode).output         # (the same under every configuration)
 
     def buffers(self) -> dict[str, np.ndarray]:
         """Every texture in the pool, image orientation."""

@@ -105,15 +105,16 @@ class StaticRaster:
         """The raster now holds view `key` (its far depths and boxes not yet made)."""
         self.key, self.boxes = key, None
 
-    def prepare(self, ranks: int):
+    def prepare(self, pool, ranks: int):
         """`far` from the depths, each rank's box from the rank target (read back once
         a view; a static-only pass, the hybrid's static layer, never asks)."""
         if self.boxes is not None:
             return
         w, h = self.size
-        d = np.frombuffer(self.depth.read(), np.float32)
+        d = np.frombuffer(pool.read_back("static_raster", texture=self.depth), np.float32)
         self.far.write(np.nextafter(d, np.float32(0)).tobytes())    # (the clear 0 stays)
-        r = np.frombuffer(self.rank.read(), np.uint32).reshape(h, w)
+        r = np.frombuffer(pool.read_back("static_raster", texture=self.rank),
+                          np.uint32).reshape(h, w)
         boxes = np.zeros((ranks + 1, 4), np.int64)
         for lo, hi, at, n in ((0, 2, np.arange(w)[None, :], w),
                               (1, 3, np.arange(h)[:, None], h)):

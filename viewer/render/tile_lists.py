@@ -36,7 +36,7 @@ from .gbuffer import path_targets
 from .host import HostResource
 from .hybrid.params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from .passes import FullscreenPass, Pass
-from .pool import TexSpec
+from .pool import ReadBack, TexSpec
 from . import tile_kernels
 from .kept import KeptSlot
 from .tiles import StripSpec
@@ -314,8 +314,10 @@ def path_textures(frame: Frame, names=PATH_TEXTURES) -> dict[str, str]:
 class MotionTiles(FullscreenPass):
     name = "motion_tiles"
     fragment = "motion_tiles.frag"
-    inputs = ("hybrid_front", "hybrid_path", "hybrid_path2")   # D, id; the path
     produces = ("motion_tiles_x", "motion_tiles")
+
+    def __init__(self, segments: int = 1):
+        self.inputs = ("hybrid_front", *path_targets(segments))   # D, id; the path
 
     def defines(self, frame: Frame):
         return {"SEGMENTS": segments(frame)}
@@ -338,6 +340,7 @@ class SelectTiles(Pass):
     runs_on = "cpu"
     inputs = ("motion_tiles",)
     host_outputs = (TILE_LISTS,)
+    reads_back = (ReadBack("motion_tiles"),)
 
     def execute(self, frame: Frame):
         lists = frame.kept.get(KEPT_LISTS)
@@ -345,7 +348,8 @@ class SelectTiles(Pass):
             lists = frame.kept.put(KEPT_LISTS, TileLists(frame.ctx))
         tex = frame.pool.get("motion_tiles")
         tw, th = tex.size
-        both = np.frombuffer(tex.read(), np.float32).reshape(th, tw, 2)   # GL rows
+        both = np.frombuffer(frame.pool.read_back("motion_tiles"),
+                             np.float32).reshape(th, tw, 2)   # GL rows
         longest, boundary = both[..., 0].copy(), both[..., 1] != 0
         p = frame.params["hybrid"]
         moving = moving_tiles(longest, p.min_speed)
@@ -402,5 +406,6 @@ def tile_list(frame: Frame, which: str) -> TileList | None:
     return getattr(lists, which) if lists is not None else None
 
 
-def selection_passes() -> list:
-    return [MotionTiles(), SelectTiles()]
+def selection_passes(segments: int = 1) -> list:
+    """motion_tiles (the path of `segments` pieces) and select_tiles."""
+    return [MotionTiles(segments), SelectTiles()]

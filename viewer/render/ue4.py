@@ -20,18 +20,20 @@ texel's path, and the gather's taps walk the looked-up tile's path (glsl/ue4_gat
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import ClassVar
 
 from ..params import group, param
 from .blur_common import max_radius_px
 from .frame import Frame
 from .gather_reach import ue4_map
 from .gather_tiles import draw_gather, gather_tiles, jitter_reach, tile_list
-from .gbuffer import GBufferPass, segments_in, segments_param
+from .gbuffer import GBufferPass, PathConfig, path_targets, segments_in, segments_param
 from .motion_params import curve_steps_param
 from .half_velocity import GBUFFER_PATHS, path_bindings
 from .registry import mode
 from .passes import FullscreenPass, Pipeline
-from .pool import TexSpec
+from .pool import ReadBack, TexSpec
 from .tile_lists import FINE
 
 
@@ -68,6 +70,16 @@ segments = segments_in("ue4")
 PATH_SUFFIXES = ("_path", "_path2")
 
 
+@dataclass(frozen=True)
+class UE4Config(PathConfig):
+    group: ClassVar[str] = "ue4"
+
+
+def declared(base: str, config: UE4Config) -> tuple[str, ...]:
+    """BASE's path targets under `config` (none for one segment)."""
+    return tuple(base + x for x in PATH_SUFFIXES[:config.segments // 2])
+
+
 def paths_of(frame, base: str) -> tuple[str, ...]:
     """BASE's path targets this frame (none for one segment)."""
     return tuple(base + x for x in PATH_SUFFIXES[:segments(frame) // 2])
@@ -94,8 +106,10 @@ def dilation_reach(max_px: float, tile: int) -> int:
 class Flatten(FullscreenPass):
     name = "ue4_flatten"
     fragment = "ue4_flatten.frag"
-    inputs = ("velocity", "depth", *GBUFFER_PATHS)
     produces = ("ue4_flat",)
+
+    def __init__(self, config: UE4Config = UE4Config()):
+        self.inputs = ("velocity", "depth", *path_targets(config.segments))
 
     def defines(self, frame):
         return {"SEGMENTS": segments(frame)}
@@ -112,8 +126,10 @@ class Flatten(FullscreenPass):
 class TileMinMax(FullscreenPass):
     name = "ue4_tiles"
     fragment = "ue4_tiles.frag"
-    inputs = ("ue4_flat", *GBUFFER_PATHS)
-    produces = ("ue4_tiles", "ue4_tiles_path", "ue4_tiles_path2")
+
+    def __init__(self, config: UE4Config = UE4Config()):
+        self.inputs = ("ue4_flat", *path_targets(config.segments))
+        self.produces = ("ue4_tiles", *declared("ue4_tiles", config))
 
     def defines(self, frame):
         return {"SEGMENTS": segments(frame)}
@@ -130,8 +146,10 @@ class TileMinMax(FullscreenPass):
 class Dilate(FullscreenPass):
     name = "ue4_dilate"
     fragment = "ue4_dilate.frag"
-    inputs = ("ue4_tiles", "ue4_tiles_path", "ue4_tiles_path2")
-    produces = ("ue4_dilated", "ue4_dilated_path", "ue4_dilated_path2")
+
+    def __init__(self, config: UE4Config = UE4Config()):
+        self.inputs = ("ue4_tiles", *declared("ue4_tiles", config))
+        self.produces = ("ue4_dilated", *declared("ue4_dilated", config))
 
     def defines(self, frame):
         return {"SEGMENTS": segments(frame)}
@@ -159,12 +177,15 @@ class Gather(FullscreenPass):
     (viewer/render/gather_tiles.py): the same image."""
     name = "ue4_gather"
     fragment = "ue4_gather.frag"
-    inputs = ("color", "ue4_flat", "ue4_tiles", "ue4_dilated", *GBUFFER_PATHS,
-              "ue4_dilated_path", "ue4_dilated_path2")
     produces = ("ue4",)
 
-    def __init__(self, tiled: bool = True):
+    def __init__(self, tiled: bool = True, config: UE4Config = UE4Config()):
         self.tiled = tiled
+        self.inputs = ("color", "ue4_flat", "ue4_tiles", "ue4_dilated",
+                       *path_targets(config.segments), *declared("ue4_dilated", config))
+        # The tiles to draw come from the tile textures read back (tiles()).
+        lookups = ("ue4_dilated",) if config.segments > 1 else ("ue4_dilated", "ue4_tiles")
+        self.reads_back = tuple(ReadBack(n) for n in lookups) if tiled else ()
 
     def defines(self, frame):
         return {"EARLY_OUT_PX": EARLY_OUT_PX, "SEGMENTS": segments(frame)}
@@ -195,12 +216,12 @@ class Gather(FullscreenPass):
         return None if draw.all() else tile_list(frame, "ue4", draw, FINE)
 
 
-def ue4_passes(tiled: bool = True) -> list:
-    """The post passes after the G-buffer (the hybrid mode may reuse them)."""
-    return [Flatten(), TileMinMax(), Dilate(), Gather(tiled)]
+def ue4_passes(tiled: bool = True, config: UE4Config = UE4Config()) -> list:
+    """The post passes after the G-buffer (the path of config.segments pieces)."""
+    return [Flatten(config), TileMinMax(config), Dilate(config), Gather(tiled, config)]
 
 
-@mode("ue4", groups=("blur", "ue4"))
-def ue4_pipeline() -> Pipeline:
-    return Pipeline("ue4", [GBufferPass(layout="motion", segments_group="ue4"), *ue4_passes()],
-                    output="ue4")
+@mode("ue4", groups=("blur", "ue4"), config=UE4Config)
+def ue4_pipeline(config: UE4Config = UE4Config()) -> Pipeline:
+    return Pipeline("ue4", [GBufferPass(layout="motion", segments=config.segments),
+                            *ue4_passes(config=config)], output="ue4", config=config)

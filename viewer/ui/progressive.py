@@ -41,7 +41,7 @@ class Progressive:
              seed: int, key, per_frame: int) -> Frame:
         """Add up to `per_frame` sub-frames; start over first when `key` differs from the
         last call's (it must capture everything the image depends on)."""
-        pipe = renderer.pipeline(mode)
+        pipe = renderer.pipeline(mode, params)
         acc = accumulating_pass(pipe)
         frame = clock.frame(renderer, t, params, seed)
         index = pipe.passes.index(acc)

@@ -22,9 +22,9 @@ import numpy as np
 from ..blur_common import max_radius_px
 from ..frame import Frame
 from ..host import HostResource
-from .params import HybridParams  # noqa: F401  (registers the "hybrid" group)
+from .config import HybridConfig
 from ..passes import FullscreenPass, Pass
-from ..pool import TexSpec
+from ..pool import ReadBack, TexSpec
 from .reveal import MASKED_PIXELS
 from ..tile_kernels import mark_tiles, outlines_along, pixel_tiles, square_max
 from ..tile_lists import (FINE, TILE_LISTS, moving_strips, path_textures, segments,
@@ -85,7 +85,8 @@ def path_reach(frame: Frame, shape: tuple[int, int]) -> np.ndarray:
     points = []
     for name in ("hybrid_neighbormax_path", "hybrid_neighbormax_path2")[:segments(frame) // 2]:
         tex = frame.pool.get(name)
-        points.append(np.frombuffer(tex.read(), np.float32).reshape(tex.size[1], tex.size[0], 2, 2))
+        points.append(np.frombuffer(frame.pool.read_back(name),
+                                    np.float32).reshape(tex.size[1], tex.size[0], 2, 2))
     o = np.concatenate(points, axis=2).astype(np.float64)
     extent = np.minimum(2.0 * np.sqrt((o * o).sum(-1).max(-1)), 2.0 * k)
     reach = 0.5 * extent + OUTLINE_MARGIN_PX + 1.0
@@ -99,7 +100,8 @@ def path_reach(frame: Frame, shape: tuple[int, int]) -> np.ndarray:
 def read_neighbormax(frame: Frame) -> np.ndarray:
     """hybrid_neighbormax on the host (GL rows): a few hundred floats."""
     tex = frame.pool.get("hybrid_neighbormax")
-    return np.frombuffer(tex.read(), np.float32).reshape(tex.size[1], tex.size[0], 2)
+    return np.frombuffer(frame.pool.read_back("hybrid_neighbormax"),
+                         np.float32).reshape(tex.size[1], tex.size[0], 2)
 
 
 class ReadNeighborMax(Pass):
@@ -110,6 +112,7 @@ class ReadNeighborMax(Pass):
     runs_on = "cpu"
     inputs = ("hybrid_neighbormax",)
     host_outputs = (NEIGHBORMAX,)
+    reads_back = (ReadBack("hybrid_neighbormax"),)
 
     def execute(self, frame: Frame):
         frame.host.put(NEIGHBORMAX, read_neighbormax(frame))
@@ -167,12 +170,20 @@ class Composite(FullscreenPass):
     """The composite composite_kind picks: "time" (glsl/hybrid_time.frag), "bucket"
     (glsl/hybrid_bucket.frag), or "split" between them by tiles."""
     name = "hybrid_composite"
-    inputs = ("color", "hybrid_front", "hybrid_back", "hybrid_back_color", "hybrid_tilemax",
-              "hybrid_neighbormax", "hybrid_path", "hybrid_path2", "hybrid_neighbormax_path",
-              "hybrid_neighbormax_path2")
-    produces = ("hybrid", MASK_TILES)   # ray_mask_tiles: held only while "time" draws
-    host_inputs = (TILE_LISTS, NEIGHBORMAX, MASKED_PIXELS)
     fragment = FRAGMENTS["time"]        # (each draw names its own: _draw)
+
+    def __init__(self, config: HybridConfig = HybridConfig()):
+        tile_paths = config.tile_paths("hybrid_neighbormax")
+        self.inputs = ("color", "hybrid_front", "hybrid_back", "hybrid_back_color",
+                       "hybrid_tilemax", "hybrid_neighbormax", *config.paths, *tile_paths)
+        # ray_mask_tiles: made where the time-sampled composite draws
+        self.produces = ("hybrid",) + ((MASK_TILES,) if config.composite != "bucket" else ())
+        self.host_inputs = (TILE_LISTS, MASKED_PIXELS,
+                            *((NEIGHBORMAX,) if config.reads_neighbormax else ()))
+        # The bucket's tiles near no outline: along a path, from the path's extent read
+        # back (path_reach); along the chord, from NEIGHBORMAX.
+        self.reads_back = (tuple(ReadBack(n) for n in tile_paths)
+                           if config.composite != "time" else ())
 
     def defines(self, frame: Frame):
         p = frame.params["hybrid"]
@@ -193,7 +204,7 @@ class Composite(FullscreenPass):
             # (Where every tile is active, as under a moving camera, the draws below
             # write every pixel.)
             frame.ctx.copy_framebuffer(frame.pool.framebuffer(("hybrid",)),
-                                       frame.pool.framebuffer(("color",)))
+                                       frame.pool.framebuffer(("color",), read=True))
         if tiles is None or kind == "time":    # (no tile lists: a pass run on its own)
             return self._draw(frame, "time" if kind == "split" else kind, tiles)
         active = np.zeros(lists.shape, bool)
@@ -244,14 +255,14 @@ class Composite(FullscreenPass):
                   defines={"BACK_LAYER": back, "OWN_STILL": own_still, "SIMPLE": simple})
 
 
-def composite_tile_passes() -> list:
-    """The raster displacement's tiles for the composite (and NeighborMax on the host):
-    they need only the G-buffer and the tile lists."""
+def composite_tile_passes(config: HybridConfig = HybridConfig()) -> list:
+    """The raster displacement's tiles for the composite (and NeighborMax on the host,
+    where the composite reads it): they need only the G-buffer and the tile lists."""
     return [*tile_passes("hybrid_front", "hybrid", select_x=moving_strips, segments=segments,
-                         paths=("hybrid_path", "hybrid_path2"), select_reads=(TILE_LISTS,)),
-            ReadNeighborMax()]
+                         paths=config.paths, select_reads=(TILE_LISTS,)),
+            *((ReadNeighborMax(),) if config.reads_neighbormax else ())]
 
 
-def composite_passes() -> list:
+def composite_passes(config: HybridConfig = HybridConfig()) -> list:
     """The displacement tiles and the composite (the composite after the reveal)."""
-    return [*composite_tile_passes(), Composite()]
+    return [*composite_tile_passes(config), Composite(config)]

@@ -36,9 +36,9 @@ import numpy as np
 from ..blur_common import max_radius_px
 from ..frame import Frame
 from ..host import HostResource
-from .params import HybridParams  # noqa: F401  (registers the "hybrid" group)
+from .config import HybridConfig
 from ..passes import FullscreenPass
-from ..pool import TexSpec
+from ..pool import ReadBack, TexSpec
 from ..tile_lists import (FINE, TILE_LISTS, path_textures, segments, tile_coords, tile_list,
                          tile_strips, within_reach)
 from ..tiles import StripSpec
@@ -48,8 +48,8 @@ RAY_MASK = TexSpec(1, "u4")         # own object id where masked
 RELATIVE = TexSpec(2, "f4")
 EDGE_PROBE = TexSpec(2, "f4")       # (half |relative D|, object id) at edge pixels, else 0
 REACH_TEST_FRACTION = 0.5           # of the tiles moving, from which reach_test holds
-# FINE tile maps (GL rows) from the surface tests, for the passes after them; None where
-# the frame's mask path does not make them.
+# FINE tile maps (GL rows) from the surface tests, for the range check's passes; None
+# where the frame's mask path does not make them.
 PROBE_TILES = HostResource("edge_probe_tiles", np.ndarray,
                            "tiles where mask_edge_probe was written (None: unknown)", optional=True)
 SURVIVOR_TILES = HostResource("survivor_tiles", np.ndarray,
@@ -66,23 +66,30 @@ class SurfaceTests(FullscreenPass):
     (the Sobel kernel) on those alone."""
     name = "mask_displacement"
     fragment = "raymask_displacement.frag"
-    inputs = ("hybrid_front", "normal", "hybrid_path", "hybrid_path2")
-    produces = ("mask_displacement", "mask_relative", "mask_edge", "mask_edge_probe",
-                "mask_survivors_x", "mask_survivors", "ray_mask")
     host_inputs = (TILE_LISTS,)
-    host_outputs = (PROBE_TILES, SURVIVOR_TILES)
 
-    def __init__(self):
+    def __init__(self, config: HybridConfig = HybridConfig()):
+        """Without the range check (config.range_check off) the displacement test alone,
+        written as ray_mask; with it the targets of the three steps' first two."""
         self._any = AnyTiles()
+        self.range_check = config.range_check
+        if self.range_check:
+            self.inputs = ("hybrid_front", "normal", *config.paths)
+            self.produces = RANGE_TARGETS
+            self.host_outputs = (PROBE_TILES, SURVIVOR_TILES)
+            self.reads_back = (ReadBack("mask_survivors", "most tiles moving"),)
+        else:
+            self.inputs, self.produces = ("hybrid_front", *config.paths), ("ray_mask",)
 
     def defines(self, frame: Frame):
         return {"SEGMENTS": segments(frame)}
 
     def outputs(self, frame: Frame):
-        return {"mask_displacement": MASK, "mask_relative": RELATIVE, "mask_edge": MASK,
-                "mask_edge_probe": EDGE_PROBE,
-                "mask_survivors_x": StripSpec(1, "u1", tile=FINE),
-                "mask_survivors": TexSpec(1, "u1", tile=FINE), "ray_mask": RAY_MASK}
+        specs = {"mask_displacement": MASK, "mask_relative": RELATIVE, "mask_edge": MASK,
+                 "mask_edge_probe": EDGE_PROBE,
+                 "mask_survivors_x": StripSpec(1, "u1", tile=FINE),
+                 "mask_survivors": TexSpec(1, "u1", tile=FINE), "ray_mask": RAY_MASK}
+        return {n: specs[n] for n in self.produces}
 
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
@@ -93,12 +100,12 @@ class SurfaceTests(FullscreenPass):
         first = {"u_min_speed": float(p.min_speed),
                  "u_depth_threshold": float(p.depth_threshold)}
         second = {"u_edge_depth": float(p.edge_depth), "u_edge_normal": float(p.edge_normal)}
-        if not p.range_check:
+        if not self.range_check:
             # The mask is the displacement test's survivors, written as ray_mask at once;
-            # the other mask targets hold nothing this frame.
-            frame.host.put(PROBE_TILES, None)
-            frame.host.put(SURVIVOR_TILES, None)
-            clear_unwritten(frame, self.produces[:-1] + EdgeIdTiles.produces)
+            # the range check's targets are not this configuration's (dropped where an
+            # earlier one made them, so that none shows an older frame's mask).
+            for n in RANGE_TARGETS[:-1] + EdgeIdTiles.produces:
+                frame.pool.discard(n)
             return self.draw(frame, ("ray_mask",),
                              {"u_front": "hybrid_front", **path_textures(frame)}, first,
                              tiles=tiles, defines={"STEP": 3})
@@ -127,12 +134,9 @@ class SurfaceTests(FullscreenPass):
                   second, tiles=tl, defines={"STEP": 2})
 
 
-def clear_unwritten(frame: Frame, names):
-    """Zero the targets `names` that a frame's mask passes leave unwritten (nothing is
-    done where they are clear already), so that none shows an older frame's mask."""
-    for n in names:
-        if n in frame.pool.names() and frame.pool.written_box(n) is not None:
-            frame.pool.clear((n,))
+# SurfaceTests' targets with the range check (ray_mask last: written without it too).
+RANGE_TARGETS = ("mask_displacement", "mask_relative", "mask_edge", "mask_edge_probe",
+                 "mask_survivors_x", "mask_survivors", "ray_mask")
 
 
 class AnyTiles(FullscreenPass):
@@ -145,7 +149,8 @@ class AnyTiles(FullscreenPass):
             self.draw(frame, (dst,), {"u_source": src}, {"u_tile": FINE},
                       defines={"STAGE": stage})
         tex = frame.pool.get(name)
-        return np.frombuffer(tex.read(), np.uint8).reshape(tex.size[1], tex.size[0]) != 0
+        return np.frombuffer(frame.pool.read_back(name),
+                             np.uint8).reshape(tex.size[1], tex.size[0]) != 0
 
 
 def reach_tiles(frame: Frame) -> int:
@@ -158,7 +163,8 @@ def edge_tiles(frame: Frame) -> np.ndarray:
     """Which FINE tiles (GL rows) hold a ray-mask edge: mask_edge_ids read back, for the
     range check's tile list under a moving camera."""
     ids = frame.pool.get("mask_edge_ids")
-    return np.frombuffer(ids.read(), np.uint32).reshape(ids.size[1], ids.size[0], -1)[..., 0] != 0
+    data = np.frombuffer(frame.pool.read_back("mask_edge_ids"), np.uint32)
+    return data.reshape(ids.size[1], ids.size[0], -1)[..., 0] != 0
 
 
 def reach_test(frame: Frame) -> bool:
@@ -192,8 +198,6 @@ class EdgeIdTiles(FullscreenPass):
                 "mask_edge_reach": TexSpec(2, "u4", tile=FINE)}
 
     def execute(self, frame: Frame):
-        if not frame.params["hybrid"].range_check:
-            return                      # (SurfaceTests wrote the ray mask)
         uniforms = {"u_tile": FINE, "u_radius": reach_tiles(frame)}
         # The edge test wrote mask_edge_probe only on some tiles (SurfaceTests: the surface
         # tiles, or under a moving camera those holding a survivor), 0 elsewhere: the
@@ -217,10 +221,11 @@ class EdgeIdTiles(FullscreenPass):
 class RangeCheck(FullscreenPass):
     name = "ray_mask"
     fragment = "raymask_range.frag"
-    inputs = ("mask_displacement", "mask_edge_probe", "mask_edge_near", "mask_edge_reach",
-              "hybrid_front")
+    inputs = ("mask_displacement", "mask_edge_probe", "mask_edge_ids", "mask_edge_near",
+              "mask_edge_reach", "hybrid_front")
     produces = ("ray_mask",)
     host_inputs = (TILE_LISTS, SURVIVOR_TILES)
+    reads_back = (ReadBack("mask_edge_ids", "most tiles moving"),)
 
     def defines(self, frame: Frame):
         # The tile size as a constant: a division by a uniform runs lane by lane on
@@ -232,8 +237,6 @@ class RangeCheck(FullscreenPass):
 
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
-        if not p.range_check:
-            return                      # (SurfaceTests wrote the ray mask)
         tiles = tile_list(frame, "moving")
         if reach_test(frame):
             # Only the moving tiles with an edge within their search's reach, or a
@@ -259,6 +262,9 @@ class RangeCheck(FullscreenPass):
                   tiles=tiles)
 
 
-def raymask_passes() -> list:
-    """The three mask passes and their tile summaries, after a full G-buffer."""
-    return [SurfaceTests(), EdgeIdTiles(), RangeCheck()]
+def raymask_passes(config: HybridConfig = HybridConfig()) -> list:
+    """The mask passes of `config`: the displacement test alone, or with the range check
+    the three steps and their tile summaries (after a G-buffer with normals)."""
+    if not config.range_check:
+        return [SurfaceTests(config)]
+    return [SurfaceTests(config), EdgeIdTiles(), RangeCheck()]

@@ -4,26 +4,30 @@ Post-process blur cannot know the background a moving object hides, which its bl
 partly uncovers (inner blur). The hybrid mode finds those pixels, ray-traces the true
 background behind them, shades it like the raster layer, and resolves both layers:
 
-  gbuffer (colour, hybrid_front = D, depth, id; + normal for the range check)
+  gbuffer (colour, hybrid_front = D, depth, id; the path's targets with segments;
+          + normal for the range check)
           -> motion_tiles -> select_tiles
           (host: which tiles move, which any motion reaches) (viewer/render/tile_lists.py)
-          -> hybrid tiles (+ NeighborMax read back)      (viewer/render/hybrid/composite.py)
-          -> mask_displacement (+ the edge test) -> mask_edge tiles -> ray_mask (+ tiles),
-          on the moving tiles                                (viewer/render/hybrid/mask.py)
+          -> hybrid tiles (+ NeighborMax read back for the bucket along the chord)
+                                                             (viewer/render/hybrid/composite.py)
+          -> mask_displacement (with the range check: + the edge test -> mask_edge tiles
+          -> ray_mask), on the moving tiles                  (viewer/render/hybrid/mask.py)
           -> reveal (CPU rays) -> reveal_shade (hybrid_back*: packed D, depth, id, colour)
                                                              (viewer/render/hybrid/reveal.py)
           -> hybrid_composite (bucketed; time-sampled or split by setting), on the
           active tiles
                                                              (viewer/render/hybrid/composite.py)
 
-Parameters: the `hybrid` group (viewer/render/hybrid/params.py) and the shared `blur` limit.
+Parameters: the `hybrid` group (viewer/render/hybrid/params.py) and the shared `blur`
+limit; the pipeline holds the passes of its configuration (viewer/render/hybrid/config.py:
+segments, range_check, composite).
 Stats: masked_pixels, rays, revealed_pixels, reveal_ms (host work) and its parts.
 """
 from __future__ import annotations
 
-from ..gbuffer import SEGMENT_CHOICES, GBufferPass
+from ..gbuffer import GBufferPass
 from .composite import Composite, composite_tile_passes
-from .params import HybridParams  # noqa: F401  (registers the "hybrid" group)
+from .config import HybridConfig
 from ..registry import mode
 from ..passes import Pipeline
 from .mask import raymask_passes
@@ -31,28 +35,21 @@ from .reveal import reveal_passes
 from ..tile_lists import selection_passes
 
 
-def hybrid_passes() -> list:
+def hybrid_passes(config: HybridConfig = HybridConfig()) -> list:
     """Everything after the G-buffer (the composite's tiles early: they need only the
     G-buffer, and their host read-back then waits for little)."""
-    return [*selection_passes(), *composite_tile_passes(), *raymask_passes(),
-            *reveal_passes(), Composite()]
+    return [*selection_passes(config.segments), *composite_tile_passes(config),
+            *raymask_passes(config), *reveal_passes(), Composite(config)]
 
 
-class HybridGBuffer(GBufferPass):
-    """Colour and the packed front layer (D, depth, id); the normal target too only for
-    the poster's three-step mask (hybrid.range_check), whose edge test alone reads it."""
-
-    def __init__(self):
-        super().__init__(layout="hybrid")
-        self.produces = self.targets("hybrid", max(SEGMENT_CHOICES))
-
-    def layout(self, frame) -> str:
-        return "hybrid" if frame.params["hybrid"].range_check else "front"
-
-    def segments(self, frame) -> int:
-        return int(frame.params["hybrid"].segments)
+def hybrid_gbuffer(config: HybridConfig = HybridConfig()) -> GBufferPass:
+    """Colour and the packed front layer (D, depth, id), the path's targets; the normal
+    target too only for the poster's three-step mask, whose edge test alone reads it."""
+    return GBufferPass(layout="hybrid" if config.range_check else "front",
+                       segments=config.segments)
 
 
-@mode("hybrid", groups=("blur", "hybrid"))
-def hybrid_pipeline() -> Pipeline:
-    return Pipeline("hybrid", [HybridGBuffer(), *hybrid_passes()], output="hybrid")
+@mode("hybrid", groups=("blur", "hybrid"), config=HybridConfig)
+def hybrid_pipeline(config: HybridConfig = HybridConfig()) -> Pipeline:
+    return Pipeline("hybrid", [hybrid_gbuffer(config), *hybrid_passes(config)],
+                    output="hybrid", config=config)

@@ -41,7 +41,7 @@ from ..host import HostResource
 from .params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from ..kept import KeptSlot
 from ..passes import FullscreenPass, Pass
-from ..pool import TexSpec
+from ..pool import ReadBack, TexSpec
 from . import reveal_kernels as kernels
 from ..tile_lists import TileList, clear_outside
 
@@ -317,8 +317,8 @@ def read_masked_pixels(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
     if box is None:                                     # nothing written since a clear
         return np.zeros((0, 2), np.int64), np.zeros(0, np.uint32)
     i0, y0, i1, y1 = box if box != "unknown" else (0, 0, w, h)   # GL pixels
-    fbo = frame.pool.framebuffer(("ray_mask",))
-    data = fbo.read(viewport=(i0, y0, i1 - i0, y1 - y0), components=1, dtype="u4")
+    data = frame.pool.read_back("ray_mask", viewport=(i0, y0, i1 - i0, y1 - y0),
+                                components=1, dtype="u4")
     gl_rows = np.frombuffer(data, np.uint32).reshape(y1 - y0, i1 - i0)
     return kernels.nonzero_pixels(gl_rows, i0, flip_row(y1 - 1, h))   # the top row's image row
 
@@ -364,6 +364,7 @@ class RevealTrace(Pass):
     runs_on = "cpu"
     inputs = ("ray_mask",)
     host_outputs = (MASKED_PIXELS, REVEAL_HITS, REVEAL_BATCH)
+    reads_back = (ReadBack("ray_mask"),)
 
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
@@ -411,7 +412,8 @@ class RevealShade(FullscreenPass):
     name = "reveal_shade"
     fragment = "reveal_shade.frag"
     host_inputs = (REVEAL_HITS,)
-    produces = BACK
+    # BACK; the static layer, copied in where a hit takes its pixel from it
+    produces = (*BACK, *(STATIC_PREFIX + n for n in GBufferPass(layout="front").produces))
 
     def defines(self, frame: Frame):
         return {**frame.gpu.light_defines(), **ObjectTable.glsl_defines(),
@@ -419,7 +421,7 @@ class RevealShade(FullscreenPass):
                 "SKINNED_FACES": int(bool(reveal_state(frame).skinned))}
 
     def outputs(self, frame: Frame):
-        return {n: PACKED for n in self.produces}
+        return {n: PACKED for n in BACK}
 
     def execute(self, frame: Frame):
         cam, gpu = frame.camera, frame.gpu
