@@ -18,7 +18,7 @@ def ceiling_jobs(batch: dict, front: bool = False) -> list[tuple]:
     mode records it (host resource reveal_batch): the primary ray through each pixel
     centre, into the static objects but its own (RayScene.exclusion_scene: the scene the
     reveal answers it from; the whole static scene where the own object moves or has no
-    exclusion scene) and into every moving object's scene but its own's.
+    exclusion scene) and into every moving object's scene but those of its own's rigid body.
     front: the static part into the whole static scene for every ray, where a ray of a
     static own object stops at that object (a cheaper query than the reveal's: the static
     part of the ceiling up to session 10, which also traced every ray into its own moving
@@ -44,8 +44,9 @@ def ceiling_jobs(batch: dict, front: bool = False) -> list[tuple]:
         if rows.size:
             jobs.append((rs._static, o[rows], d[rows], rows))
     poses = rs._poses(t)                     # M(t)^-1 as the reveal takes them
-    for (obj, es), inv in zip(rs.moving, poses.inv):
-        rows = np.flatnonzero(own != obj.id)
+    bodies = rs._body[own] if rs.moving else own
+    for (obj, es), inv, body in zip(rs.moving, poses.inv, rs._moving_bodies):
+        rows = np.flatnonzero(bodies != body)       # not the own object's rigid body
         if rows.size:
             jobs.append((es, transform_points(inv, o[rows]), transform_vectors(inv, d[rows]),
                          rows))

@@ -10,7 +10,8 @@ object's world box at t (a slab test on the mesh's local box carried by M(t)) go
 scene. The nearest valid hit over all the scenes wins.
 
 A ray must pass its own object (the masked pixel's surface). A moving one is simply not
-traced. A static one lives in the shared static scene, so the ray is traced instead in an
+traced, nor the objects that move rigidly with it (its children that do not move on their
+own, its parents'). A static one lives in the shared static scene, so the ray is traced instead in an
 "exclusion scene", the static objects but that one, built the first time a ray needs it
 (static geometry only, so once per scene, within a triangle budget); past the budget, or
 where asked, the ray restarts just past each hit on its own object.
@@ -167,6 +168,18 @@ def _embree_run(scene: rtcs.EmbreeScene, origins: np.ndarray, dirs: np.ndarray,
                      dists=np.array(tfar, dtype=np.float32), output=1)
 
 
+
+def body_of(obj) -> int:
+    """The rigid body a moving object belongs to: the nearest of it and its parents that
+    moves on its own (keys, velocities, a skin, a glTF node's animation), or the topmost
+    placement; objects with the same body keep their relative pose at every time. (Under
+    a moving camera their parallax within one exposure is neglected.)"""
+    node = obj
+    while (getattr(node, "skin", None) is None and not getattr(node, "own_moving", True)
+           and getattr(node, "parent", None) is not None):
+        node = node.parent
+    return id(node)
+
 class RayScene:
     """The Embree side of one loaded scene: built once, traced at any time t."""
 
@@ -219,6 +232,16 @@ class RayScene:
         # The corners of each moving mesh's local bounding box: at time t their world
         # box culls the rays that cannot hit the object before any Embree call.
         self._moving_ids = np.array([o.id for o, _ in self.moving], np.uint32)
+        # A ray passes every mover of its own object's rigid body (body_of), not just that
+        # object: what moves with it cannot be uncovered by its motion (a wheel under a
+        # car's body would be revealed as the background). _body maps an object id to its
+        # body's first mover's id (itself where it moves alone, and for static objects).
+        self._body = np.arange(max((o.id for o in scene.objects), default=0) + 1,
+                               dtype=np.uint32)
+        first: dict[int, int] = {}
+        for o, _ in self.moving:
+            self._body[o.id] = first.setdefault(body_of(o), o.id)
+        self._moving_bodies = self._body[self._moving_ids]
         self._corners = np.array([box_corners(o.vertices_at(0.0)) for o, _ in self.moving]
                                  ).reshape(-1, 8, 3)
         self._pose_cache: tuple | None = None
@@ -299,7 +322,7 @@ class RayScene:
 
         origins, dirs: (n, 3); dirs should be unit length for `distance` to be metres.
         exclude_ids: (n,) object id each ray must pass through (0 or None: none). A moving
-        one is simply not traced; a static one is passed by restarting the ray just past
+        one is simply not traced, nor any other mover of its rigid body (body_of); a static one is passed by restarting the ray just past
         each hit on it, at most `max_restarts` times (then the ray reports what else it found
         nearer, or a miss, and counts as unresolved).
         tnear, tfar: optional (n,) distances along the ray bounding the hits (clipping);
@@ -359,6 +382,7 @@ class RayScene:
         # excluded object is not traced at all. (Nothing of this without moving objects:
         # a camera passing static ones pays it in every frame.)
         poses = self._poses(t, matrices) if self.moving else None
+        bodies = self._body[excl] if self.moving else excl
         if self.cull and self.moving:
             o_box = o[:1].astype(np.float32) if from_eye else o.astype(np.float32)
             index = (RowIndex.of(o[0], d, *image_axes)
@@ -367,12 +391,14 @@ class RayScene:
             spans = (np.tile(np.array([0, n], np.int64), (len(self.moving), 1))
                      if index is None else index.spans(poses.lo, poses.hi))
             culled, cuts = kernels.boxes_rows(o_box, inv_d, from_eye, poses.lo, poses.hi,
-                                              start, best, excl, self._moving_ids, spans)
+                                              start, best, bodies, self._moving_bodies,
+                                              spans)
             cuts = cuts.tolist()
         movers = zip(self.moving, poses.inv, poses.rotate.tolist()) if self.moving else ()
+        body = self._moving_bodies.tolist()
         for k, ((obj, es), inv, rotate) in enumerate(movers):
             rows = (culled[cuts[k]:cuts[k + 1]] if self.cull
-                    else np.flatnonzero(excl != obj.id))
+                    else np.flatnonzero(bodies != body[k]))
             if not rows.size:
                 continue
             lo, ld, tfar = kernels.local_rays(o32, d32, rows, shared, inv, rotate, start, best)

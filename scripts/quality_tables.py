@@ -28,13 +28,13 @@ SCENES = [("living_room", "living_room"), ("spinner", "spinner"), ("thin", "thin
           ("vase_pan", str(CONFORMANCE / "vase_pan.toml")),
           ("keys_arc", str(CONFORMANCE / "keys_arc.toml")),
           ("shapes", str(CONFORMANCE / "shapes.toml")),
-          ("rover", "rover"),
+          ("turning_car", "turning_car"),
           ("gltf_box", str(CONFORMANCE / "gltf" / "gltf_box.toml")),
           ("gltf_skin", str(CONFORMANCE / "gltf" / "gltf_skin.toml"))]
 # Curved motion, on the scenes whose motion bends: the hybrid's default (curve steps:
 # 2 sub-frames where the paths bend), the linear hybrid (one chord, one frame), the
 # linear hybrid with 2 path segments, and every real-time mode with 4 sub-exposure steps.
-CURVED_SCENES = ("spinner", "wheel", "keys_arc")
+CURVED_SCENES = ("spinner", "wheel", "keys_arc", "turning_car")
 ORDER = ("off", "mcguire", "ue4", "guertin", "hybrid")
 LABELS = {"mcguire": "McGuire 2012", "ue4": "UE4-style", "guertin": "Guertin 2014"}
 LINEAR = ["--set", "hybrid.curve_steps=1"]

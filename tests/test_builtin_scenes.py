@@ -13,7 +13,7 @@ from world.camera import Camera
 from world.errors import SceneError
 from world.loader import builtin_scene_names, builtin_scene_path, load_scene
 
-NAMES = ["living_room", "pan", "rover", "spinner", "thin", "wheel"]
+NAMES = ["living_room", "pan", "rover", "spinner", "thin", "turning_car", "wheel"]
 
 
 def world(obj, t, local_points):
@@ -219,3 +219,17 @@ def test_bench_scenes_hold_many_visible_movers():
     on_screen = ((xy >= 0) & (xy < [1280, 720])).all(axis=1)
     assert on_screen.sum() >= 24, on_screen.sum()
     assert [o.name for o in crowd.objects] == [o.name for o in crowd_pan.objects]
+
+
+def test_turning_car_turns_29_degrees_within_the_shutter_over_a_textured_road(scenes):
+    s = scenes["turning_car"]
+    chassis = by_name(s, "chassis")
+    t0, t1 = s.exposure(s.render.time)
+    r0, r1 = (chassis.matrix(t)[:3, :3] for t in (t0, t1))
+    turn = np.degrees(np.arccos(np.clip((np.trace(r0.T @ r1) - 1.0) / 2.0, -1.0, 1.0)))
+    assert turn == pytest.approx(29.0, abs=0.5)
+    # Its parts ride on it, and it moves far over the textured ground seen from above.
+    parts = [o for o in s.objects if o.parent is chassis]
+    assert len(parts) == 5 and all(o.moving and not o.own_moving for o in parts)
+    assert by_name(s, "ground").material.texture is not None
+    assert displacement(s, chassis, centre(chassis)).max() > 200     # px at 1280x720

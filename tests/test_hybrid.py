@@ -105,6 +105,27 @@ def test_reveal_equals_raster_without_the_own_object(ctx, name, t):
         assert 0 < res.stats["static_layer_hits"] <= res.stats["masked_pixels"]
 
 
+def test_the_reveal_passes_the_own_objects_rigid_body(ctx):
+    """turning_car: the cabin and the wheels ride on the keyed chassis. What the car's
+    motion reveals behind any of its pixels is the road, never another part of the car
+    (the wheels hidden under the body, the chassis under the cabin: they move with it):
+    the raster of the scene without the car."""
+    scene = load_scene("turning_car")
+    res, bufs = render(ctx, scene, "hybrid", 0.0)
+    car = [o.id for o in scene.objects if o.moving]
+    assert len(car) == 6
+    cam = scene.camera
+    parked = cam.position - 1000.0 * (cam.look_at - cam.position)
+    gone = dataclasses.replace(scene, objects=[
+        dataclasses.replace(o, keys=None, parent=None, position=parked) if o.id in car else o
+        for o in scene.objects])
+    _, oracle = render(ctx, gone, "off", 0.0)
+    mask = bufs["ray_mask"]
+    for part in car[:2]:              # the chassis and the cabin
+        assert np.count_nonzero(mask == part) > 50
+    assert_layer_matches(bufs, oracle, np.isin(mask, car))
+
+
 # A camera 5 m before a wall, one light: the stage of the scenes below (named by their
 # files), which add the camera's motion and the objects.
 STAGE = """

@@ -238,6 +238,28 @@ def test_moving_own_object_reveals_the_static_wall_behind():
     assert hits.restarts == 0          # a moving object is skipped, not restarted
 
 
+def test_rigid_body_of_a_moving_own_object_is_passed_not_revealed():
+    """A wheel hidden under a moving car's body moves with it: the body's motion never
+    uncovers it, so a ray from a body pixel passes it to the ground (it was revealed,
+    a patch of wheel colour under the car). A wheel with its own spin is another body."""
+    ground = obj(1, box([20, 20, 0.2]), position=[0, 0, -4])
+    body = obj(2, box([2, 2, 0.4]), position=[0, 0, -2], velocity=[1.0, 0, 0])
+    wheel = obj(3, box([1, 1, 0.4]), position=[0, 0, -0.6])
+    wheel.parent = body
+    spun = obj(4, box([1, 1, 0.4]), position=[0, 0, -0.6], angular_velocity=[0, 0, 1.0])
+    spun.parent = body
+    o, d = down_z(1, xy=(0.0, 0.0))
+    for own_first, rest in ((body, wheel), (wheel, body)):
+        rs = RayScene(scene_of([ground, body, wheel]))
+        hits = rs.intersect(o, d, 0.0, exclude_ids=A([own_first.id]))
+        assert hits.object_id.tolist() == [1]
+        assert hits.distance[0] == pytest.approx(3.9, rel=1e-6)
+    rs = RayScene(scene_of([ground, body, spun]))
+    assert rs.intersect(o, d, 0.0, exclude_ids=A([2])).object_id.tolist() == [4]
+    rs.cull = False                     # the plain per-object row selection agrees
+    assert rs.intersect(o, d, 0.0, exclude_ids=A([2])).object_id.tolist() == [4]
+
+
 def test_static_own_object_is_passed_by_restarts():
     rs = RayScene(wall_scene(), exclusion_budget=0)
     o, d = down_z(3)

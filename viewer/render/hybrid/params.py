@@ -13,18 +13,24 @@ COMPOSITES = ("bucket", "split", "time")
 @group("hybrid")
 class HybridParams:
     # ---- motion (viewer/render/gbuffer.py, glsl/path.glsl)
-    # 1 by default: 2 segments cut whole-image FLIP to 0.70-0.96x on bending motion but
-    # double the composite (frame 1.5-2.75x McGuire's against 0.92-1.24x; docs/quality.md)
+    # 1 by default: at 640x360 2 segments cost 2.3-3.1x McGuire's frame (4: 3.1-4.8x), for
+    # whole-image FLIP 0.59-1.08x the linear blur's; curve steps give 0.27-0.83x at
+    # 1.95-2.6x (docs/performance.md "Bending motion").
     segments: int = param(1, unit="segments", choices=SEGMENT_CHOICES, effect="recompile",
                           help="linear pieces of each pixel's screen path over the "
                                "exposure (its points projected at evenly spaced times): "
-                               "tiles, ray mask and composite follow the path (rotation, "
-                               "approach, a reversal); 1 = the chord alone (the paper); 2 "
-                               "is best on spins, 4 on keyed arcs and bounces; each "
-                               "about doubles the composite")
-    # 2 where the motion bends (viewer/render/steps.py): on spinner, wheel and keys_arc
-    # whole-image FLIP 0.27-0.52x the linear blur's, outer blur 0.29-0.43x, where 2 path
-    # segments reach 0.70-0.96x (docs/quality.md); straight motion stays one frame.
+                               "tiles, ray mask and composite follow the path; 1 = the "
+                               "chord alone (the paper). Helps where objects roll, arc or "
+                               "bounce as a whole (wheel, keys_arc: 4 best); no help "
+                               "where a body turns about a point off it (turning_car, "
+                               "spinner, rover: what passes a pixel is gathered along "
+                               "one path per tile, and a turn's paths turn across the "
+                               "tile); each about doubles the composite; curve_steps "
+                               "(the default) gives less error on every bending scene "
+                               "measured, at a similar or lower cost")
+    # 2 where the motion bends (viewer/render/steps.py): whole-image FLIP 0.27-0.63x the
+    # linear blur's on wheel, spinner, keys_arc, rover, basic, turning_car, where path
+    # segments reach 0.59-1.08x (docs/performance.md); straight motion stays one frame.
     curve_steps: int = curve_steps_param(2)
     # ---- ray mask (viewer/render/hybrid/mask.py)
     min_speed: float = param(1.0, unit="px", lo=0.0, hi=64.0,
