@@ -36,7 +36,7 @@ VARIANTS = [("linear", ["hybrid.curve_steps=1"]),
 
 
 def hmblur(*args):
-    subprocess.run([sys.executable, "-m", "viewer.cli", *args], cwd=ROOT, check=True,
+    subprocess.run([sys.executable, "-m", "viewer.commands.main", *args], cwd=ROOT, check=True,
                    stdout=subprocess.DEVNULL)
 
 

@@ -1,4 +1,4 @@
-"""The post-process gathers drawn full screen against tiled (viewer/render/gather_tiles.py),
+"""The post-process gathers drawn full screen against tiled (viewer/render/passes/gather_tiles.py),
 frames interleaved in one process so both see the same machine load; with the hybrid
 composite of the same run. Medians of ctx.finish() + CPU clock times (ms).
 

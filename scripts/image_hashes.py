@@ -21,8 +21,8 @@ sys.path.insert(0, str(ROOT))
 
 from world.errors import UserError  # noqa: E402
 from viewer.glcontext import create_headless  # noqa: E402
-from viewer.imageio import linear_to_srgb8  # noqa: E402
-from viewer.params import ParamSet  # noqa: E402
+from viewer.io.imageio import linear_to_srgb8  # noqa: E402
+from viewer.render.graph.params import ParamSet  # noqa: E402
 from viewer.render.modes import MODES  # noqa: E402
 from viewer.render.renderer import Renderer  # noqa: E402
 from world.loader import load_scene  # noqa: E402

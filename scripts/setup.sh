@@ -38,6 +38,6 @@ fi
 # Compile every mode's numba kernels into their on-disk cache now (~40 s once; seconds
 # when cached), so that no first frame waits for the compiler. Not fatal: without it the
 # first frame compiles them (and says so).
-.venv/bin/python -m viewer.warmup \
+.venv/bin/python -m viewer.cli.warmup \
   || echo "setup: the kernel warm-up failed (above); the first frame will compile the kernels"
 echo "setup: done; the command is .venv/bin/hmblur ('. .venv/bin/activate' puts hmblur on the PATH)"

@@ -64,11 +64,11 @@ def synthetic_frame(ctx):
     """make(size, params=None, seed=0) -> a Frame over an empty scene; upload buffers with
     frame.pool.texture(name, spec) then frame.write(name, array) (image orientation)."""
     from world.camera import Camera
-    from viewer.params import ParamSet
-    from viewer.render.frame import Frame
+    from viewer.render.graph.params import ParamSet
+    from viewer.render.graph.frame import Frame
     from viewer.render.gpu_scene import GpuScene
-    from viewer.render.pool import ResourcePool
-    from viewer.shaders import ProgramCache
+    from viewer.render.graph.pool import ResourcePool
+    from viewer.render.graph.shaders import ProgramCache
     made = []
 
     def make(size, params=None, seed=0, scene=None):

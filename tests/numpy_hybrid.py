@@ -1,5 +1,5 @@
-"""A numpy statement of the hybrid mode's GPU passes (viewer/render/hybrid/mask.py and
-viewer/render/hybrid/composite.py), the oracle for the GLSL.
+"""A numpy statement of the hybrid mode's GPU passes (viewer/render/modes/hybrid/mask.py and
+viewer/render/modes/hybrid/composite.py), the oracle for the GLSL.
 
 Arrays are in GL orientation: row 0 is the BOTTOM row, index [y, x], displacements in GL
 window axes (x right, y up), as the fragment shaders see them. Tests flip with
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from viewer.render.hybrid.composite import MERGE_COS   # (a setting, not logic)
+from viewer.render.modes.hybrid.composite import MERGE_COS   # (a setting, not logic)
 
 F32 = np.float32
 

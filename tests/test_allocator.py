@@ -1,4 +1,4 @@
-"""viewer/render/allocator.py: with its settings, a frame's host arrays reuse memory the
+"""viewer/render/graph/allocator.py: with its settings, a frame's host arrays reuse memory the
 process already touched instead of faulting fresh pages in every time."""
 from __future__ import annotations
 
@@ -7,12 +7,12 @@ import sys
 
 import pytest
 
-from viewer.render import allocator
+from viewer.render.graph import allocator
 
 PROBE = """
 import resource, sys
 import numpy as np
-from viewer.render.allocator import keep_freed_memory
+from viewer.render.graph.allocator import keep_freed_memory
 if sys.argv[1] == "1":
     assert keep_freed_memory()
 def frame():

@@ -16,7 +16,7 @@ import pytest
 from PIL import Image
 
 from tests.conftest import CONFORMANCE, ROOT
-from viewer.cli import main
+from viewer.commands.main import main
 from world import toml_out
 from world.camera import Camera
 
@@ -192,7 +192,7 @@ def test_mistakes_are_one_line_and_exit_2(tmp_path):
 
 def shot(tmp_path, asset, *args):
     """`hmblur shot ASSET` at 320x180: (foreground mask, sidecar)."""
-    from viewer.imageio import linear_to_srgb8
+    from viewer.io.imageio import linear_to_srgb8
     from world import asset_scene
     out = tmp_path / f"{asset.stem}.png"
     p = subprocess.run([sys.executable, "-m", "viewer", "shot", str(asset), "--size", "320x180",

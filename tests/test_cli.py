@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from viewer.cli import main
+from viewer.commands.main import main
 
 from conftest import CONFORMANCE, ROOT
 
@@ -154,7 +154,7 @@ def test_every_user_mistake_is_one_line_and_exit_2(tmp_path, capsys):
 
 def test_an_error_after_a_progress_bar_starts_on_its_own_line():
     import io
-    from viewer.progress import Progress, end_line
+    from viewer.io.progress import Progress, end_line
 
     class Tty(io.StringIO):
         def isatty(self):
@@ -213,8 +213,8 @@ def test_compare_writes_images_regions_and_metrics_recomputable_from_them(tmp_pa
     """`hmblur compare`: every mode's PNG and sidecar, the reference, the region map, the
     strip, metrics.md and metrics.json (with the space the numbers are in); the same
     outputs twice over, and the metrics those of the written PNGs and region map."""
-    from viewer.metrics import image_metrics
-    from viewer.regions import INNER, OUTER
+    from viewer.eval.metrics import image_metrics
+    from viewer.render.regions import INNER, OUTER
     runs = [tmp_path / "a", tmp_path / "b"]
     for out in runs:
         assert main(["compare", BASIC, "--size", "64x40", "--samples", "4",
@@ -273,7 +273,7 @@ def test_compare_of_an_image_smaller_than_the_ssim_window(tmp_path):
 
 def test_a_write_that_fails_is_one_line_and_leaves_no_output(tmp_path, capsys, monkeypatch):
     # A full disk (ENOSPC) while compare writes its files: none of them appears.
-    import viewer.imageio as io
+    import viewer.io.imageio as io
     real = io._write_temp
     calls = []
 
@@ -321,14 +321,14 @@ def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys, ct
     assert rep["params"]["hybrid"]["range_check"] is True and rep["seed"] == 0
     from argparse import Namespace
 
-    from viewer.cliargs import setup
+    from viewer.cli.args import setup
     back = setup(Namespace(params=str(out), scene=BASIC, size=None, time=None, seed="0",
                            set=[]))
     assert back.params["hybrid"].range_check is True and back.size == (96, 54)
     # The driver's own method (CPU clock on software GL, timer queries on a GPU); times are
     # the bench's to report, not the tests' to judge: only their bookkeeping is checked.
-    from viewer.render.registry import build
-    from viewer.render.timing import PassClock, describe
+    from viewer.render.graph.registry import build
+    from viewer.render.graph.timing import PassClock, describe
     assert rep["pass_timing"] == describe(PassClock(ctx).method)
     assert set(rep["modes"]) == {"off", "mcguire", "ue4", "guertin", "hybrid"}
     for mode, r in rep["modes"].items():
@@ -365,7 +365,7 @@ def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys, ct
 
 def test_bench_animates_frame_after_frame(tmp_path, capsys, monkeypatch):
     from viewer.render.renderer import Renderer
-    from viewer.render.timing import PassClock
+    from viewer.render.graph.timing import PassClock
     times = []
     render, timed = Renderer.render, PassClock.render
     monkeypatch.setattr(Renderer, "render", lambda self, mode, t, *a, **k: (
@@ -441,7 +441,7 @@ def test_help_is_complete(capsys):
 
 
 def test_params_lists_every_parameter_from_the_dataclasses(capsys):
-    from viewer.params import GROUPS
+    from viewer.render.graph.params import GROUPS
     from viewer.render.modes import MODE_GROUPS
     assert main(["params"]) == 0
     text = capsys.readouterr().out
@@ -507,7 +507,7 @@ def test_first_scene_example_renders(tmp_path):
 
 
 def test_buffers_readme_describes_every_file(tmp_path):
-    from viewer.buffer_docs import describe
+    from viewer.io.buffer_docs import describe
     d = tmp_path / "bufs"
     for mode in ("mcguire", "ue4", "hybrid", "reference"):
         samples = ["--samples", "2"] if mode == "reference" else []
@@ -526,8 +526,8 @@ def test_buffers_readme_describes_every_file(tmp_path):
 
 
 def test_compare_writes_keyed_regions_flip_maps_and_region_definitions(tmp_path):
-    from viewer.metrics import flip_map, to_srgb
-    from viewer.strip import REGION_COLOURS, heat
+    from viewer.eval.metrics import flip_map, to_srgb
+    from viewer.eval.strip import REGION_COLOURS, heat
     out = tmp_path / "c"
     assert main(["compare", BASIC, "--size", "64x40", "--samples", "4", "--modes",
                  "off,hybrid", "--out", str(out)]) == 0
@@ -561,7 +561,7 @@ def test_compare_writes_keyed_regions_flip_maps_and_region_definitions(tmp_path)
 
 
 def test_bench_header_says_animated_and_explains_the_medians():
-    from viewer.cmd_bench import format_report
+    from viewer.commands.bench import format_report
     rv = {"masked_pixels": 10, "rays": 12, "reveal_ms": 2.0, "rays_per_s": 6e3,
           "fraction_of_embree": 0.5, "trace_ms": 1.0, "trace_rays_per_s": 1.2e4,
           "trace_fraction_of_embree": 1.0, "embree_rays_per_s": 1.2e4,
@@ -579,7 +579,7 @@ def test_bench_header_says_animated_and_explains_the_medians():
 
 
 def test_graph_prints_the_modes_passes_and_host_resources(capsys):
-    from viewer.cli import main
+    from viewer.commands.main import main
     assert main(["graph", "hybrid"]) == 0
     out = capsys.readouterr().out
     assert out.startswith("mode hybrid -> hybrid\n")

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from viewer.imageio import linear_to_srgb8
+from viewer.io.imageio import linear_to_srgb8
 from viewer.render.renderer import Renderer
-from viewer.render.reference import REGIONS
+from viewer.render.modes.reference import REGIONS
 from world.loader import load_scene
 
 from conftest import CONFORMANCE

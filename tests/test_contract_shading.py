@@ -5,8 +5,8 @@ sub-frames at the stratified times t - s/2 + (k + 0.5) s / N and clamping once."
 
 import numpy as np
 
-from viewer.imageio import linear_to_srgb8
-from viewer.params import ParamSet
+from viewer.io.imageio import linear_to_srgb8
+from viewer.render.graph.params import ParamSet
 from viewer.render.renderer import Renderer
 
 from conftest import scene_from

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from world.errors import UserError
-from viewer.params import ParamSet
+from viewer.render.graph.params import ParamSet
 from viewer.render.modes import MODES
 from viewer.render.renderer import Renderer
 from world.loader import load_scene

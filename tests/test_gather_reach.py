@@ -1,4 +1,4 @@
-"""The FINE tiles of the McGuire and UE4-style gathers (viewer/render/gather_reach.py): the
+"""The FINE tiles of the McGuire and UE4-style gathers (viewer/render/passes/gather_reach.py): the
 kernels against their pixel-by-pixel definitions, the self-tap test against the taps the
 gather takes, and the tiled draw against the full-screen one, byte for byte, on synthetic
 frames (small movers fast and slow, at the screen's edge, nothing moving, a pan) and on
@@ -15,11 +15,11 @@ import pytest
 
 import numpy_mcguire as nm
 from test_mcguire import download, params, upload
-from viewer.params import ParamSet
-from viewer.render import tile_kernels
-from viewer.render.gather_reach import self_tap_tiles
-from viewer.render.mcguire import JITTER_STREAM, mcguire_passes
-from viewer.render.ue4 import ue4_passes
+from viewer.render.graph.params import ParamSet
+from viewer.render.passes import tile_kernels
+from viewer.render.passes.gather_reach import self_tap_tiles
+from viewer.render.modes.mcguire import JITTER_STREAM, mcguire_passes
+from viewer.render.modes.ue4 import ue4_passes
 from world.conventions import to_image
 
 F32 = np.float32
@@ -159,7 +159,7 @@ def test_tiled_mcguire_is_the_full_screen_one(synthetic_frame, kw):
 def test_tiled_mcguire_draws_only_near_motion(synthetic_frame):
     """A small fast mover: its blur reaches under half the FINE tiles of the k x k tiles
     whose NeighborMax lookup runs."""
-    from viewer.render.gather_tiles import within_reach
+    from viewer.render.passes.gather_tiles import within_reach
     size, k = (320, 192), 32
     frame = synthetic_frame(size, params(k / 320))
     disp = np.zeros((192, 320, 2))

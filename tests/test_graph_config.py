@@ -1,17 +1,17 @@
-"""Pipelines built for their configuration (viewer/render/registry.py): the passes, textures
+"""Pipelines built for their configuration (viewer/render/graph/registry.py): the passes, textures
 and read-backs of what runs, cached per (mode, configuration), with texture accesses and
-read-backs checked while a pipeline runs as host resources are (viewer/render/pool.py)."""
+read-backs checked while a pipeline runs as host resources are (viewer/render/graph/pool.py)."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from viewer.params import ParamSet
-from viewer.render.hybrid.config import HybridConfig
+from viewer.render.graph.params import ParamSet
+from viewer.render.modes.hybrid.config import HybridConfig
 from viewer.render.modes import MODES
-from viewer.render.passes import FullscreenPass, Pass, Pipeline
-from viewer.render.pool import ReadBack, TexSpec
-from viewer.render.registry import build, mode_config
+from viewer.render.graph.passes import FullscreenPass, Pass, Pipeline
+from viewer.render.graph.pool import ReadBack, TexSpec
+from viewer.render.graph.registry import build, mode_config
 from viewer.render.renderer import Renderer
 from world.loader import load_scene
 
@@ -81,7 +81,7 @@ def test_post_process_paths_only_with_segments(mode):
 
 
 def test_graph_shows_the_configuration_and_counts(capsys):
-    from viewer.cli import main
+    from viewer.commands.main import main
     assert main(["graph", "hybrid", "--set", "hybrid.segments=4",
                  "--set", "hybrid.range_check=true"]) == 0
     out = capsys.readouterr().out.splitlines()
@@ -194,7 +194,7 @@ def test_every_mode_runs_under_its_checks(ctx, monkeypatch):
     texture access and read-back checked (a pass touching what it does not declare
     raises); each read-back the graph lists as every frame's happens, and no other than
     it lists."""
-    from viewer.render.pool import ResourcePool
+    from viewer.render.graph.pool import ResourcePool
     seen = []
     read_back = ResourcePool.read_back
 

@@ -16,12 +16,11 @@ from numpy_ue4 import ign
 from test_mcguire import (assert_still_scene_unchanged, download, images_per_seed,
                           random_velocities, render_basic, two_layer_scene, upload)
 from test_mcguire import params as mcguire_params
-from viewer.render.blur_common import max_radius_px
-from viewer.render.guertin import EARLY_OUT_PX, TAP_NOISE, TILE_STREAM_X, TILE_STREAM_Y, \
-    guertin_passes
-from viewer.render.mcguire import mcguire_passes
-from viewer.render.reference import REGIONS
-from viewer.render.ue4 import ue4_passes
+from viewer.render.passes.blur_common import max_radius_px
+from viewer.render.modes.guertin import EARLY_OUT_PX, TAP_NOISE, TILE_STREAM_X, TILE_STREAM_Y, guertin_passes
+from viewer.render.modes.mcguire import mcguire_passes
+from viewer.render.modes.reference import REGIONS
+from viewer.render.modes.ue4 import ue4_passes
 
 SIZE = (32, 16)
 STREAMS = (TAP_NOISE, TILE_STREAM_X, TILE_STREAM_Y)
@@ -255,7 +254,7 @@ MODES = {"guertin": (guertin_passes, "guertin"), "mcguire": (mcguire_passes, "mc
 def test_within_reach_is_the_pixelwise_rule(size, tile, reach):
     """A FINE tile is listed exactly when one of its pixels has a moving lookup tile
     within reach px (the pixel offset on each axis, clamped to the screen)."""
-    from viewer.render.gather_tiles import within_reach
+    from viewer.render.passes.gather_tiles import within_reach
     w, h = size
     rng = np.random.default_rng(9)
     moving = rng.uniform(size=(-(-h // tile), -(-w // tile))) < 0.08
@@ -303,8 +302,8 @@ def test_tiled_gather_is_the_full_screen_one(synthetic_frame, mode):
 # ---- the whole mode --------------------------------------------------------------------------
 
 def test_mode_beats_off_on_basic(ctx):
-    from viewer.metrics import image_metrics
-    from viewer.regions import OUTER
+    from viewer.eval.metrics import image_metrics
+    from viewer.render.regions import OUTER
     ref, images, names = render_basic(ctx, ("off", "guertin"))
     region = ref.host[REGIONS]
     assert (region == OUTER).sum() > 50

@@ -14,7 +14,7 @@ from hypothesis import given, settings, strategies as st
 from PIL import Image
 
 from conftest import CONFORMANCE, ROOT
-from viewer.cli import main
+from viewer.commands.main import main
 from world import limits
 from world import loader as loader_mod
 from world.errors import SceneError, UserError, printable

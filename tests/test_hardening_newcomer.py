@@ -15,10 +15,11 @@ import numpy as np
 import pytest
 
 from conftest import CONFORMANCE, ROOT
-from viewer import cliargs, cmd_compare
-from viewer.cli import main
+from viewer.cli import args as cliargs
+from viewer.commands import compare as cmd_compare
+from viewer.commands.main import main
 from viewer.render.modes import MODES
-from viewer.strip import GAP, error_strip, heat, make_strip
+from viewer.eval.strip import GAP, error_strip, heat, make_strip
 from world.loader import builtin_scene_names
 
 BASIC = str(CONFORMANCE / "basic.toml")
@@ -28,8 +29,8 @@ BASIC = str(CONFORMANCE / "basic.toml")
 PROBE = textwrap.dedent("""
     import importlib, json, sys
     from numba.core.registry import CPUDispatcher
-    MODULES = ["raytrace.kernels", "viewer.render.tile_kernels",
-               "viewer.render.hybrid.reveal_kernels", "world.camera"]
+    MODULES = ["raytrace.kernels", "viewer.render.passes.tile_kernels",
+               "viewer.render.modes.hybrid.reveal_kernels", "world.camera"]
     def signatures():
         out = {}
         for m in MODULES:
@@ -37,11 +38,11 @@ PROBE = textwrap.dedent("""
                 if isinstance(v, CPUDispatcher) and v.py_func.__module__ == m:
                     out[f"{m}.{k}"] = sorted(map(str, v.signatures))
         return out
-    from viewer.warmup import warm_up
+    from viewer.cli.warmup import warm_up
     warm_up()
     before = signatures()
     from viewer.glcontext import create_headless
-    from viewer.params import ParamSet
+    from viewer.render.graph.params import ParamSet
     from viewer.render.modes import MODES, MODE_GROUPS
     from viewer.render.renderer import Renderer
     from world.loader import builtin_scene_names, builtin_scene_path, load_scene
@@ -153,10 +154,10 @@ def test_setup_waits_for_the_apt_lock_and_installs_only_what_changed(tmp_path):
     apt = [c for c in first if c.startswith("apt-get")]
     assert len(apt) == 2 and all("-o DPkg::Lock::Timeout=600" in c for c in apt)
     assert any("pip install -q -e .[test]" in c for c in first)
-    assert any("-m viewer.warmup" in c for c in first)
+    assert any("-m viewer.cli.warmup" in c for c in first)
     second = run()
     assert not any(c.startswith("apt-get") or "pip install" in c for c in second), second
-    assert any("-m viewer.warmup" in c for c in second)
+    assert any("-m viewer.cli.warmup" in c for c in second)
     (tree / "pyproject.toml").write_text((ROOT / "pyproject.toml").read_text() + "\n# changed\n")
     assert any("pip install -q -e .[test]" in c for c in run())
 

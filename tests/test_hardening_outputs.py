@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from viewer.cli import main
+from viewer.commands.main import main
 from world.camera import Camera
 from world.path_bend import FRACTIONS, screen_bend
 

@@ -74,7 +74,7 @@ def test_sigterm_during_a_video_leaves_nothing(tmp_path, out):
 def test_an_ignored_sighup_stays_ignored():
     # nohup's promise: a SIGHUP ignored before hmblur starts is not turned into an exit.
     code = ("import signal; signal.signal(signal.SIGHUP, signal.SIG_IGN);"
-            "from viewer.cli import catch_signals; catch_signals();"
+            "from viewer.commands.main import catch_signals; catch_signals();"
             "assert signal.getsignal(signal.SIGHUP) is signal.SIG_IGN;"
             "assert signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL")
     subprocess.run([sys.executable, "-c", code], cwd=ROOT, check=True)

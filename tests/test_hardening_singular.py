@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from viewer.params import ParamSet
+from viewer.render.graph.params import ParamSet
 from viewer.render.modes import MODES
 from viewer.render.renderer import Renderer
 from world import transforms as tf
@@ -148,7 +148,7 @@ CROSSING_CAMERA = """
 def test_a_keyed_camera_whose_look_at_meets_its_eye_is_one_line(tmp_path, capsys):
     # The eye passes through look_at at t = 0.5: no view exists there (it flips), so no
     # limit either: one line naming the keys and the time; other times render.
-    from viewer.cli import main
+    from viewer.commands.main import main
     p = tmp_path / "cam.toml"
     p.write_text(textwrap.dedent(CROSSING_CAMERA.format(t=0.5)))
     assert main(["shot", str(p), "--mode", "off", "--out", str(tmp_path / "a.png")]) == 2

@@ -1,21 +1,22 @@
-"""Host-side resources declared like textures (viewer/render/host.py), state kept across
-frames in the renderer (viewer/render/kept.py), and the pipeline graph that shows both."""
+"""Host-side resources declared like textures (viewer/render/graph/host.py), state kept across
+frames in the renderer (viewer/render/graph/kept.py), and the pipeline graph that shows both."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from viewer.params import ParamSet
-from viewer.render.host import HostResource, HostResources
-from viewer.render.kept import KeptSlot, KeptState
+from viewer.render.graph.params import ParamSet
+from viewer.render.graph.host import HostResource, HostResources
+from viewer.render.graph.kept import KeptSlot, KeptState
 from viewer.render.modes import MODES
-from viewer.render.passes import Pass, Pipeline
-from viewer.render.registry import build
-from viewer.render.hybrid.mask import SurfaceTests
-from viewer.render.reference import REGIONS
+from viewer.render.graph.passes import Pass, Pipeline
+from viewer.render.graph.registry import build
+from viewer.render.modes.hybrid.mask import SurfaceTests
+from viewer.render.modes.reference import REGIONS
 from viewer.render.renderer import Renderer
-from viewer.render.hybrid.reveal import MASKED_PIXELS
-from viewer.render.tile_lists import MotionTiles, SelectTiles, kept_tile_list
+from viewer.render.modes.hybrid.reveal import MASKED_PIXELS
+from viewer.render.passes.tile_runs import kept_tile_list
+from viewer.render.modes.hybrid.tile_select import MotionTiles, SelectTiles
 from world.loader import load_scene
 
 from conftest import CONFORMANCE

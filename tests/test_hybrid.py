@@ -1,4 +1,4 @@
-"""The hybrid mode (viewer/render/hybrid/pipeline.py): the ray reveal against a raster oracle (the
+"""The hybrid mode (viewer/render/modes/hybrid/pipeline.py): the ray reveal against a raster oracle (the
 scene rendered without the pixel's own object), same-coloured objects,
 transforms at t != 0, the composite against tests/numpy_hybrid.py and the analytic box
 shutter, determinism, an empty mask, and the whole mode against the reference.
@@ -15,17 +15,17 @@ import numpy_hybrid as nh
 import numpy_mcguire as nm
 from conftest import CONFORMANCE
 from world.conventions import to_image
-from viewer.metrics import image_metrics
-from viewer.params import ParamSet
-from viewer.render.blur_common import max_radius_px
-from viewer.render.gbuffer import GBUFFER
-from viewer.render.hybrid.composite import composite_kind, composite_passes, mask_tiles
+from viewer.eval.metrics import image_metrics
+from viewer.render.graph.params import ParamSet
+from viewer.render.passes.blur_common import max_radius_px
+from viewer.render.passes.gbuffer import GBUFFER
+from viewer.render.modes.hybrid.composite import composite_kind, composite_passes, mask_tiles
 from viewer.render.modes import MODES
-from viewer.render.pool import TexSpec
+from viewer.render.graph.pool import TexSpec
 from viewer.render.renderer import Renderer
-from viewer.render.reference import REGIONS
-from viewer.render.hybrid.reveal import BACK, PACKED, REVEAL_BATCH, shade_draws
-from viewer.render.tile_lists import KEPT_LISTS
+from viewer.render.modes.reference import REGIONS
+from viewer.render.modes.hybrid.reveal import BACK, PACKED, REVEAL_BATCH, shade_draws
+from viewer.render.modes.hybrid.tile_select import KEPT_LISTS
 from world.loader import load_scene
 
 SMALL = (160, 90)
@@ -201,7 +201,7 @@ def test_many_revealed_objects_are_shaded_by_few_draws_like_the_raster(ctx, monk
     """crowd_pan (32 movers, moving camera): every revealed object in one draw of the
     object table, each the raster without the pixel's own object; with 4 objects to a
     row of the table too (its records over 9 rows, as past 256 objects)."""
-    from viewer.render.hybrid.reveal import ObjectTable
+    from viewer.render.modes.hybrid.reveal import ObjectTable
     from world.loader import builtin_dir
     monkeypatch.setattr(ObjectTable, "OBJECTS_PER_ROW", per_row)
     scene = load_scene(builtin_dir() / "bench" / "crowd_pan.toml")
@@ -221,7 +221,7 @@ def test_the_reveal_takes_the_movers_matrices_from_the_frame(ctx, monkeypatch):
     (asking 32 objects again cost ~0.2 ms in the frame), equal to SceneObject.matrix(t);
     its hits are those of asking each object."""
     from raytrace import reveal
-    from viewer.render.hybrid.reveal import frame_models, reveal_state
+    from viewer.render.modes.hybrid.reveal import frame_models, reveal_state
     from world.scene import SceneObject
     from world.loader import builtin_dir
     scene = load_scene(builtin_dir() / "bench" / "crowd_pan.toml")
@@ -600,7 +600,7 @@ def test_inner_blur_beats_the_post_process_modes_on_basic(ctx):
 def test_split_composite_is_time_near_the_mask_and_bucket_elsewhere(ctx):
     # A moving camera: each active tile holds exactly what the time-sampled or the bucketed
     # composite gives there; the time tiles are those within reach of a masked pixel.
-    from viewer.render.tile_lists import FINE
+    from viewer.render.passes.tile_runs import FINE
     scene = load_scene(CONFORMANCE / "vase_pan.toml")
     size = (160, 90)
     r = Renderer(ctx, scene, size)
@@ -645,8 +645,8 @@ def test_mask_tiles_are_made_only_where_the_time_composite_reads_them(ctx):
 
 
 def test_split_tiles_hand_values():
-    from viewer.render.hybrid.composite import split_tiles
-    from viewer.render.tile_lists import FINE
+    from viewer.render.modes.hybrid.composite import split_tiles
+    from viewer.render.passes.tile_runs import FINE
     active = np.ones((3, 6), bool)
     active[0, 5] = False
     # One masked pixel in image row 0 of a 48-row screen: GL row 47, tile row 2; column 20

@@ -6,9 +6,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from viewer import imageio
-from viewer.imageio import (json_safe, linear_to_srgb8, srgb8_to_linear, srgb_float,
-                            write_json_atomic, write_npy_atomic, write_png_atomic)
+from viewer.io import imageio
+from viewer.io.imageio import json_safe, linear_to_srgb8, srgb8_to_linear, srgb_float, write_json_atomic, write_npy_atomic, write_png_atomic
 
 CONF = Path(__file__).parent / "conformance"
 
@@ -181,7 +180,7 @@ def test_npy_round_trip(tmp_path):
 
 
 def test_output_set_writes_all_or_nothing(tmp_path):
-    from viewer.imageio import OutputSet
+    from viewer.io.imageio import OutputSet
     files = OutputSet()
     files.png(tmp_path / "new" / "a.png", np.zeros((2, 3, 3), np.uint8))
     files.json(tmp_path / "new" / "a.json", {"x": 1})

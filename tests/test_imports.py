@@ -130,7 +130,7 @@ def _upward(m: str, t: str) -> bool:
     return ((below_viewer and t.startswith("viewer"))
             or (m.startswith(("world", "glsl", "scenes")) and t.startswith("raytrace"))
             or (m.startswith("viewer.render") and t.startswith(
-                ("viewer.ui", "viewer.app", "viewer.cmd_", "viewer.cli", "viewer.__main__"))))
+                ("viewer.ui", "viewer.ui.app", "viewer.cmd_", "viewer.commands.main", "viewer.__main__"))))
 
 
 def test_lower_layers_do_not_import_upper_ones():

@@ -11,7 +11,7 @@ import pytest
 
 from world import transforms as tf
 from world.camera import Camera
-from viewer.cli import main
+from viewer.commands.main import main
 from world.loader import check_camera, load_scene, merge_camera
 
 CAMERA = """[camera]

@@ -14,12 +14,12 @@ import numpy_mcguire as nm
 from conftest import CONFORMANCE
 from glsl import DIR as GLSL_DIR
 from world.conventions import to_image
-from viewer.params import ParamSet
-from viewer.render.blur_common import max_radius_px
-from viewer.render.gbuffer import GBUFFER
-from viewer.render.mcguire import EARLY_OUT_PX, JITTER_STREAM, mcguire_passes
-from viewer.render.tiles import TileMaxPass
-from viewer.render.reference import REGIONS
+from viewer.render.graph.params import ParamSet
+from viewer.render.passes.blur_common import max_radius_px
+from viewer.render.passes.gbuffer import GBUFFER
+from viewer.render.modes.mcguire import EARLY_OUT_PX, JITTER_STREAM, mcguire_passes
+from viewer.render.passes.tiles import TileMaxPass
+from viewer.render.modes.reference import REGIONS
 
 SIZE = (32, 16)          # W, H
 
@@ -400,8 +400,8 @@ def render_basic(ctx, modes, size=(160, 90)):
 
 
 def test_mode_beats_off_in_outer_blur_on_basic(ctx):
-    from viewer.regions import OUTER
-    from viewer.metrics import image_metrics
+    from viewer.render.regions import OUTER
+    from viewer.eval.metrics import image_metrics
     ref, images, names = render_basic(ctx, ("off", "mcguire"))
     off, mc = images["off"], images["mcguire"]
     region = ref.host[REGIONS]

@@ -12,9 +12,9 @@ def test_wheel_contains_code_shaders_and_scenes(tmp_path):
                     "-q", "-w", str(tmp_path), str(ROOT)], check=True, capture_output=True)
     wheel = next(tmp_path.glob("hybrid_mblur-*.whl"))
     names = set(zipfile.ZipFile(wheel).namelist())
-    need = {"viewer/cli.py", "viewer/render/renderer.py", "viewer/render/gbuffer.py",
+    need = {"viewer/commands/main.py", "viewer/render/renderer.py", "viewer/render/passes/gbuffer.py",
             "raytrace/embree_scene.py", "world/loader.py", "world/scene.py",
-            "world/camera.py", "viewer/render/hybrid/pipeline.py", "glsl/gbuffer.frag",
+            "world/camera.py", "viewer/render/modes/hybrid/pipeline.py", "glsl/gbuffer.frag",
             "glsl/shading.glsl",
             "glsl/fullscreen.vert", "scenes/living_room.toml", "scenes/assets/painting.png",
             "scenes/assets/quad_uv.obj", "scenes/rover.toml", "scenes/assets/rover.glb"}
@@ -29,4 +29,4 @@ def test_wheel_contains_code_shaders_and_scenes(tmp_path):
     assert not any(n.startswith("tests/") for n in names)
     entry = [n for n in names if n.endswith("entry_points.txt")]
     text = zipfile.ZipFile(wheel).read(entry[0]).decode()
-    assert "hmblur = viewer.cli:main" in text
+    assert "hmblur = viewer.commands.main:main" in text

@@ -16,13 +16,13 @@ import numpy_hybrid as nh
 from conftest import CONFORMANCE
 from world.camera import Camera
 from world.conventions import to_image
-from viewer.params import ParamSet
-from viewer.render.gbuffer import GBUFFER, path_targets, path_times
-from viewer.render.hybrid.composite import composite_passes
-from viewer.render.hybrid.config import HybridConfig
-from viewer.render.hybrid.mask import raymask_passes
+from viewer.render.graph.params import ParamSet
+from viewer.render.passes.gbuffer import GBUFFER, path_targets, path_times
+from viewer.render.modes.hybrid.composite import composite_passes
+from viewer.render.modes.hybrid.config import HybridConfig
+from viewer.render.modes.hybrid.mask import raymask_passes
 from viewer.render.renderer import Renderer
-from viewer.render.hybrid.reveal import BACK, PACKED
+from viewer.render.modes.hybrid.reveal import BACK, PACKED
 from world.loader import load_scene
 from raytrace import RayScene
 from raytrace.reveal import reveal
@@ -263,8 +263,8 @@ def test_a_reversal_is_blurred_by_the_composite(synthetic_frame):
 def test_path_buffers_are_shown_as_motion():
     # The viewer's buffer view and the --buffers pictures draw a path target's first point
     # as a velocity (colour wheel), not as a colour.
-    from viewer.render.debug_view import auto_kind
-    from viewer.visualize import colour_wheel, visualise
+    from viewer.render.passes.debug_view import auto_kind
+    from viewer.io.visualize import colour_wheel, visualise
     for name in path_targets(4):
         assert auto_kind(name, GBUFFER[name]) == ("velocity", 0)
     a = np.random.default_rng(0).normal(size=(3, 5, 4)).astype(np.float32)

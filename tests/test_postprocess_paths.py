@@ -16,11 +16,11 @@ import pytest
 import numpy_mcguire as nm
 from conftest import CONFORMANCE
 from world.conventions import to_image
-from viewer.params import ParamSet
-from viewer.render.blur_common import max_radius_px
-from viewer.render.gbuffer import GBUFFER
-from viewer.render.mcguire import EARLY_OUT_PX, JITTER_STREAM, Gather
-from viewer.render.pool import TexSpec
+from viewer.render.graph.params import ParamSet
+from viewer.render.passes.blur_common import max_radius_px
+from viewer.render.passes.gbuffer import GBUFFER
+from viewer.render.modes.mcguire import EARLY_OUT_PX, JITTER_STREAM, Gather
+from viewer.render.graph.pool import TexSpec
 from viewer.render.renderer import Renderer
 from world.loader import load_scene
 
@@ -199,7 +199,7 @@ def test_rotation_is_closer_to_the_reference_with_two_segments(ctx, mode):
 def test_ue4_straight_path_is_the_linear_filter(synthetic_frame):
     """Straight uniform paths (o_k = (k/K - 1/2) D): the UE4-style passes with two
     segments reproduce the linear filter (taps, spreads and tiles are the same numbers)."""
-    from viewer.render.ue4 import ue4_passes
+    from viewer.render.modes.ue4 import ue4_passes
     rng = np.random.default_rng(5)
     w, h = SIZE
     color = rng.uniform(0, 1, (h, w, 3))

@@ -2,7 +2,7 @@
 just above what the modes measure, so a quality regression turns the suite red.
 
 160x90, the reference with 16 sub-frames (its per-sub-frame visibility classifies the
-regions: viewer/regions.py), every frame at the scene's own time. The modes are MODES'
+regions: viewer/render/regions.py), every frame at the scene's own time. The modes are MODES'
 (the reference aside): a new mode joins by itself, held to the worst bound of the
 post-process modes (mcguire, ue4) until it has its own. Rerun the measurement with
 `python tests/test_quality_matrix.py` (prints the table below with measured values).
@@ -14,11 +14,11 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from viewer.metrics import image_metrics  # noqa: E402
-from viewer.params import ParamSet  # noqa: E402
+from viewer.eval.metrics import image_metrics  # noqa: E402
+from viewer.render.graph.params import ParamSet  # noqa: E402
 from viewer.render.modes import MODES  # noqa: E402
 from viewer.render.renderer import Renderer  # noqa: E402
-from viewer.render.reference import REGIONS as REGION_MAP  # noqa: E402
+from viewer.render.modes.reference import REGIONS as REGION_MAP  # noqa: E402
 from world.loader import builtin_scene_names, builtin_scene_path, load_scene  # noqa: E402
 
 SIZE, SAMPLES = (160, 90), 16

@@ -1,4 +1,4 @@
-"""The hybrid ray mask (viewer/render/hybrid/mask.py): each pass on tiny synthetic buffers
+"""The hybrid ray mask (viewer/render/modes/hybrid/mask.py): each pass on tiny synthetic buffers
 against tests/numpy_hybrid.py, and the numpy statement itself against hand-computed bands.
 
 Arrays here are in GL orientation (row 0 at the bottom, displacement y up) like the numpy
@@ -11,11 +11,11 @@ import pytest
 
 import numpy_hybrid as nh
 from world.conventions import BACKGROUND_DEPTH, to_image
-from viewer.params import ParamSet
-from viewer.render.blur_common import max_radius_px
-from viewer.render.gbuffer import GBUFFER
-from viewer.render.hybrid.config import HybridConfig
-from viewer.render.hybrid.mask import raymask_passes
+from viewer.render.graph.params import ParamSet
+from viewer.render.passes.blur_common import max_radius_px
+from viewer.render.passes.gbuffer import GBUFFER
+from viewer.render.modes.hybrid.config import HybridConfig
+from viewer.render.modes.hybrid.mask import raymask_passes
 
 W, H = 40, 6
 BAR = (12, 24)                 # columns of the bar, [x0, x1)
@@ -221,7 +221,7 @@ def test_random_layers_match_numpy(synthetic_frame, seed):
     assert np.count_nonzero(mask == 2) > 10 and np.count_nonzero(mask == 3) > 5
     k = max_radius_px(frame)
     # The reveal's tile summary, from the masked pixels it reads back (image rows).
-    from viewer.render.hybrid.composite import mask_tiles
+    from viewer.render.modes.hybrid.composite import mask_tiles
     jj, ii = np.nonzero(got["ray_mask"])
     np.testing.assert_array_equal(mask_tiles(np.c_[ii, jj], (w, h), k),
                                   to_image(nh.tile_summary(mask, k)))
@@ -260,7 +260,7 @@ def test_masked_pixels_read_in_image_order_from_gl_rows():
     # The reveal's read-back: the nonzero pixels of a GL-orientation window in image order
     # (top row first) with the window's top-left image pixel added, and their values.
     # Widths below, at and past its runs of 8 pixels; dense, banded and empty windows.
-    from viewer.render.hybrid.reveal_kernels import nonzero_pixels
+    from viewer.render.modes.hybrid.reveal_kernels import nonzero_pixels
     rng = np.random.default_rng(5)
     for h, w, density in ((7, 9, 0.5), (5, 8, 0.9), (12, 31, 0.05), (40, 64, 0.01),
                           (3, 7, 1.0), (6, 17, 0.0), (1, 1, 1.0)):
@@ -318,7 +318,7 @@ def wide_bar_masks(synthetic_frame, bg_disp):
     """A bar (columns 40-199 of 240 x 48, id 2, depth 2) moving 60 px over a wall (id 1,
     depth 10) moving bg_disp: (stats with tile lists, masks with tile lists, masks of the
     full-screen passes), masks in image orientation."""
-    from viewer.render.tile_lists import selection_passes
+    from viewer.render.modes.hybrid.tile_select import selection_passes
     w, h, bar = 240, 48, (40, 200)
     depth = np.full((h, w), 10.0)
     ids = np.ones((h, w), np.uint32)

@@ -920,7 +920,7 @@ def test_record_inputs_match_their_numpy_statements(static_key):
     prim_id = np.where(object_id != 0, rng.integers(0, 30, n), -1).astype(np.int32)
     face_offset = np.array([0, 0, 30, 70], np.int64)
     static_view = rng.uniform(size=n) < 0.3
-    from viewer.render.hybrid.reveal_kernels import record_inputs
+    from viewer.render.modes.hybrid.reveal_kernels import record_inputs
     gx, gy, key, face = record_inputs(px, height, object_id, prim_id, face_offset,
                                       static_view, static_key)
     np.testing.assert_array_equal(gx, px[:, 0])

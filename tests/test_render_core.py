@@ -8,8 +8,8 @@ import pytest
 from conftest import CONFORMANCE, scene_from
 from world.camera import Camera
 from world.conventions import BACKGROUND_DEPTH
-from viewer.imageio import linear_to_srgb8
-from viewer.params import ParamSet
+from viewer.io.imageio import linear_to_srgb8
+from viewer.render.graph.params import ParamSet
 from viewer.render.renderer import Renderer
 from world.loader import load_scene
 
@@ -296,7 +296,7 @@ def test_pass_timer_splits_host_cpu_from_waiting(monkeypatch):
     # pass_cpu_ms the main thread's CPU time in the pass; repeats add up. Scripted clocks
     # and a recording context: the arithmetic and the order, no real time.
     from types import SimpleNamespace
-    from viewer.render import frame as frame_mod
+    from viewer.render.graph import frame as frame_mod
     log, wall, cpu = [], [10.0], [3.0]
     clock = SimpleNamespace(perf_counter=lambda: (log.append("wall"), wall[0])[1],
                             thread_time=lambda: (log.append("cpu"), cpu[0])[1])
@@ -498,9 +498,9 @@ def test_an_image_texture_past_the_drivers_size_limit_is_a_scene_error(ctx, tmp_
 def test_depth_holds_with_a_tiny_near_and_far_surfaces(ctx, tmp_path, mode):
     """near 1e-4: the standard mapping in a 24-bit buffer rounded a wall at 2000 m to
     depth 1 (gone), and a box 30 m behind another at 1000 m showed through it. With
-    reversed Z in a float buffer (viewer/render/depth.py) both render as a ray caster
+    reversed Z in a float buffer (viewer/render/passes/depth.py) both render as a ray caster
     sees them."""
-    from viewer.render import depth
+    from viewer.render.passes import depth
     assert depth.reversed_z(ctx)                 # (llvmpipe: GL 4.5)
     sc = scene_from(tmp_path, """
         background = [0.0, 0.0, 1.0]

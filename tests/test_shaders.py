@@ -1,7 +1,7 @@
 """The GLSL preprocessor: include-once, defines after #version, errors as file:line."""
 import pytest
 
-from viewer.shaders import LINE_BASE, ShaderError, build_program, preprocess
+from viewer.render.graph.shaders import LINE_BASE, ShaderError, build_program, preprocess
 
 
 @pytest.fixture
@@ -43,7 +43,7 @@ def test_missing_include_is_reported(glsl_dir):
 
 def test_shipped_shaders_compile(ctx):
     from world.conventions import glsl_defines
-    from viewer.render.gbuffer import LAYOUTS, layout_defines
+    from viewer.render.passes.gbuffer import LAYOUTS, layout_defines
     from viewer.render.gpu_scene import TEX_KINDS
     kinds = {f"TEX_{k.upper()}": v for k, v in TEX_KINDS.items() if k}
     for layout in LAYOUTS:

@@ -128,7 +128,7 @@ def test_the_pair_differs_only_in_skinning(pair):
     ("off", {}), ("mcguire", {}), ("ue4", {}), ("guertin", {}), ("hybrid", {}),
     ("hybrid", {"hybrid.segments": 4}), ("reference", {"reference.samples": 16})])
 def test_skinned_path_renders_like_rigid_path(pair, mode, params):
-    from viewer.params import ParamSet
+    from viewer.render.graph.params import ParamSet
     ctx = _context()
     images = []
     for sc in pair:

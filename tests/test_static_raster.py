@@ -1,4 +1,4 @@
-"""The G-buffer's kept static raster (viewer/render/static_raster.py): under a still camera
+"""The G-buffer's kept static raster (viewer/render/passes/static_raster.py): under a still camera
 a renderer that copies the statics in and draws only the movers makes every target the
 full draw makes, bit for bit, ties included; a moved camera, a moving one or a new size
 never finds a stale raster."""
@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from conftest import scene_from
-from viewer.params import ParamSet
-from viewer.render import static_raster
-from viewer.render.gbuffer import GBUFFER, LAYOUTS, GBufferPass
+from viewer.render.graph.params import ParamSet
+from viewer.render.passes import static_raster
+from viewer.render.passes.gbuffer import GBUFFER, LAYOUTS, GBufferPass
 from viewer.render.renderer import Renderer
 
 SIZE = (96, 64)

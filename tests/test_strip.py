@@ -4,11 +4,9 @@ import math
 import numpy as np
 import pytest
 
-from viewer.imageio import srgb8_to_linear
-from viewer.regions import INNER, OUTER, STATIC
-from viewer.strip import (BACKGROUND, BOX, GAP, HEAT_RGB, REGION_COLOURS, choose_inset, font_size,
-                          heat, line_height, make_strip, metrics_json, metrics_markdown,
-                          metrics_rows, region_picture)
+from viewer.io.imageio import srgb8_to_linear
+from viewer.render.regions import INNER, OUTER, STATIC
+from viewer.eval.strip import BACKGROUND, BOX, GAP, HEAT_RGB, REGION_COLOURS, choose_inset, font_size, heat, line_height, make_strip, metrics_json, metrics_markdown, metrics_rows, region_picture
 
 LH = line_height(20)     # label row height beside 20 px tall images
 
@@ -169,7 +167,7 @@ def test_json_rows():
 
 
 def test_table_from_image_metrics():
-    from viewer.metrics import image_metrics
+    from viewer.eval.metrics import image_metrics
     rng = np.random.default_rng(2)
     ref = rng.random((12, 12, 3))
     region = np.zeros((12, 12), np.uint8)

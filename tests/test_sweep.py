@@ -8,7 +8,7 @@ import textwrap
 import pyarrow.parquet as pq
 import pytest
 
-from viewer.cli import main, version
+from viewer.commands.main import main, version
 from viewer.sweep import run as sweep_run
 from viewer.sweep.bundle import materialise, scene_bundle
 from viewer.sweep.cells import run_cell

@@ -1,4 +1,4 @@
-"""Tile lists (viewer/render/tile_lists.py): the hybrid passes drawn only on listed tiles
+"""Tile lists (viewer/render/modes/hybrid/tile_select.py): the hybrid passes drawn only on listed tiles
 give the same pixels as drawn full screen; the tile selection itself against hand values."""
 from __future__ import annotations
 
@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 
 from conftest import CONFORMANCE
-from viewer.params import ParamSet
-from viewer.render import tile_kernels, tile_lists
-from viewer.render.hybrid import composite as hybrid_composite
+from viewer.render.graph.params import ParamSet
+from viewer.render.passes import tile_kernels, tile_runs
+from viewer.render.modes.hybrid import tile_select
+from viewer.render.modes.hybrid import composite as hybrid_composite
 from viewer.render.renderer import Renderer
 from world.loader import load_scene
 
@@ -17,7 +18,7 @@ SIZE = (200, 112)
 
 def render_buffers(ctx, scene, p, full_screen: bool, monkeypatch, size=SIZE):
     if full_screen:
-        monkeypatch.setattr(tile_lists.SelectTiles, "execute", lambda self, frame: None)
+        monkeypatch.setattr(tile_select.SelectTiles, "execute", lambda self, frame: None)
     r = Renderer(ctx, scene, size)
     try:
         res = r.render("hybrid", scene.render.time, p)
@@ -59,7 +60,7 @@ def test_tiled_passes_equal_full_screen(ctx, monkeypatch, name, composite, range
 
 def test_moving_tiles_use_the_mask_speed_test():
     longest = np.array([[0.0, 0.99, 1.0, 5.0]], np.float32)
-    np.testing.assert_array_equal(tile_lists.moving_tiles(longest, 1.0),
+    np.testing.assert_array_equal(tile_select.moving_tiles(longest, 1.0),
                                   [[False, False, True, True]])
 
 
@@ -67,16 +68,16 @@ def test_active_tiles_reach_half_the_displacement_plus_tolerance():
     tile = 16
     longest = np.zeros((1, 12), np.float32)
     longest[0, 5] = 40.0         # reach 20 + 0.65 + 1 = 21.65 px: gaps 0 and 16 px
-    got = tile_lists.active_tiles(longest, tile, max_disp=200.0, tolerance=0.65)
+    got = tile_select.active_tiles(longest, tile, max_disp=200.0, tolerance=0.65)
     np.testing.assert_array_equal(np.flatnonzero(got[0]), [3, 4, 5, 6, 7])
     # The displacement is clamped to the blur limit before it reaches anything.
-    got = tile_lists.active_tiles(longest, tile, max_disp=20.0, tolerance=0.65)
+    got = tile_select.active_tiles(longest, tile, max_disp=20.0, tolerance=0.65)
     np.testing.assert_array_equal(np.flatnonzero(got[0]), [4, 5, 6])
     # Nothing moves: nothing is active.
-    assert not tile_lists.active_tiles(np.zeros((3, 3), np.float32), tile, 50.0, 0.65).any()
+    assert not tile_select.active_tiles(np.zeros((3, 3), np.float32), tile, 50.0, 0.65).any()
 
 
-def quad_rects(tl: tile_lists.TileList, stride: int) -> np.ndarray:
+def quad_rects(tl: tile_runs.TileList, stride: int) -> np.ndarray:
     """The (x0, y0, x1, y1) GL-pixel rectangles of a list's quads, from its vertex buffer."""
     v = np.frombuffer(tl.buffer.read(), np.float32)[:tl.quads * 6 * stride]
     v = v.reshape(tl.quads, 6, stride)[..., :2]
@@ -84,7 +85,7 @@ def quad_rects(tl: tile_lists.TileList, stride: int) -> np.ndarray:
 
 
 def test_tile_quads_cover_exactly_the_listed_tiles(ctx):
-    tl = tile_lists.TileList(ctx)
+    tl = tile_runs.TileList(ctx)
     try:
         tl.set(np.array([[0, 0], [2, 1]]), 16, (40, 20))
         assert quad_rects(tl, 2).tolist() == [[0, 0, 16, 16], [32, 16, 40, 20]]  # cut at the edge
@@ -187,7 +188,7 @@ def brute_force_active(longest, tile, max_disp, tolerance):
                 for u in range(w):
                     m = min(float(longest[v, u]), max_disp)
                     gap = max(0, max(abs(x - u), abs(y - v)) - 1) * tile
-                    if m > 0 and gap <= 0.5 * m + tolerance + tile_lists.MARGIN:
+                    if m > 0 and gap <= 0.5 * m + tolerance + tile_select.MARGIN:
                         out[y, x] = True
     return out
 
@@ -198,7 +199,7 @@ def test_active_tiles_match_their_definition(seed):
     longest = np.where(rng.uniform(size=(9, 13)) < 0.1, rng.uniform(0, 120, (9, 13)), 0.0)
     longest = longest.astype(np.float32)
     for max_disp in (20.0, 60.0, 200.0):
-        got = tile_lists.active_tiles(longest, 8, max_disp, 0.65)
+        got = tile_select.active_tiles(longest, 8, max_disp, 0.65)
         np.testing.assert_array_equal(got, brute_force_active(longest, 8, max_disp, 0.65))
 
 
@@ -225,7 +226,7 @@ def test_record_blocks_match_a_brute_force_packing(seed, tile_bits):
     # reveal_shade's hit records: one tile x tile block per (key, screen tile) in order of
     # (key, tile row, tile column), 4 blocks a row here, each pixel's record at its
     # offset within its tile, -1 there in the tile's other keys' blocks; else zero.
-    from viewer.render.hybrid.reveal_kernels import pack_blocks
+    from viewer.render.modes.hybrid.reveal_kernels import pack_blocks
     rng = np.random.default_rng(seed)
     n, tile, per_row = 500, 1 << tile_bits, 4
     flat = rng.choice(70 * 50, n, replace=False)
@@ -269,7 +270,7 @@ def test_simple_tiles_change_nothing_where_no_outline_is_in_reach(ctx, monkeypat
     images = []
     for full_screen in (False, True):
         if full_screen:
-            monkeypatch.setattr(tile_lists.SelectTiles, "execute", lambda self, frame: None)
+            monkeypatch.setattr(tile_select.SelectTiles, "execute", lambda self, frame: None)
         r = Renderer(ctx, scene, size)
         try:
             res = r.render("hybrid", scene.render.time, ParamSet())
@@ -313,15 +314,15 @@ def true_boundary_tiles(ids: np.ndarray, tile: int) -> np.ndarray:
 def run_motion_tiles(frame, ids, disp):
     """motion_tiles (GL rows: (longest |D|, boundary flag)) of ids and D given in GL rows."""
     from world.conventions import to_image
-    from viewer.render.gbuffer import GBUFFER
+    from viewer.render.passes.gbuffer import GBUFFER
     h, w = ids.shape
     front = np.dstack([disp, np.full((h, w), 5.0, np.float32), ids]).astype(np.float32)
     frame.pool.texture("hybrid_front", GBUFFER["hybrid_front"])
     frame.write("hybrid_front", to_image(front))
-    p = tile_lists.MotionTiles()
+    p = tile_select.MotionTiles()
     p.allocate(frame)
     p.execute(frame)
-    tile = tile_lists.FINE
+    tile = tile_runs.FINE
     return np.frombuffer(frame.pool.get("motion_tiles").read(), np.float32).reshape(
         -(-h // tile), -(-w // tile), 2)
 
@@ -331,7 +332,7 @@ def test_motion_tiles_flag_every_id_boundary(synthetic_frame, seed):
     # motion_tiles .y: every tile holding a pixel whose right or upper neighbour shows
     # another object is flagged (conservatively: a few more may be), .x the longest |D|.
     rng = np.random.default_rng(seed)
-    w, h, tile = 70, 52, tile_lists.FINE
+    w, h, tile = 70, 52, tile_runs.FINE
     ids = np.ones((h, w), np.float32)                     # GL rows
     for _ in range(3):                                    # rectangles of other objects
         x0, y0 = rng.integers(0, w - 8), rng.integers(0, h - 8)
@@ -366,7 +367,7 @@ def test_near_boundary_matches_its_definition():
     rng = np.random.default_rng(4)
     boundary = rng.uniform(size=(9, 12)) < 0.08
     longest = rng.uniform(0, 90, (9, 12)).astype(np.float32)
-    got = tile_lists.near_boundary(longest, boundary, 16)
+    got = tile_select.near_boundary(longest, boundary, 16)
     want = np.zeros_like(boundary)
     for y, x in np.ndindex(*boundary.shape):
         for v, u in zip(*np.nonzero(boundary)):
@@ -374,7 +375,7 @@ def test_near_boundary_matches_its_definition():
             want[y, x] |= gap <= 0.5 * longest[y, x] + 2.0
     assert want.any() and not want.all()
     np.testing.assert_array_equal(got, want)
-    assert not tile_lists.near_boundary(longest, np.zeros_like(boundary), 16).any()
+    assert not tile_select.near_boundary(longest, np.zeros_like(boundary), 16).any()
 
 
 def test_displacement_test_runs_only_near_id_boundaries(ctx, monkeypatch):
@@ -393,7 +394,7 @@ def test_displacement_test_runs_only_near_id_boundaries(ctx, monkeypatch):
 @pytest.mark.parametrize("seed", range(3))
 def test_chessboard_distance_is_scipys(seed):
     from scipy.ndimage import distance_transform_cdt
-    from viewer.render.tile_kernels import chessboard_distance
+    from viewer.render.passes.tile_kernels import chessboard_distance
     sources = np.random.default_rng(seed).uniform(size=(13, 21)) < 0.04
     sources[5, 7] = True
     np.testing.assert_array_equal(chessboard_distance(sources),
@@ -426,8 +427,8 @@ def test_pixel_tiles_mark_the_gl_row_tiles_of_image_pixels():
 def test_tile_coords_list_the_true_tiles_row_by_row():
     sel = np.random.default_rng(4).uniform(size=(9, 14)) < 0.3
     ty, tx = np.nonzero(sel)
-    np.testing.assert_array_equal(tile_lists.tile_coords(sel), np.stack([tx, ty], axis=1))
-    assert tile_lists.tile_coords(np.zeros((3, 4), bool)).shape == (0, 2)
+    np.testing.assert_array_equal(tile_runs.tile_coords(sel), np.stack([tx, ty], axis=1))
+    assert tile_runs.tile_coords(np.zeros((3, 4), bool)).shape == (0, 2)
 
 
 def _line_leaves_object(ids, vn, k, max_len, turn=0.0):

@@ -1,4 +1,4 @@
-"""UE4-style motion blur (viewer/render/ue4.py): each pass on tiny synthetic buffers against
+"""UE4-style motion blur (viewer/render/modes/ue4.py): each pass on tiny synthetic buffers against
 the numpy reference in tests/numpy_ue4.py (itself checked on hand-computed cases first), the
 behaviour docs/algorithms.md 3.2, 3.4 promises (linear ramps, mirrored inner background, fast path,
 static scenes unchanged) and the whole mode against the reference on a conformance scene.
@@ -14,12 +14,12 @@ import pytest
 import numpy_ue4 as nu
 from conftest import CONFORMANCE
 from world.conventions import to_image
-from viewer.params import ParamSet
-from viewer.render.gbuffer import GBUFFER
-from viewer.render.pool import TexSpec
-from viewer.render.blur_common import max_radius_px
-from viewer.render.ue4 import Dilate, Flatten, Gather, TileMinMax, dilation_reach, tile_spec
-from viewer.render.reference import REGIONS
+from viewer.render.graph.params import ParamSet
+from viewer.render.passes.gbuffer import GBUFFER
+from viewer.render.graph.pool import TexSpec
+from viewer.render.passes.blur_common import max_radius_px
+from viewer.render.modes.ue4 import Dilate, Flatten, Gather, TileMinMax, dilation_reach, tile_spec
+from viewer.render.modes.reference import REGIONS
 
 
 def make_params(**ue4) -> ParamSet:
@@ -469,7 +469,7 @@ def test_dilation_guard_matches_numpy(synthetic_frame):
 def test_mode_beats_off_against_reference_on_basic(ctx):
     """The whole mode through the Renderer: closer to the reference than the sharp frame,
     over the whole image and in the outer-blur region."""
-    from viewer.metrics import image_metrics
+    from viewer.eval.metrics import image_metrics
     from viewer.render.renderer import Renderer
     from world.loader import load_scene
     scene = load_scene(CONFORMANCE / "basic.toml")

@@ -14,10 +14,10 @@ import pytest
 from PIL import Image
 
 from conftest import CONFORMANCE, ROOT
-from viewer.cli import main
-from viewer.plot import line_plots, nice_ticks, tick_label
-from viewer.temporal import flicker
-from viewer.video_writer import gif_durations
+from viewer.commands.main import main
+from viewer.eval.plot import line_plots, nice_ticks, tick_label
+from viewer.eval.temporal import flicker
+from viewer.io.video_writer import gif_durations
 
 BASIC = str(CONFORMANCE / "basic.toml")
 SMALL = ["--size", "64x36", "--frames", "3", "--samples", "4"]

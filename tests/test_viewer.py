@@ -20,12 +20,12 @@ from tests.conftest import ROOT
 from tests.xvfb import Xvfb
 from world.camera import Camera
 from world.errors import UserError
-from viewer.imageio import linear_to_srgb8
-from viewer.params import GROUPS, ParamSet
+from viewer.io.imageio import linear_to_srgb8
+from viewer.render.graph.params import GROUPS, ParamSet
 from viewer.ui.camera_control import POLE_MARGIN, CameraControl
 from viewer.ui.input import InputRouter
 from viewer.ui.script import Timeline, load_script
-from viewer.visualize import colour_wheel, depth_grey, id_colours
+from viewer.io.visualize import colour_wheel, depth_grey, id_colours
 
 SCENE = "spinner"
 W, H = 640, 360
@@ -41,8 +41,8 @@ def spec():
 # --- the render core stays window-free ----------------------------------------------------
 
 def test_render_core_and_cli_do_not_import_glfw_or_imgui():
-    code = ("import sys; import viewer.render.renderer, viewer.render.debug_view, viewer.cli; "
-            "viewer.cli.build_parser(); "
+    code = ("import sys; import viewer.render.renderer, viewer.render.passes.debug_view, viewer.commands.main; "
+            "viewer.commands.main.build_parser(); "
             "bad = [m for m in ('glfw', 'imgui_bundle', 'OpenGL') if m in sys.modules]; "
             "print(bad); sys.exit(1 if bad else 0)")
     p = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True)
@@ -214,10 +214,10 @@ def test_every_parameter_gets_a_widget_that_fits_its_type():
 # --- debug view (GL, headless) ---------------------------------------------------------------------
 
 def draw_view(ctx, array, dtype, settings=None, tile=1, name="buf"):
-    from viewer.render.debug_view import DebugView
-    from viewer.render.framebuffers import park_framebuffer
-    from viewer.render.pool import ResourcePool, TexSpec
-    from viewer.shaders import ProgramCache
+    from viewer.render.passes.debug_view import DebugView
+    from viewer.render.graph.framebuffers import park_framebuffer
+    from viewer.render.graph.pool import ResourcePool, TexSpec
+    from viewer.render.graph.shaders import ProgramCache
     a = np.asarray(array)
     comps = 1 if a.ndim == 2 else a.shape[2]
     h, w = a.shape[:2]
@@ -267,7 +267,7 @@ def test_debug_view_matches_visualize(ctx):
 
 
 def test_debug_view_tiles_and_masks(ctx):
-    from viewer.render.debug_view import ViewSettings
+    from viewer.render.passes.debug_view import ViewSettings
     tiles = np.zeros((2, 3, 4), np.float32)
     tiles[..., 2:4] = [[[8, 0]] * 3, [[0, -4]] * 3]     # vmax in .zw: right, then down
     kind, img = draw_view(ctx, tiles, "f4", tile=8, name="ue4_tiles")
@@ -292,7 +292,7 @@ def test_progressive_reference_equals_the_full_render_and_restarts(ctx):
     from viewer.render.renderer import Renderer
     from world.loader import load_scene
     from viewer.ui.progressive import Progressive
-    from viewer.render.timing import PassClock
+    from viewer.render.graph.timing import PassClock
     r = Renderer(ctx, load_scene(SCENE), (96, 54))
     try:
         params = ParamSet()
@@ -305,7 +305,7 @@ def test_progressive_reference_equals_the_full_render_and_restarts(ctx):
             steps += 1
             assert frame.stats["sub_frames"] == f"{prog.done}/7"
         assert steps == 3 and prog.gain == 1.0
-        from viewer.render.frame import read_texture
+        from viewer.render.graph.frame import read_texture
         assert np.array_equal(read_texture(r.pool.get("reference"))[..., :3], full)
         prog.step(clock, r, "reference", 0.02, params, 0, "b", 2)     # anything changed
         assert prog.done == 2 and math.isclose(prog.gain, 3.5)
@@ -316,7 +316,7 @@ def test_progressive_reference_equals_the_full_render_and_restarts(ctx):
 def test_pass_clock_method_and_gpu_queries(ctx):
     from viewer.render.renderer import Renderer
     from world.loader import load_scene
-    from viewer.render.timing import PassClock, gpu_timers_truthful
+    from viewer.render.graph.timing import PassClock, gpu_timers_truthful
     software = "llvmpipe" in ctx.info["GL_RENDERER"].lower()
     assert gpu_timers_truthful(ctx) is not software
     assert PassClock(ctx).method == ("cpu" if software else "gpu")
@@ -483,7 +483,7 @@ def test_open_scene_replaces_the_scene(display, tmp_path, ctx):
 
 def test_memory_stays_flat_over_mode_switches_and_resizes(display, tmp_path):
     # RSS climbs while the allocator meets each mode and size for the first times (it is
-    # asked to keep freed memory: viewer/render/allocator.py), ~30-40 MB up to frame
+    # asked to keep freed memory: viewer/render/graph/allocator.py), ~30-40 MB up to frame
     # ~250 here, then stays flat (measured to frame 900); a leak of a texture or a frame's
     # arrays per frame or per switch would keep it climbing.
     from viewer.render.modes import MODES

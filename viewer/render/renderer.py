@@ -12,18 +12,18 @@ from world.camera import Camera
 from world.conventions import exposure
 from world.path_bend import screen_bend
 from world.errors import UserError
-from ..params import ParamSet
+from viewer.render.graph.params import ParamSet
 from world.scene import Scene
-from ..shaders import ProgramCache
-from .allocator import keep_freed_memory
-from .frame import Frame, PassTimer
+from viewer.render.graph.shaders import ProgramCache
+from viewer.render.graph.allocator import keep_freed_memory
+from viewer.render.graph.frame import Frame, PassTimer
 from .gpu_scene import GpuScene
-from .host import HostResources
-from .kept import KeptState
+from viewer.render.graph.host import HostResources
+from viewer.render.graph.kept import KeptState
 from .modes import MODES
-from .registry import mode_config
-from .pool import ResourcePool
-from .steps import MakeFrame, Measure, run_steps, step_count, sub_exposures
+from viewer.render.graph.registry import mode_config
+from viewer.render.graph.pool import ResourcePool
+from viewer.render.graph.steps import MakeFrame, Measure, run_steps, step_count, sub_exposures
 
 
 @dataclass
@@ -65,7 +65,7 @@ class Renderer:
 
     def pipeline(self, mode: str, params: ParamSet | None = None):
         """`mode`'s pipeline for its configuration under `params` (None: the defaults),
-        built once per (mode, configuration) (viewer/render/registry.py)."""
+        built once per (mode, configuration) (viewer/render/graph/registry.py)."""
         if mode not in MODES:
             raise UserError(f"--mode {mode}: expected one of {', '.join(MODES)}")
         key = (mode, mode_config(mode, params))
@@ -84,7 +84,7 @@ class Renderer:
 
     def run(self, mode: str, t: float, params: ParamSet, seed: int, make_frame: MakeFrame,
             measure: Measure = PassTimer) -> Frame:
-        """The frame at t of `mode`, as its sub-exposure steps (viewer/render/steps.py):
+        """The frame at t of `mode`, as its sub-exposure steps (viewer/render/graph/steps.py):
         `make_frame(time, shutter, seed)` makes each sub-frame, Pipeline.run runs the
         mode's passes on it, each inside `measure(frame, name)`, and the accumulation."""
         shutter = float(self.scene.camera.shutter)
@@ -138,7 +138,7 @@ class Renderer:
 
     def buffers(self) -> dict[str, np.ndarray]:
         """Every texture in the pool, image orientation."""
-        from .frame import read_texture
+        from viewer.render.graph.frame import read_texture
         return {n: read_texture(self.pool.get(n)) for n in self.pool.names()}
 
     def release(self):

@@ -1,6 +1,6 @@
 """One cell of a sweep, as a worker runs it: (scene, time, shutter, size, samples, seed)
 with every variant. The reference is rendered once and shared; the numbers come from
-viewer.comparison.compare_frame, the function `hmblur compare` runs.
+viewer.eval.comparison.compare_frame, the function `hmblur compare` runs.
 
 A cell never raises for its own failure (a scene that does not load, a render that fails):
 it returns its error, which becomes one row of the table. Each worker process keeps one
@@ -21,11 +21,11 @@ from collections import OrderedDict
 from dataclasses import dataclass, field
 
 from world.errors import UserError
-from ..comparison import compare_frame
-from ..imageio import json_safe, linear_to_srgb8, png_bytes
-from ..params import ParamSet
+from viewer.eval.comparison import compare_frame
+from viewer.io.imageio import json_safe, linear_to_srgb8, png_bytes
+from viewer.render.graph.params import ParamSet
 from ..render.modes import MODE_GROUPS
-from ..strip import REGION_ORDER, choose_inset, make_strip, region_picture
+from viewer.eval.strip import REGION_ORDER, choose_inset, make_strip, region_picture
 from .bundle import Bundle, copy_root, materialise
 
 TIMING_FRAMES = 5          # warm frames per variant whose median is frame_ms (--timing)
@@ -142,7 +142,7 @@ def run_cell(task: CellTask) -> dict:
 
 def _check_version(task: CellTask):
     """A worker of another version would file its numbers under this version's key."""
-    from ..cli import version
+    from viewer.commands.main import version
     if version() != task.version:
         raise UserError(f"this worker runs hmblur {version()}, the sweep was started with "
                         f"{task.version}: install the same version on every worker")

@@ -20,7 +20,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from world.errors import UserError
-from ..imageio import OutputSet, json_safe
+from viewer.io.imageio import OutputSet, json_safe
 from .bundle import scene_bundle
 from .cells import CellTask, run_cell
 from .spec import Sweep
@@ -93,7 +93,7 @@ class Bar:
         self.show()
 
     def show(self):
-        from .. import progress
+        from viewer.io import progress
         finished = self.skipped + self.done
         left = self.total - finished
         el = time.perf_counter() - self.t0
@@ -224,7 +224,7 @@ def run_sweep(spec: Sweep, out: Path, version: str, workers: int, scheduler: str
                 else:
                     engine = run_on_dask(todo, on_result, workers, scheduler)
         except KeyboardInterrupt:
-            from ..progress import end_line
+            from viewer.io.progress import end_line
             end_line()
             print(f"sweep: interrupted; {len(results)} of {len(tasks)} cells kept in "
                   f"{out / 'cells'}; run the same command again to continue", file=stream)

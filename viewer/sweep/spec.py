@@ -17,9 +17,9 @@ from pathlib import Path
 
 from world.errors import UserError
 from world.loader import builtin_scene_names, builtin_scene_path, describe_value
-from ..cliargs import MAX_TIME, other_scene, parse_size
-from ..comparison import REALTIME, Variant, check_variant
-from ..params import ParamSet
+from viewer.cli.args import MAX_TIME, other_scene, parse_size
+from viewer.eval.comparison import REALTIME, Variant, check_variant
+from viewer.render.graph.params import ParamSet
 from ..render.modes import MODE_GROUPS
 
 KEYS = ("scenes", "times", "shutters", "size", "samples", "seed", "set", "variants")

@@ -16,9 +16,9 @@ import statistics
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from ..imageio import OutputSet
-from ..plot import PALETTE, line_plots
-from ..strip import REGION_ORDER
+from viewer.io.imageio import OutputSet
+from viewer.eval.plot import PALETTE, line_plots
+from viewer.eval.strip import REGION_ORDER
 from .spec import Sweep
 
 METRICS = ("flip", "psnr", "ssim")
@@ -123,7 +123,7 @@ def plots(spec: Sweep, rows: list[dict], timing: bool) -> dict[str, bytes]:
     """{file name: PNG}: each metric against each swept cell parameter (series: the
     variants) and against each variant grid key (series: the variant tables using it),
     a panel per region, each point the mean over everything else (scenes, other axes)."""
-    from ..imageio import png_bytes
+    from viewer.io.imageio import png_bytes
     ok = [r for r in rows if r["error"] is None]
     axes = [(a, "variant", AXIS_LABEL[a]) for a in spec.swept()]
     axes += [(k, "family", k) for k in spec.grid_keys()

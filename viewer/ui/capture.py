@@ -7,10 +7,10 @@ from pathlib import Path
 import moderngl
 import numpy as np
 
-from ..cliargs import Setup
-from ..cmd_shot import sidecar
+from viewer.cli.args import Setup
+from viewer.commands.shot import sidecar
 from world.conventions import to_image
-from ..imageio import OutputSet, linear_to_srgb8
+from viewer.io.imageio import OutputSet, linear_to_srgb8
 from ..render.renderer import Renderer
 
 

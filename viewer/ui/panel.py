@@ -7,7 +7,7 @@ from typing import Protocol
 
 from imgui_bundle import imgui
 
-from ..render.debug_view import KINDS
+from viewer.render.passes.debug_view import KINDS
 from ..render.modes import MODE_GROUPS, MODES
 from world.asset_scene import animation_range
 from world.loader import builtin_scene_names
@@ -20,7 +20,7 @@ from .window import Window
 
 
 class PanelHost(Protocol):
-    """What the panel reads and calls on the viewer (viewer.app.App), which imports this
+    """What the panel reads and calls on the viewer (viewer.ui.app.App), which imports this
     module: the panel never imports the app."""
     state: ViewState
     window: Window

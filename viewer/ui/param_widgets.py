@@ -1,4 +1,4 @@
-"""imgui widgets generated from the parameter dataclasses (viewer/params.py): a combo for
+"""imgui widgets generated from the parameter dataclasses (viewer/render/graph/params.py): a combo for
 choices, a checkbox for booleans, a slider for a bounded number (logarithmic over wide
 positive ranges), a drag for an unbounded one. Every change goes through ParamSet.set, so
 the panel obeys the same ranges as `--set`."""
@@ -9,7 +9,7 @@ import dataclasses
 from imgui_bundle import imgui
 
 from world.errors import UserError
-from ..params import ParamSet
+from viewer.render.graph.params import ParamSet
 
 DRAG_SPEED = 0.01
 LOG_RATIO = 100.0                 # hi / lo at which a slider becomes logarithmic

@@ -4,10 +4,10 @@ changes the image changes. When all N sub-frames are in, the sum is the image
 `Renderer.render` gives (same sub-frames, weights and blending order)."""
 from __future__ import annotations
 
-from ..params import ParamSet
-from ..render.frame import Frame
+from viewer.render.graph.params import ParamSet
+from viewer.render.graph.frame import Frame
 from ..render.renderer import Renderer
-from ..render.timing import PassClock
+from viewer.render.graph.timing import PassClock
 
 
 def accumulating_pass(pipeline):

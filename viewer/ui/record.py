@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..cmd_shot import camera_dict
-from ..cmd_video import scene_for_sidecar
-from ..imageio import OutputSet
-from ..video_writer import VideoPaths, VideoWriter, video_paths
+from viewer.commands.shot import camera_dict
+from viewer.commands.video import scene_for_sidecar
+from viewer.io.imageio import OutputSet
+from viewer.io.video_writer import VideoPaths, VideoWriter, video_paths
 
 
 def next_path(folder: Path, stem: str) -> Path:

@@ -70,7 +70,7 @@ class Action:
 
 
 def _number(a: Action, text: str, what: str = "a number", lo: float | None = None) -> float:
-    from ..cliargs import parse_float
+    from viewer.cli.args import parse_float
     try:
         v = parse_float(a.name, text)
     except UserError:
@@ -94,7 +94,7 @@ def _check_args(a: Action):
         if args[0] not in MODES:
             a.fail(f"one of {', '.join(MODES)}, got {args[0]!r}")
     elif name == "set":
-        from ..params import ParamSet
+        from viewer.render.graph.params import ParamSet
         from ..render import modes  # noqa: F401  (registers every mode's parameter groups)
         try:
             ParamSet().apply([args[0]])
@@ -105,7 +105,7 @@ def _check_args(a: Action):
         if not isinstance(getattr(glfw, f"KEY_{args[0].upper()}", None), int):
             a.fail(f"a GLFW key name (P, F12, SPACE, W, ...), got {args[0]!r}")
     elif name == "resize":
-        from ..cliargs import parse_size
+        from viewer.cli.args import parse_size
         try:
             parse_size(args[0], "resize")
         except UserError:
@@ -121,7 +121,7 @@ def _check_args(a: Action):
         for v in args[1:]:
             _number(a, v, "window pixels")
     elif name == "visual":
-        from ..render.debug_view import KINDS
+        from viewer.render.passes.debug_view import KINDS
         if args[0] not in ("auto",) + KINDS:
             a.fail(f"auto or one of {', '.join(KINDS)}, got {args[0]!r}")
     elif name in ("fly", "panel"):
@@ -209,7 +209,7 @@ MAX_SCRIPT_BYTES = 1 << 20      # a script of actions is a few hundred bytes
 
 
 def load_script(path: str) -> list[Action]:
-    from ..cliargs import read_user_file
+    from viewer.cli.args import read_user_file
     p = Path(path)
     raw = read_user_file("--script", path, MAX_SCRIPT_BYTES, "a script")
     try:

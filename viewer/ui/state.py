@@ -5,9 +5,9 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 
-from ..cmd_shot import camera_dict
-from ..params import ParamSet
-from ..render.debug_view import ViewSettings
+from viewer.commands.shot import camera_dict
+from viewer.render.graph.params import ParamSet
+from viewer.render.passes.debug_view import ViewSettings
 from ..render.modes import MODE_GROUPS
 from world.scene import Scene
 

@@ -1,0 +1,371 @@
+"""Arguments shared by the subcommands, and turning them into a scene, size, time and
+parameters (every mistake a one-line UserError)."""
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+import stat
+from dataclasses import dataclass
+from pathlib import Path
+
+from world import limits
+from world.errors import SceneError, UserError
+from viewer.render.graph.params import ParamSet
+from world.scene import Scene
+from world.loader import (builtin_dir, builtin_scene_names, builtin_scene_path,
+                           load_scene, merge_camera)
+
+# Scene files beside the built-in ones that are not built-in names: the bench scenes, the
+# examples and (in a source checkout) the conformance scenes.
+OTHER_SCENE_DIRS = ("bench", "examples", "../tests/conformance")
+
+
+def other_scene(name: str) -> Path | None:
+    """The file a scene name that is not built-in most likely means, if there is one."""
+    for folder in OTHER_SCENE_DIRS:
+        path = (builtin_dir() / folder / f"{name}.toml").resolve()
+        if path.is_file():
+            return path
+    return None
+
+
+def load(source: str):
+    """load_scene, with the file named when `source` is the name of a bench, example or
+    conformance scene rather than a built-in one."""
+    try:
+        return load_scene(source)
+    except SceneError as exc:
+        path = None if Path(source).exists() or source.endswith(".toml") else other_scene(source)
+        if path is None:
+            raise
+        try:
+            shown = path.relative_to(Path.cwd())
+        except ValueError:
+            shown = path
+        raise UserError(f"{exc}; {source!r} is the scene file {shown}") from None
+
+
+def add_scene_args(p, samples: bool = True):
+    p.add_argument("scene", nargs="?", default=None, metavar="SCENE",
+                   help="scene file (.toml), glTF asset (.gltf, .glb) or built-in scene name; "
+                        "may be left out with --params (the sidecar's scene)")
+    p.add_argument("--time", type=str, default=None, metavar="T",
+                   help="frame time in seconds (default: the scene's [render] time)")
+    p.add_argument("--size", type=str, default=None, metavar="WxH",
+                   help="image size (default: the scene's [render] size, else 1280x720)")
+    if samples:
+        p.add_argument("--samples", type=str, default=None, metavar="N",
+                       help="reference sub-frames (default 64; = --set reference.samples=N)")
+    p.add_argument("--seed", type=str, default=None, metavar="N",
+                   help="seed of every jitter (default 0, or the --params file's)")
+    p.add_argument("--set", action="append", default=[], metavar="GROUP.FIELD=VALUE",
+                   help="set a parameter (repeatable; 'hmblur params' lists them)")
+    p.add_argument("--params", type=str, default=None, metavar="FILE.json",
+                   help="JSON sidecar of an earlier output: reproduce its scene, parameters, "
+                        "time, size, seed and camera (flags given beside it win)")
+
+
+def scene_source(arg: str) -> dict:
+    """Where a scene came from, for a sidecar: the file's absolute path (so `--params`
+    finds it from any folder) and, for a built-in scene, its name."""
+    path = Path(arg)
+    if not path.is_file() and not arg.endswith(".toml") and arg in builtin_scene_names():
+        return {"scene": str(builtin_scene_path(arg)), "scene_builtin": arg}
+    return {"scene": str(path.resolve())}
+
+
+def sidecar_scene(side: dict, params_path: str) -> str:
+    """The scene an earlier output was made from (SCENE left out beside --params): its
+    built-in name, else its path (absolute; an older relative one is tried from the
+    current folder, then from the sidecar's)."""
+    src = f"--params {params_path}"
+    name = side.get("scene_builtin")
+    if isinstance(name, str) and name in builtin_scene_names():
+        return name
+    path = side.get("scene")
+    if not isinstance(path, str) or not path:
+        raise UserError(f"{src}: names no scene: give SCENE")
+    for candidate in (Path(path), Path(params_path).parent / path):
+        if candidate.is_file():
+            return str(candidate)
+    if path in builtin_scene_names():         # a sidecar that stored the name only
+        return path
+    raise UserError(f"{src}: its scene {path} is not found: give SCENE")
+
+
+def check_set_groups(assignments: list[str], modes, mode_groups: dict, flag: str = "--set"):
+    """A `--set` for a parameter group none of the rendered `modes` reads is a mistake (it
+    would change nothing): one line naming the modes that do read it."""
+    used = {g for m in modes for g in mode_groups.get(m, ())}
+    for text in assignments:
+        group = text.partition("=")[0].strip().partition(".")[0]
+        if group not in used:
+            readers = [m for m, gs in mode_groups.items() if group in gs]
+            which = f"mode {modes[0]}" if len(modes) == 1 else "modes " + ", ".join(modes)
+            raise UserError(f"{flag} {text}: {which} does not use the {group} parameters "
+                            f"(used by {', '.join(readers) or 'no mode'})")
+
+
+def parse_size(text: str, flag: str = "--size") -> tuple[int, int]:
+    m = re.fullmatch(r"\s*(\d{1,9})\s*[xX]\s*(\d{1,9})\s*", text or "")
+    if not m or int(m.group(1)) < 1 or int(m.group(2)) < 1:
+        raise UserError(f"{flag} {text!r}: expected WIDTHxHEIGHT with positive integers, e.g. 640x360")
+    return check_size(int(m.group(1)), int(m.group(2)), f"{flag} {text!r}")
+
+
+def check_size(w: int, h: int, where: str) -> tuple[int, int]:
+    """An image size within limits.MAX_FRAME_SIZE a side and MAX_FRAME_PIXELS in all."""
+    if max(w, h) > limits.MAX_FRAME_SIZE or w * h > limits.MAX_FRAME_PIXELS:
+        raise UserError(f"{where}: {w}x{h} is too large: at most {limits.MAX_FRAME_SIZE} px "
+                        f"a side and {limits.MAX_FRAME_PIXELS} pixels (e.g. 2560x1600)")
+    return w, h
+
+
+MAX_TIME = limits.MAX_TIME
+
+
+def parse_time(flag: str, text: str) -> float:
+    t = parse_float(flag, text)
+    if abs(t) > MAX_TIME:
+        raise UserError(f"{flag} {text!r}: expected seconds within +-{MAX_TIME:g}")
+    return t
+
+
+def parse_float(flag: str, text: str) -> float:
+    try:
+        v = float(text)
+    except (ValueError, OverflowError):
+        raise UserError(f"{flag} {text!r}: expected a number") from None
+    if not math.isfinite(v):
+        raise UserError(f"{flag} {text!r}: expected a finite number")
+    return v
+
+
+def parse_int(flag: str, text: str, lo: int, hi: int | None = None) -> int:
+    text = str(text)
+    if len(text) > 40:                     # (int() of thousands of digits is slow, or refused)
+        raise UserError(f"{flag} {text[:20]!r}...: expected an integer of at most 40 characters")
+    try:
+        v = int(text)
+    except ValueError:
+        raise UserError(f"{flag} {text!r}: expected an integer") from None
+    if v < lo:
+        raise UserError(f"{flag} {text!r}: expected an integer >= {lo}")
+    if hi is not None and v > hi:
+        raise UserError(f"{flag} {text!r}: expected an integer from {lo} to {hi}")
+    return v
+
+
+def parse_fps(flag: str, text: str) -> float:
+    """Frames per second within limits.MIN_FPS..MAX_FPS."""
+    v = parse_float(flag, text)
+    if not limits.MIN_FPS <= v <= limits.MAX_FPS:
+        raise UserError(f"{flag} {text!r}: expected frames per second from "
+                        f"{limits.MIN_FPS:g} to {limits.MAX_FPS:g}")
+    return v
+
+
+def parse_seed(flag: str, text: str) -> int:
+    return parse_int(flag, text, 0, limits.MAX_SEED)
+
+
+@dataclass
+class Setup:
+    scene: Scene
+    size: tuple[int, int]
+    time: float
+    params: ParamSet
+    seed: int
+    sidecar: dict | None = None
+
+
+def read_sidecar(path: str) -> dict:
+    """An earlier output's JSON (an image's sidecar, compare's metrics.json, a bench
+    report): anything with a table of parameters. A regular file of at most
+    limits.MAX_PARAMS_BYTES, checked before reading (not a device, FIFO or folder)."""
+    raw = read_user_file("--params", path, limits.MAX_PARAMS_BYTES, "a sidecar")
+    try:
+        data = json.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise UserError(f"--params {path}: not UTF-8 text") from None
+    except json.JSONDecodeError as exc:
+        raise UserError(f"--params {path}: not JSON ({exc.msg} at line {exc.lineno})") from None
+    except RecursionError:
+        raise UserError(f"--params {path}: JSON nested too deeply to be a sidecar") from None
+    except ValueError as exc:               # an integer of more digits than Python converts
+        raise UserError(f"--params {path}: not a sidecar's JSON ({exc})") from None
+    if not isinstance(data, dict) or not isinstance(data.get("params"), dict):
+        raise UserError(f"--params {path}: expected the JSON sidecar of an hmblur image "
+                        "(an object with a \"params\" table)")
+    return data
+
+
+def apply_camera(scene: Scene, data, source: str):
+    """Override the scene's camera with a sidecar's (the viewer may have moved it), checked
+    as the scene file's camera is (world.loader.merge_camera)."""
+    if not isinstance(data, dict):
+        raise UserError(f"{source}: camera: expected a table")
+    scene.camera = merge_camera(scene.camera, data, source)
+
+
+def sidecar_size(value, source: str) -> tuple[int, int]:
+    if (not isinstance(value, list) or len(value) != 2
+            or not all(isinstance(x, int) and not isinstance(x, bool) and x >= 1 for x in value)):
+        raise UserError(f"{source}: size: expected [width, height], positive integers, "
+                        f"got {str(value)[:60]}")
+    return check_size(value[0], value[1], f"{source}: size")
+
+
+class _NotRegular(OSError):
+    pass
+
+
+def read_user_file(flag: str, path: str, max_bytes: int, what: str) -> bytes:
+    """The bytes of a file a flag names: a regular file (not a device, FIFO or folder,
+    refused before any read) of at most `max_bytes`; else one line naming the flag."""
+    try:
+        with open(path, "rb", opener=_open_regular) as f:
+            raw = f.read(max_bytes + 1)
+    except FileNotFoundError:
+        raise UserError(f"{flag} {path}: file not found") from None
+    except _NotRegular as exc:
+        raise UserError(f"{flag} {path}: {exc}") from None
+    except (OSError, ValueError) as exc:
+        raise UserError(f"{flag} {path}: cannot read "
+                        f"({getattr(exc, 'strerror', None) or exc.__class__.__name__})") from None
+    if len(raw) > max_bytes:
+        raise UserError(f"{flag} {path}: larger than {max_bytes} bytes: not {what}")
+    return raw
+
+
+def _open_regular(path, flags):
+    """os.open that refuses what is not a regular file before any read (a FIFO is opened
+    without blocking, /dev/zero is never read)."""
+    fd = os.open(path, flags | getattr(os, "O_NONBLOCK", 0))
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise _NotRegular("not a regular file")
+        os.set_blocking(fd, True)
+    except BaseException:
+        os.close(fd)
+        raise
+    return fd
+
+
+def setup(args) -> Setup:
+    params = ParamSet()
+    side = read_sidecar(args.params) if getattr(args, "params", None) else None
+    if args.scene is None:
+        if side is None:
+            raise UserError("SCENE: expected a scene file (.toml), a glTF asset (.gltf, .glb) "
+                            "or a built-in name ("
+                            + ", ".join(builtin_scene_names()) + "), or --params FILE.json")
+        args.scene = sidecar_scene(side, args.params)
+    scene = load(args.scene)
+    size = (scene.render.width, scene.render.height)
+    t = scene.render.time
+    seed = 0
+    if side is not None:
+        src = f"--params {args.params}"
+        made_for = side.get("scene_name", side.get("scene"))
+        if isinstance(made_for, str) and made_for not in (scene.name, args.scene):
+            raise UserError(f"{src}: made for scene {made_for!r}, not {scene.name!r}")
+        params.update(side["params"], source=src)
+        if "camera" in side:
+            apply_camera(scene, side["camera"], src)
+        if "size" in side:
+            size = sidecar_size(side["size"], src)
+        if "time" in side:
+            t = parse_time(f"{src}: time", str(side["time"]))
+        seed = parse_seed(f"{src}: seed", str(side.get("seed", 0)))
+    if args.size is not None:
+        size = parse_size(args.size)
+    if args.time is not None:
+        t = parse_time("--time", args.time)
+    if args.seed is not None:
+        seed = parse_seed("--seed", args.seed)
+    if getattr(args, "samples", None) is not None:
+        params.set("reference.samples", str(parse_int("--samples", args.samples, 1)),
+                   label="--samples")
+    params.apply(args.set)
+    return Setup(scene, size, t, params, seed, side)
+
+
+# What `shot` and `view` render when no mode is given: the blur this project is about.
+DEFAULT_MODE = "hybrid"
+
+
+def pick_mode(flag: str | None, sidecar: dict | None) -> str:
+    """--mode, else the --params file's mode, else DEFAULT_MODE (checked by the caller)."""
+    mode = flag if flag is not None else (sidecar or {}).get("mode")
+    return str(mode) if mode is not None else DEFAULT_MODE
+
+
+def parse_modes(flag: str, text: str, available: list[str]) -> list[str]:
+    """A comma-separated list of modes, each of `available`, at least one, none twice."""
+    modes = [m.strip() for m in text.split(",") if m.strip()]
+    if not modes:
+        raise UserError(f"{flag} {text!r}: expected one or more of {', '.join(available)}")
+    for m in modes:
+        if m not in available:
+            raise UserError(f"{flag} {text}: {m!r} is not one of {', '.join(available)}")
+        if modes.count(m) > 1:
+            raise UserError(f"{flag} {text}: {m!r} is listed twice")
+    return modes
+
+
+def _existing_ancestor(p: Path) -> Path:
+    """The nearest folder above `p` (or `p` itself) that exists: where missing folders
+    would be made."""
+    p = p.absolute()
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    return p
+
+
+def _check_can_make(folder: Path, flag: str, path: str):
+    """`folder` exists and is writable, or can be made (with its missing parents)."""
+    base = _existing_ancestor(folder)
+    if not base.is_dir():
+        raise UserError(f"{flag} {path}: {base} is not a folder")
+    if not os.access(base, os.W_OK):
+        raise UserError(f"{flag} {path}: folder {base} is not writable")
+
+
+def check_output_file(path: str, flag: str = "--out", suffix: str | None = None) -> Path:
+    """A file path that can be written: not a folder, not a device or pipe (renaming over
+    one would replace it), in a folder that exists or can be made (missing folders are
+    made when the outputs are written: imageio.OutputSet). `suffix`: the one extension
+    accepted (".png": only PNG is written, and `x.png` -> `x.json` then never collides)."""
+    if not path:
+        raise UserError(f"{flag} '': expected a file path")
+    p = Path(path)
+    if p.is_dir() or path.endswith(("/", os.sep)):
+        raise UserError(f"{flag} {path}: is a directory, expected a file path")
+    if suffix is not None and p.suffix != suffix:
+        raise UserError(f"{flag} {path}: expected a path ending in {suffix} "
+                        f"(only {suffix[1:].upper()} is written)")
+    if p.exists() and not p.is_file():
+        raise UserError(f"{flag} {path}: exists and is not a regular file")
+    _check_can_make(p.parent if str(p.parent) else Path("."), flag, path)
+    return p
+
+
+def check_output_dir(path: str, flag: str, create: bool = True) -> Path:
+    """A folder to write into: an existing one, or with `create` one that can be made with
+    its missing parents (made only when the outputs are written: imageio.OutputSet)."""
+    if not path:
+        raise UserError(f"{flag} '': expected a folder path")
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise UserError(f"{flag} {path}: exists and is not a folder")
+    if not p.exists():
+        if not create:
+            raise UserError(f"{flag} {path}: folder does not exist")
+        _check_can_make(p, flag, path)
+        return p
+    if not os.access(p, os.W_OK):
+        raise UserError(f"{flag} {path}: folder is not writable")
+    return p

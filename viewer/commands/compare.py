@@ -1,0 +1,156 @@
+"""`hmblur compare`: every real-time mode and the reference of one frame, a labelled strip
+with a zoomed inset where the inner blur is largest, and PSNR / SSIM / FLIP against the
+reference per region (whole image, inner blur, outer blur, static)."""
+from __future__ import annotations
+
+from dataclasses import replace
+
+from viewer.cli import args as cliargs
+from viewer.commands.shot import FIRST_FRAME_NOTE, sidecar
+from viewer.glcontext import create_headless, device_name
+from viewer.io.imageio import OutputSet, linear_to_srgb8
+from viewer.eval.comparison import REALTIME, Variant, compare_frame, parse_variant
+from viewer.eval.metrics import SPACE
+from viewer.io.progress import Progress
+from viewer.render.regions import DEFINITIONS, region_counts
+from viewer.render.modes import MODE_GROUPS, MODES
+from viewer.render.renderer import Renderer
+from viewer.eval.strip import choose_inset, error_strip, make_strip, metrics_markdown, region_picture
+
+LABELS = {"off": "off (sharp)", "mcguire": "McGuire 2012", "ue4": "UE4-style",
+          "guertin": "Guertin 2014",
+          "hybrid": "hybrid", "reference": "reference"}
+
+
+def register(sub):
+    p = sub.add_parser("compare", help="all modes side by side, with metrics against the reference",
+                       description="Render the reference and every real-time mode of one "
+                       "frame; write each mode's PNG and sidecar, strip.png (labelled, with a "
+                       "zoomed inset where the inner blur is densest), flip.png (each mode's "
+                       "FLIP error map, with the same inset and a colour key), regions.png (the blur regions, "
+                       "with a key) and metrics.md / metrics.json (PSNR, SSIM, FLIP per "
+                       "region, with pixel counts and the space they are computed in).")
+    cliargs.add_scene_args(p)
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="output folder (made, with missing parents, if missing)")
+    p.add_argument("--modes", default=None, metavar="M1,M2",
+                   help=f"comma-separated real-time modes (default: every one of {', '.join(REALTIME)} that exists)")
+    p.add_argument("--variant", action="append", default=[], metavar="NAME=MODE[:G.F=V,...]",
+                   help="a mode under a name with its own parameters, e.g. "
+                        "fast=hybrid:hybrid.curve_steps=1 (repeatable; shown beside --modes, "
+                        "which then defaults to none; the same mode may appear many times)")
+    p.add_argument("--shutter", default=None, metavar="S",
+                   help="exposure time in seconds, replacing the scene camera's")
+    p.add_argument("--inset", type=str, default=None, metavar="WxH",
+                   help="inset size in pixels (default: a quarter of the image height, square)")
+    p.set_defaults(run=run)
+
+
+def choose_modes(text: str | None, variants: bool = False) -> list[str]:
+    """The --modes list; by default every real-time mode, or none when --variant names
+    what to show."""
+    available = [m for m in REALTIME if m in MODES]
+    if text is None:
+        return [] if variants else available
+    return cliargs.parse_modes("--modes", text, available)
+
+
+def choose_variants(args) -> list[Variant]:
+    """--modes (each mode under its own name) then each --variant, no name twice."""
+    available = [m for m in REALTIME if m in MODES]
+    variants = [Variant(m, m) for m in choose_modes(args.modes, bool(args.variant))]
+    for text in args.variant:
+        v = parse_variant(text, available)
+        if any(v.name == u.name for u in variants):
+            raise cliargs.UserError(f"--variant {text}: the name {v.name!r} is already shown "
+                                    "(by --modes or an earlier --variant); give it another")
+        variants.append(v)
+    return variants
+
+
+def label(v: Variant) -> str:
+    """A column's label: the mode's own words when the variant is the bare mode."""
+    return LABELS[v.mode] if v.name == v.mode and not v.sets else v.name
+
+
+def run(args) -> int:
+    s = cliargs.setup(args)
+    variants = choose_variants(args)
+    cliargs.check_set_groups(args.set, [v.mode for v in variants] + ["reference"], MODE_GROUPS)
+    out = cliargs.check_output_dir(args.out, "--out")
+    if args.shutter is not None:
+        s.scene.camera.shutter = cliargs.parse_float("--shutter", args.shutter)
+        if s.scene.camera.shutter < 0:
+            raise cliargs.UserError(f"--shutter {args.shutter}: expected seconds >= 0")
+    w, h = s.size
+    inset = cliargs.parse_size(args.inset, "--inset") if args.inset else (max(8, h // 4),) * 2
+    ctx = create_headless()
+    r = Renderer(ctx, s.scene, s.size)
+    try:
+        c = compare_frame(r, s.time, s.params, variants, s.seed,
+                          progress=Progress(f"reference ({s.params['reference'].samples} sub-frames)"),
+                          log=lambda v, line: print(line))
+    finally:
+        r.release()
+    names = [v.name for v in variants]
+    table, ref = c.table, c.reference
+
+    box = choose_inset(c.region, inset)
+    panels = [(label(v), c.results[v.name].image) for v in variants] + [(LABELS["reference"], ref.image)]
+    lines = [[f"FLIP {table[n]['all']['flip']:.3f} all",
+              f"FLIP {fmt(table[n]['inner']['flip'])} inner"] for n in names]
+    lines.append([f"{s.params['reference'].samples} sub-frames", "ground truth"])
+    strip = make_strip(panels, inset_box=box, metrics=lines)
+    errors = error_strip([(f"{label(v)}: FLIP", c.flips[v.name]) for v in variants],
+                         metrics=[[f"mean {table[n]['all']['flip']:.4f}"] for n in names],
+                         inset_box=box)
+
+    files = OutputSet()                  # all of them, or none
+    for v in variants:                   # each image with the sidecar that remakes it
+        vs = replace(s, params=c.params[v.name])
+        side = sidecar(vs, v.mode, c.results[v.name], ctx, args.scene, first_frame=True,
+                       ms=c.ms[v.name])
+        if v.name != v.mode or v.sets:
+            side["variant"] = {"name": v.name, "set": v.sets}
+        files.png(out / f"{v.name}.png", linear_to_srgb8(c.results[v.name].image))
+        files.json(out / f"{v.name}.json", side)
+    files.png(out / "reference.png", linear_to_srgb8(ref.image))
+    files.json(out / "reference.json", sidecar(s, "reference", ref, ctx, args.scene,
+                                               first_frame=True, ms=c.ms["reference"]))
+    files.png(out / "regions.png", region_picture(c.region))
+    files.png(out / "strip.png", strip)
+    files.png(out / "flip.png", errors)
+    md = metrics_markdown(table, key="mode" if all(v.name == v.mode for v in variants)
+                          else "variant")
+    steps = s.params["motion"].steps
+    header = (f"# {s.scene.name}: {w}x{h}, t = {s.time:g} s, shutter {s.scene.camera.shutter:g} s, "
+              + (f"motion.steps={steps} (the blurring modes), " if steps > 1 else "")
+              + f"reference {s.params['reference'].samples} sub-frames\n\nSpace: {SPACE}.\n\n"
+              + "".join(f"- {v.name}: {v.mode}"
+                        + (", " + ", ".join(f"{k}={val}" for k, val in v.sets.items()) if v.sets else "")
+                        + "\n" for v in variants if v.name != v.mode or v.sets)
+              + ("\n" if any(v.name != v.mode or v.sets for v in variants) else "")
+              + "Regions (regions.png), from the reference's own visibility at each of its "
+              "sub-frames:\n\n" + "".join(f"- {d}\n" for d in DEFINITIONS.values()) + "\n")
+    text = (header + md).encode("utf-8")
+    files.add(out / "metrics.md", lambda f: f.write(text))
+    files.json(out / "metrics.json", {
+        **cliargs.scene_source(args.scene), "scene_name": s.scene.name, "size": [w, h],
+        "time": s.time, "shutter": s.scene.camera.shutter,
+        "seed": s.seed, "device": device_name(ctx), "params": s.params.to_dict(),
+        "variants": {v.name: {"mode": v.mode, "set": v.sets} for v in variants},
+        "regions": region_counts(c.region), "region_definitions": DEFINITIONS,
+        "inset": list(box), "metrics": table, "space": SPACE,
+        "ms": c.ms, "ms_note": FIRST_FRAME_NOTE, "stats": {**{n: c.results[n].stats for n in names},
+                              "reference": ref.stats},
+    })
+    files.commit()
+    print(md)
+    print(f"{out}: strip.png, flip.png, regions.png, metrics.md, metrics.json, "
+          f"{len(variants) + 1} images (first-frame times include shader compiles and set-up; "
+          "'hmblur bench' times warm frames)")
+    return 0
+
+
+def fmt(v) -> str:
+    return "n/a" if v is None else f"{v:.4f}"

@@ -1,0 +1,107 @@
+"""`hmblur shot`: render one mode of a scene to an sRGB PNG, with a JSON sidecar."""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from viewer.cli import args as cliargs
+from viewer.glcontext import create_headless, device_name
+from viewer.io.imageio import OutputSet, linear_to_srgb8
+from viewer.render.modes import MODE_GROUPS, MODES
+from viewer.render.renderer import Renderer
+from viewer.io.buffer_docs import buffers_readme
+from viewer.io.visualize import visualise
+
+
+FIRST_FRAME_NOTE = ("the times and *_ms counters in stats are those of the first frame of a "
+                    "fresh renderer: shader compiles, texture allocation and the ray "
+                    "tracer's scene build are included; 'hmblur bench' reports warm medians")
+
+
+def register(sub):
+    p = sub.add_parser("shot", help="render one mode to a PNG (with a JSON sidecar)",
+                       description="Render one mode of a scene to an sRGB 8-bit PNG (top row "
+                       "first) and write a JSON sidecar beside it (x.png -> x.json) holding "
+                       "every parameter, the scene, camera, time, size, seed, device and the "
+                       "frame's counters; 'hmblur shot --params x.json --out y.png' "
+                       "reproduces it byte for byte.")
+    cliargs.add_scene_args(p)
+    p.add_argument("--mode", default=None,
+                   help=f"one of: {', '.join(MODES)} (default: {cliargs.DEFAULT_MODE}, or the "
+                        "--params file's)")
+    p.add_argument("--out", required=True, metavar="PATH.png",
+                   help="output PNG path (missing folders are made; the .json sidecar goes "
+                        "beside it)")
+    p.add_argument("--buffers", default=None, metavar="DIR",
+                   help="also write every intermediate texture as .npy (raw) and .png "
+                        "(viewable), with README.txt saying what each holds")
+    p.set_defaults(run=run)
+
+
+def camera_dict(spec) -> dict:
+    return spec.to_dict()
+
+
+def sidecar(s: cliargs.Setup, mode: str, result, ctx, scene_arg: str,
+            first_frame: bool = False, ms: float | None = None) -> dict:
+    """The JSON beside an image. `first_frame`: the stats are a fresh renderer's first
+    frame (set-up costs included), said so in "timing"; `ms`: the render's wall time."""
+    timing = {"first_frame": first_frame}
+    if first_frame:
+        timing["note"] = FIRST_FRAME_NOTE
+    if ms is not None:
+        timing["render_ms"] = ms
+    return {
+        **cliargs.scene_source(scene_arg),
+        "scene_name": s.scene.name,
+        "mode": mode,
+        "time": s.time,
+        "size": list(s.size),
+        "seed": s.seed,
+        "params": s.params.to_dict(MODE_GROUPS.get(mode, ())),
+        "camera": camera_dict(s.scene.camera),
+        "device": device_name(ctx),
+        "stats": result.stats,
+        "timing": timing,
+    }
+
+
+def run(args) -> int:
+    s = cliargs.setup(args)
+    mode = cliargs.pick_mode(args.mode, s.sidecar)
+    if mode not in MODES:
+        raise cliargs.UserError(f"--mode {mode}: expected one of {', '.join(MODES)}")
+    cliargs.check_set_groups(args.set, [mode], MODE_GROUPS)
+    if args.samples is not None and mode != "reference":
+        raise cliargs.UserError(f"--samples {args.samples}: only the reference mode takes "
+                                f"sub-frames, not {mode}")
+    out = cliargs.check_output_file(args.out, suffix=".png")
+    side = out.with_suffix(".json")
+    cliargs.check_output_file(str(side), "--out's sidecar")
+    bufdir = cliargs.check_output_dir(args.buffers, "--buffers") if args.buffers is not None else None
+    ctx = create_headless()
+    r = Renderer(ctx, s.scene, s.size)
+    files = OutputSet()
+    try:
+        t0 = time.perf_counter()
+        res = r.render(mode, s.time, s.params, seed=s.seed)
+        ms = (time.perf_counter() - t0) * 1e3
+        if bufdir is not None:
+            add_buffers(files, r, bufdir, mode)
+        files.png(out, linear_to_srgb8(res.image))
+        files.json(side, sidecar(s, mode, res, ctx, args.scene, first_frame=True, ms=ms))
+    finally:
+        r.release()
+    files.commit()
+    print(f"{out}: {mode} {s.size[0]}x{s.size[1]} t={s.time:g} in {ms:.0f} ms "
+          "(first frame: set-up included; 'hmblur bench' times warm frames)")
+    return 0
+
+
+def add_buffers(files: OutputSet, r: Renderer, folder: Path, mode: str):
+    bufs = r.buffers()
+    for name, a in bufs.items():
+        files.npy(folder / f"{name}.npy", a)
+        files.png(folder / f"{name}.png", visualise(name, a))
+    text = buffers_readme(bufs, mode).encode("utf-8")
+    files.add(folder / "README.txt", lambda f: f.write(text))

@@ -1,0 +1,2 @@
+"""Evaluation against the reference: metrics per region, one frame compared, flicker over
+time, labelled strips and plots."""

@@ -1,0 +1,119 @@
+"""One frame compared: the reference (with its visibility, hence the blur regions) rendered
+once, then each variant (a named mode with its own parameters), with PSNR / SSIM / FLIP per
+region against the reference. `hmblur compare` and every cell of `hmblur sweep` run this
+one function, so that their numbers are the same by construction."""
+from __future__ import annotations
+
+import re
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from world.errors import UserError
+from .metrics import metric_maps, region_metrics
+from viewer.render.graph.params import ParamSet
+from viewer.render.modes import MODE_GROUPS
+from viewer.render.modes.reference import REGIONS
+from viewer.render.renderer import Renderer, RenderResult
+
+REALTIME = ("off", "mcguire", "ue4", "guertin", "hybrid")
+# Names an image or table of compare's folder already uses: no variant may take them.
+RESERVED = ("reference", "regions", "strip", "flip", "metrics")
+NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.+-]*")
+
+
+@dataclass
+class Variant:
+    """A real-time mode under a name, with parameter assignments on top of the common ones
+    ("group.field" -> value as text or a value)."""
+    name: str
+    mode: str
+    sets: dict = field(default_factory=dict)
+
+    def params(self, base: ParamSet, label: str) -> ParamSet:
+        """`base` with this variant's assignments applied (a copy; `base` is untouched)."""
+        p = ParamSet()
+        p.update(base.to_dict(), source=label)
+        for key, value in self.sets.items():
+            p.set(key, value, label=label)
+        return p
+
+
+def check_variant(v: Variant, label: str, available=REALTIME, values: bool = True):
+    """One line naming `label` for a bad name, mode, a group the mode does not read or
+    (with `values`) a value of the wrong type or out of range."""
+    if not NAME.fullmatch(v.name):
+        raise UserError(f"{label}: variant name {v.name!r}: expected letters, digits and "
+                        "_ . + - (a file name), starting with a letter or digit")
+    if v.name in RESERVED:
+        raise UserError(f"{label}: variant name {v.name!r} is taken by compare's own "
+                        f"outputs ({', '.join(RESERVED)})")
+    if v.mode not in available:
+        raise UserError(f"{label}: mode {v.mode!r} is not one of {', '.join(available)}")
+    for key in v.sets:
+        group = key.partition(".")[0]
+        if group not in MODE_GROUPS.get(v.mode, ()):
+            readers = [m for m, gs in MODE_GROUPS.items() if group in gs]
+            raise UserError(f"{label}: {key}: mode {v.mode} does not use the {group} "
+                            f"parameters (used by {', '.join(readers) or 'no mode'})")
+    if values:                           # every value's type and range, before any render
+        v.params(ParamSet(), label)
+
+
+def parse_variant(text: str, available=REALTIME) -> Variant:
+    """`NAME=MODE[:group.field=value,...]` (the --variant flag)."""
+    label = f"--variant {text}"
+    name, eq, rest = text.partition("=")
+    mode, _, sets_text = rest.partition(":")
+    if not eq or not name.strip() or not mode.strip():
+        raise UserError(f"{label}: expected NAME=MODE[:group.field=value,...], e.g. "
+                        "fast=hybrid:hybrid.curve_steps=1")
+    sets = {}
+    for item in filter(None, (s.strip() for s in sets_text.split(","))):
+        key, eq, value = item.partition("=")
+        if not eq or "." not in key:
+            raise UserError(f"{label}: {item!r}: expected group.field=value")
+        if key.strip() in sets:
+            raise UserError(f"{label}: {key.strip()} is set twice")
+        sets[key.strip()] = value.strip()
+    v = Variant(name.strip(), mode.strip(), sets)
+    check_variant(v, label, available)
+    return v
+
+
+@dataclass
+class Comparison:
+    reference: RenderResult
+    region: np.ndarray                    # (H, W) uint8, viewer.render.regions codes
+    params: dict                          # variant name -> its ParamSet
+    results: dict                         # variant name -> RenderResult
+    table: dict                           # variant name -> region_metrics(...)
+    flips: dict                           # variant name -> (H, W) FLIP map
+    ms: dict                              # "reference" and each name -> wall ms, first frame
+
+
+def compare_frame(r: Renderer, t: float, base: ParamSet, variants: list[Variant], seed: int,
+                  progress=None, log=None) -> Comparison:
+    """The reference at `t` with `base` parameters, then every variant on the same
+    renderer, each measured against the reference per region. `log(variant, line)` is
+    told each variant's headline numbers."""
+    t0 = time.perf_counter()
+    ref = r.render("reference", t, base, seed=seed, record_visibility=True, progress=progress)
+    ms = {"reference": (time.perf_counter() - t0) * 1e3}
+    region = ref.host[REGIONS]
+    out = Comparison(ref, region, {}, {}, {}, {}, ms)
+    for v in variants:
+        params = v.params(base, f"variant {v.name}")
+        t0 = time.perf_counter()
+        res = r.render(v.mode, t, params, seed=seed)
+        ms[v.name] = (time.perf_counter() - t0) * 1e3
+        maps = metric_maps(res.image, ref.image)
+        out.params[v.name], out.results[v.name] = params, res
+        out.table[v.name], out.flips[v.name] = region_metrics(maps, region), maps["flip"]
+        if log is not None:
+            tab = out.table[v.name]
+            inner = tab["inner"]["flip"]
+            log(v, f"{v.name}: FLIP {tab['all']['flip']:.4f} (inner "
+                   f"{'n/a' if inner is None else f'{inner:.4f}'}), first frame {ms[v.name]:.0f} ms")
+    return out
