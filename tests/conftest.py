@@ -66,7 +66,7 @@ def synthetic_frame(ctx):
     from world.camera import Camera
     from viewer.render.graph.params import ParamSet
     from viewer.render.graph.frame import Frame
-    from viewer.render.gpu_scene import GpuScene
+    from viewer.render.graph.gpu_scene import GpuScene
     from viewer.render.graph.pool import ResourcePool
     from viewer.render.graph.shaders import ProgramCache
     made = []

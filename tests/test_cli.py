@@ -214,7 +214,7 @@ def test_compare_writes_images_regions_and_metrics_recomputable_from_them(tmp_pa
     strip, metrics.md and metrics.json (with the space the numbers are in); the same
     outputs twice over, and the metrics those of the written PNGs and region map."""
     from viewer.eval.metrics import image_metrics
-    from viewer.render.regions import INNER, OUTER
+    from viewer.render.modes.regions import INNER, OUTER
     runs = [tmp_path / "a", tmp_path / "b"]
     for out in runs:
         assert main(["compare", BASIC, "--size", "64x40", "--samples", "4",
@@ -328,7 +328,7 @@ def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys, ct
     # The driver's own method (CPU clock on software GL, timer queries on a GPU); times are
     # the bench's to report, not the tests' to judge: only their bookkeeping is checked.
     from viewer.render.graph.registry import build
-    from viewer.render.graph.timing import PassClock, describe
+    from viewer.render.timing import PassClock, describe
     assert rep["pass_timing"] == describe(PassClock(ctx).method)
     assert set(rep["modes"]) == {"off", "mcguire", "ue4", "guertin", "hybrid"}
     for mode, r in rep["modes"].items():
@@ -365,7 +365,7 @@ def test_bench_reports_every_mode_pass_ratio_and_the_reveal(tmp_path, capsys, ct
 
 def test_bench_animates_frame_after_frame(tmp_path, capsys, monkeypatch):
     from viewer.render.renderer import Renderer
-    from viewer.render.graph.timing import PassClock
+    from viewer.render.timing import PassClock
     times = []
     render, timed = Renderer.render, PassClock.render
     monkeypatch.setattr(Renderer, "render", lambda self, mode, t, *a, **k: (

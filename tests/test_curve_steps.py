@@ -1,6 +1,6 @@
 """Curve steps: how far screen paths stray from their chords (world/path_bend.py), against
 the geometry worked out by hand, and the sub-exposure steps a mode takes for it
-(viewer/render/graph/steps.py): the hybrid's default follows bending motion with 2 sub-frames,
+(viewer/render/steps.py): the hybrid's default follows bending motion with 2 sub-frames,
 straight motion and the published filters stay one linear blur."""
 import math
 
@@ -9,7 +9,7 @@ import pytest
 
 from viewer.render.graph.params import ParamSet
 from viewer.render.renderer import Renderer
-from viewer.render.graph.steps import curve_steps, step_count
+from viewer.render.steps import curve_steps, step_count
 from world.camera import Camera
 from world.path_bend import FRACTIONS, screen_bend
 

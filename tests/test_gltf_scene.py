@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from raytrace import RayScene
-from viewer.render.gpu_scene import GpuScene
+from viewer.render.graph.gpu_scene import GpuScene
 from world.loader import load_scene
 
 from conftest import CONFORMANCE, _context

@@ -303,7 +303,7 @@ def test_tiled_gather_is_the_full_screen_one(synthetic_frame, mode):
 
 def test_mode_beats_off_on_basic(ctx):
     from viewer.eval.metrics import image_metrics
-    from viewer.render.regions import OUTER
+    from viewer.render.modes.regions import OUTER
     ref, images, names = render_basic(ctx, ("off", "guertin"))
     region = ref.host[REGIONS]
     assert (region == OUTER).sum() > 50

@@ -125,12 +125,58 @@ def test_no_import_cycles():
     assert not found, "modules importing each other: " + "; ".join(" <-> ".join(c) for c in found)
 
 
+# The layers, top first: a module imports only from its own group and the groups below
+# it (docs/architecture.md draws the same table). Groups on one row are peers that do not
+# import each other.
+LAYERS = (
+    ("viewer.__main__",),
+    ("viewer.commands",),                 # one module per subcommand
+    ("viewer.sweep",),                    # hmblur sweep on Dask
+    ("viewer.eval", "viewer.ui"),         # metrics, strips, plots | the window
+    ("viewer.io",),                       # files out: images, sidecars, video, signals
+    ("viewer.cli",),                      # the commands' argument toolkit
+    ("viewer.render",),                   # the render core's front: Renderer, steps, timing
+    ("viewer.render.modes",),             # each mode; the hybrid's package
+    ("viewer.render.passes",),            # passes shared by modes
+    ("viewer.render.graph",),             # the framework: passes, pool, frame, registry
+    ("viewer.glcontext",),                # the headless EGL context
+    ("viewer",),                          # the package itself (its docstring)
+    ("raytrace",),                        # Embree scenes and the reveal's rays
+    ("world",),                           # scene model, loaders, camera, conventions
+    ("glsl", "scenes"),                   # shader sources, built-in scene files
+)
+
+
+def layer_of(module: str) -> tuple[int, str]:
+    """(row, group) of the longest group that holds `module`."""
+    best = None
+    for row, groups in enumerate(LAYERS):
+        for g in groups:
+            if module == g or module.startswith(g + "."):
+                if best is None or len(g) > len(best[1]):
+                    best = (row, g)
+    assert best is not None, f"{module} is in no layer: add its group to LAYERS"
+    return best
+
+
 def _upward(m: str, t: str) -> bool:
-    below_viewer = m.startswith(("world", "raytrace", "glsl", "scenes"))
-    return ((below_viewer and t.startswith("viewer"))
-            or (m.startswith(("world", "glsl", "scenes")) and t.startswith("raytrace"))
-            or (m.startswith("viewer.render") and t.startswith(
-                ("viewer.ui", "viewer.ui.app", "viewer.cmd_", "viewer.commands.main", "viewer.__main__"))))
+    (rm, gm), (rt, gt) = layer_of(m), layer_of(t)
+    return rt < rm or (rt == rm and gt != gm)
+
+
+def test_layer_rule_on_hand_made_pairs():
+    assert _upward("viewer.render.graph.pool", "viewer.render.passes.depth")
+    assert _upward("viewer.ui.state", "viewer.commands.shot")
+    assert _upward("viewer.eval.strip", "viewer.ui.panel")            # peers
+    assert _upward("world.loader", "raytrace.kernels")
+    assert not _upward("viewer.render.modes.mcguire", "viewer.render.passes.tiles")
+    assert not _upward("viewer.commands.shot", "world.loader")
+    assert not _upward("viewer.render.modes.hybrid.mask", "viewer.render.modes.hybrid.tile_select")
+
+
+def test_every_module_is_in_a_layer():
+    for m in graph():
+        layer_of(m)
 
 
 def test_lower_layers_do_not_import_upper_ones():

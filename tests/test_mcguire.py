@@ -400,7 +400,7 @@ def render_basic(ctx, modes, size=(160, 90)):
 
 
 def test_mode_beats_off_in_outer_blur_on_basic(ctx):
-    from viewer.render.regions import OUTER
+    from viewer.render.modes.regions import OUTER
     from viewer.eval.metrics import image_metrics
     ref, images, names = render_basic(ctx, ("off", "mcguire"))
     off, mc = images["off"], images["mcguire"]

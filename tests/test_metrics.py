@@ -8,7 +8,7 @@ from skimage.metrics import structural_similarity
 
 from viewer.io.imageio import linear_to_srgb8, srgb8_to_linear, write_json_atomic
 from viewer.eval.metrics import flip_map, image_metrics, metric_maps, to_srgb
-from viewer.render.regions import INNER, OUTER, STATIC
+from viewer.render.modes.regions import INNER, OUTER, STATIC
 
 
 def _rand8(shape=(16, 20, 3), seed=0):

@@ -2,7 +2,7 @@
 just above what the modes measure, so a quality regression turns the suite red.
 
 160x90, the reference with 16 sub-frames (its per-sub-frame visibility classifies the
-regions: viewer/render/regions.py), every frame at the scene's own time. The modes are MODES'
+regions: viewer/render/modes/regions.py), every frame at the scene's own time. The modes are MODES'
 (the reference aside): a new mode joins by itself, held to the worst bound of the
 post-process modes (mcguire, ue4) until it has its own. Rerun the measurement with
 `python tests/test_quality_matrix.py` (prints the table below with measured values).

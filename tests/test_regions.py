@@ -15,7 +15,7 @@ from embreex import rtcore_scene
 from embreex.mesh_construction import TriangleMesh
 
 from world.conventions import BACKGROUND_DEPTH
-from viewer.render.regions import INNER, OUTER, STATIC, RegionAccumulator, classify_regions, region_counts
+from viewer.render.modes.regions import INNER, OUTER, STATIC, RegionAccumulator, classify_regions, region_counts
 
 CONF = Path(__file__).parent / "conformance"
 
@@ -207,7 +207,7 @@ def test_caster_reproduces_centre_buffers(conformance):
 
 
 # mismatching pixels allowed per scene: measured 0 for both (see module docstring of
-# viewer/render/regions.py for how close the alternatives come)
+# viewer/render/modes/regions.py for how close the alternatives come)
 @pytest.mark.parametrize("allowed", [0])
 def test_reproduces_conformance_region_maps(conformance, allowed):
     name, _, data, ids, depths = conformance

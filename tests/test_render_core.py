@@ -369,7 +369,7 @@ def test_any_number_of_lights_adds_up_light_by_light(ctx, tmp_path, mode):
 
 def test_lights_beyond_the_drivers_uniform_storage_go_in_a_texture():
     from world.errors import SceneError
-    from viewer.render.gpu_scene import light_slots
+    from viewer.render.graph.gpu_scene import light_slots
 
     class Info:                                  # only the limits light_slots reads
         def __init__(self, vectors, texture=16384):
@@ -391,7 +391,7 @@ def test_lights_in_a_texture_shade_as_lights_in_uniforms(ctx, tmp_path, mode, mo
     """Past the uniform storage (2016 lights on llvmpipe) the lights are read from a
     texture: the same 40 lights give the same image both ways, and 2100 lights (more
     than llvmpipe's uniforms hold) render, lit by all of them."""
-    import viewer.render.gpu_scene as gs
+    import viewer.render.graph.gpu_scene as gs
     rng = np.random.default_rng(11)
 
     def lights_text(n, scale):
@@ -472,7 +472,7 @@ def test_an_image_texture_past_the_drivers_size_limit_is_a_scene_error(ctx, tmp_
     import trimesh
     from PIL import Image
     from world.errors import SceneError
-    from viewer.render.gpu_scene import GpuScene
+    from viewer.render.graph.gpu_scene import GpuScene
     limit = ctx.info["GL_MAX_TEXTURE_SIZE"]
     Image.new("RGB", (limit + 1, 1), (255, 128, 0)).save(tmp_path / "wide.png")
     m = trimesh.creation.box(extents=[1, 1, 1])
@@ -498,9 +498,9 @@ def test_an_image_texture_past_the_drivers_size_limit_is_a_scene_error(ctx, tmp_
 def test_depth_holds_with_a_tiny_near_and_far_surfaces(ctx, tmp_path, mode):
     """near 1e-4: the standard mapping in a 24-bit buffer rounded a wall at 2000 m to
     depth 1 (gone), and a box 30 m behind another at 1000 m showed through it. With
-    reversed Z in a float buffer (viewer/render/passes/depth.py) both render as a ray caster
+    reversed Z in a float buffer (viewer/render/graph/depth.py) both render as a ray caster
     sees them."""
-    from viewer.render.passes import depth
+    from viewer.render.graph import depth
     assert depth.reversed_z(ctx)                 # (llvmpipe: GL 4.5)
     sc = scene_from(tmp_path, """
         background = [0.0, 0.0, 1.0]

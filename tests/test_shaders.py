@@ -44,7 +44,7 @@ def test_missing_include_is_reported(glsl_dir):
 def test_shipped_shaders_compile(ctx):
     from world.conventions import glsl_defines
     from viewer.render.passes.gbuffer import LAYOUTS, layout_defines
-    from viewer.render.gpu_scene import TEX_KINDS
+    from viewer.render.graph.gpu_scene import TEX_KINDS
     kinds = {f"TEX_{k.upper()}": v for k, v in TEX_KINDS.items() if k}
     for layout in LAYOUTS:
         for in_texture in (0, 1):

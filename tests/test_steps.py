@@ -1,4 +1,4 @@
-"""Sub-exposure steps (`motion.steps`, viewer/render/graph/steps.py): N = 1 is the plain frame,
+"""Sub-exposure steps (`motion.steps`, viewer/render/steps.py): N = 1 is the plain frame,
 N sub-frames are the mean of N frames of shutter s/N rendered on their own at the
 sub-interval centres, the error against the reference falls as N grows, and the
 parameter is checked like any other."""
@@ -9,8 +9,8 @@ from viewer.commands.main import main
 from viewer.render.graph.params import ParamSet
 from viewer.render.modes import MODE_GROUPS
 from viewer.render.renderer import Renderer
-from viewer.render.graph.steps import step_seed, sub_exposures
-from viewer.render.graph.timing import PassClock
+from viewer.render.steps import step_seed, sub_exposures
+from viewer.render.timing import PassClock
 from world.loader import load_scene
 
 from conftest import CONFORMANCE

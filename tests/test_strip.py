@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from viewer.io.imageio import srgb8_to_linear
-from viewer.render.regions import INNER, OUTER, STATIC
+from viewer.render.modes.regions import INNER, OUTER, STATIC
 from viewer.eval.strip import BACKGROUND, BOX, GAP, HEAT_RGB, REGION_COLOURS, choose_inset, font_size, heat, line_height, make_strip, metrics_json, metrics_markdown, metrics_rows, region_picture
 
 LH = line_height(20)     # label row height beside 20 px tall images

@@ -292,7 +292,7 @@ def test_progressive_reference_equals_the_full_render_and_restarts(ctx):
     from viewer.render.renderer import Renderer
     from world.loader import load_scene
     from viewer.ui.progressive import Progressive
-    from viewer.render.graph.timing import PassClock
+    from viewer.render.timing import PassClock
     r = Renderer(ctx, load_scene(SCENE), (96, 54))
     try:
         params = ParamSet()
@@ -316,7 +316,7 @@ def test_progressive_reference_equals_the_full_render_and_restarts(ctx):
 def test_pass_clock_method_and_gpu_queries(ctx):
     from viewer.render.renderer import Renderer
     from world.loader import load_scene
-    from viewer.render.graph.timing import PassClock, gpu_timers_truthful
+    from viewer.render.timing import PassClock, gpu_timers_truthful
     software = "llvmpipe" in ctx.info["GL_RENDERER"].lower()
     assert gpu_timers_truthful(ctx) is not software
     assert PassClock(ctx).method == ("cpu" if software else "gpu")

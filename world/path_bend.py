@@ -10,7 +10,7 @@ sagitta r (1 - cos(theta / 2)) for a point turning by theta on a circle of r px,
 way out for a path that goes out and comes back.
 
 A sub-exposure of 1/N of the exposure strays about 1/N^2 as far (a smooth path is about
-a parabola over a short interval), which is how viewer/render/graph/steps.py turns the measure
+a parabola over a short interval), which is how viewer/render/steps.py turns the measure
 into a step count.
 """
 from __future__ import annotations

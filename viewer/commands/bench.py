@@ -18,7 +18,7 @@ from viewer.io.imageio import write_json_atomic
 from viewer.io.progress import Progress
 from viewer.render.modes import MODE_GROUPS, MODES
 from viewer.render.renderer import Renderer
-from viewer.render.graph.timing import PassClock, describe, gpu_timers_truthful
+from viewer.render.timing import PassClock, describe, gpu_timers_truthful
 
 REALTIME = ("off", "mcguire", "ue4", "guertin", "hybrid")
 

@@ -6,13 +6,13 @@ from __future__ import annotations
 from dataclasses import replace
 
 from viewer.cli import args as cliargs
-from viewer.commands.shot import FIRST_FRAME_NOTE, sidecar
+from viewer.io.sidecar import FIRST_FRAME_NOTE, sidecar
 from viewer.glcontext import create_headless, device_name
 from viewer.io.imageio import OutputSet, linear_to_srgb8
 from viewer.eval.comparison import REALTIME, Variant, compare_frame, parse_variant
 from viewer.eval.metrics import SPACE
 from viewer.io.progress import Progress
-from viewer.render.regions import DEFINITIONS, region_counts
+from viewer.render.modes.regions import DEFINITIONS, region_counts
 from viewer.render.modes import MODE_GROUPS, MODES
 from viewer.render.renderer import Renderer
 from viewer.eval.strip import choose_inset, error_strip, make_strip, metrics_markdown, region_picture

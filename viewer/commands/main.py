@@ -14,6 +14,7 @@ from viewer.cli.args import OTHER_SCENE_DIRS
 from viewer.io.ending import Terminated, catch_signals, received, restore_signals
 from viewer.io.imageio import remove_partials
 from viewer.io.progress import end_line
+from viewer.io.sidecar import version
 
 COMMANDS = ("shot", "compare", "bench", "view", "params", "graph", "video", "scene",
             "sweep")
@@ -35,21 +36,6 @@ examples:
 
 'hmblur COMMAND --help' describes a command. A user's mistake prints one line
 'hmblur: error: ...' and exits with status 2."""
-
-
-def version() -> str:
-    """The project's version: pyproject.toml beside the package (a source checkout), else
-    the installed distribution's."""
-    pyproject = Path(__file__).resolve().parent.parent / "pyproject.toml"
-    try:
-        import tomllib
-        return tomllib.loads(pyproject.read_text())["project"]["version"]
-    except (OSError, KeyError, ValueError):
-        from importlib.metadata import PackageNotFoundError, version as dist_version
-        try:
-            return dist_version("hybrid-mblur")
-        except PackageNotFoundError:
-            return "unknown"
 
 
 class _Parser(argparse.ArgumentParser):

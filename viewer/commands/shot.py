@@ -5,17 +5,13 @@ import time
 from pathlib import Path
 
 from viewer.cli import args as cliargs
-from viewer.glcontext import create_headless, device_name
+from viewer.glcontext import create_headless
 from viewer.io.imageio import OutputSet, linear_to_srgb8
+from viewer.io.sidecar import sidecar
 from viewer.render.modes import MODE_GROUPS, MODES
 from viewer.render.renderer import Renderer
 from viewer.io.buffer_docs import buffers_readme
 from viewer.io.visualize import visualise
-
-
-FIRST_FRAME_NOTE = ("the times and *_ms counters in stats are those of the first frame of a "
-                    "fresh renderer: shader compiles, texture allocation and the ray "
-                    "tracer's scene build are included; 'hmblur bench' reports warm medians")
 
 
 def register(sub):
@@ -36,34 +32,6 @@ def register(sub):
                    help="also write every intermediate texture as .npy (raw) and .png "
                         "(viewable), with README.txt saying what each holds")
     p.set_defaults(run=run)
-
-
-def camera_dict(spec) -> dict:
-    return spec.to_dict()
-
-
-def sidecar(s: cliargs.Setup, mode: str, result, ctx, scene_arg: str,
-            first_frame: bool = False, ms: float | None = None) -> dict:
-    """The JSON beside an image. `first_frame`: the stats are a fresh renderer's first
-    frame (set-up costs included), said so in "timing"; `ms`: the render's wall time."""
-    timing = {"first_frame": first_frame}
-    if first_frame:
-        timing["note"] = FIRST_FRAME_NOTE
-    if ms is not None:
-        timing["render_ms"] = ms
-    return {
-        **cliargs.scene_source(scene_arg),
-        "scene_name": s.scene.name,
-        "mode": mode,
-        "time": s.time,
-        "size": list(s.size),
-        "seed": s.seed,
-        "params": s.params.to_dict(MODE_GROUPS.get(mode, ())),
-        "camera": camera_dict(s.scene.camera),
-        "device": device_name(ctx),
-        "stats": result.stats,
-        "timing": timing,
-    }
 
 
 def run(args) -> int:

@@ -33,7 +33,7 @@ def register(sub):
 
 
 def run(args) -> int:
-    from viewer.commands.main import version
+    from viewer.io.sidecar import version
     from viewer.sweep.run import run_sweep
     from viewer.sweep.spec import load_sweep
     spec = load_sweep(args.sweep)

@@ -14,7 +14,7 @@ from pathlib import Path
 from world import limits
 from viewer.cli import args as cliargs
 from viewer.commands.compare import LABELS
-from viewer.commands.shot import camera_dict
+from viewer.io.sidecar import camera_dict, scene_for_sidecar
 from world.errors import UserError
 from viewer.io.imageio import OutputSet, linear_to_srgb8
 from viewer.eval.metrics import SPACE, image_metrics
@@ -69,13 +69,6 @@ def register(sub):
                         "flicker (PATH_flicker.csv) and a plot of FLIP over time "
                         "(PATH_flip.png); in a folder metrics.csv, flicker.csv, flip.png")
     p.set_defaults(run=run)
-
-
-def scene_for_sidecar(arg: str) -> str:
-    """A scene argument that works from any folder: a file as its absolute path, a
-    built-in scene by its name."""
-    p = Path(arg)
-    return str(p.resolve()) if p.is_file() else arg
 
 
 def mode_colours(modes) -> dict:

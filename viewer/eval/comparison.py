@@ -85,7 +85,7 @@ def parse_variant(text: str, available=REALTIME) -> Variant:
 @dataclass
 class Comparison:
     reference: RenderResult
-    region: np.ndarray                    # (H, W) uint8, viewer.render.regions codes
+    region: np.ndarray                    # (H, W) uint8, viewer.render.modes.regions codes
     params: dict                          # variant name -> its ParamSet
     results: dict                         # variant name -> RenderResult
     table: dict                           # variant name -> region_metrics(...)

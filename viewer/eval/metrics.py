@@ -23,7 +23,7 @@ import numpy as np
 from skimage.metrics import structural_similarity
 
 from viewer.io.imageio import linear_to_srgb8, srgb_float
-from viewer.render.regions import NAMES
+from viewer.render.modes.regions import NAMES
 
 SSIM_WIN = 7
 SSIM_PAD = (SSIM_WIN - 1) // 2

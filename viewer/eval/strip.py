@@ -19,7 +19,7 @@ import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
 from viewer.io.imageio import json_safe, linear_to_srgb8
-from viewer.render.regions import INNER, NAMES, OUTER, STATIC
+from viewer.render.modes.regions import INNER, NAMES, OUTER, STATIC
 
 GAP = 4                    # pixels between columns and between stacked parts
 PAD = 2                    # around text

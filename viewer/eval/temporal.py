@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from viewer.render.regions import NAMES
+from viewer.render.modes.regions import NAMES
 
 REGIONS = ("all",) + tuple(NAMES[c] for c in sorted(NAMES))
 

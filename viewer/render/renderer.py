@@ -17,13 +17,13 @@ from world.scene import Scene
 from viewer.render.graph.shaders import ProgramCache
 from viewer.render.graph.allocator import keep_freed_memory
 from viewer.render.graph.frame import Frame, PassTimer
-from .gpu_scene import GpuScene
+from viewer.render.graph.gpu_scene import GpuScene
 from viewer.render.graph.host import HostResources
 from viewer.render.graph.kept import KeptState
 from .modes import MODES
 from viewer.render.graph.registry import mode_config
 from viewer.render.graph.pool import ResourcePool
-from viewer.render.graph.steps import MakeFrame, Measure, run_steps, step_count, sub_exposures
+from viewer.render.steps import MakeFrame, Measure, run_steps, step_count, sub_exposures
 
 
 @dataclass
@@ -84,7 +84,7 @@ class Renderer:
 
     def run(self, mode: str, t: float, params: ParamSet, seed: int, make_frame: MakeFrame,
             measure: Measure = PassTimer) -> Frame:
-        """The frame at t of `mode`, as its sub-exposure steps (viewer/render/graph/steps.py):
+        """The frame at t of `mode`, as its sub-exposure steps (viewer/render/steps.py):
         `make_frame(time, shutter, seed)` makes each sub-frame, Pipeline.run runs the
         mode's passes on it, each inside `measure(frame, name)`, and the accumulation."""
         shutter = float(self.scene.camera.shutter)

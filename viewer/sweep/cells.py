@@ -142,7 +142,7 @@ def run_cell(task: CellTask) -> dict:
 
 def _check_version(task: CellTask):
     """A worker of another version would file its numbers under this version's key."""
-    from viewer.commands.main import version
+    from viewer.io.sidecar import version
     if version() != task.version:
         raise UserError(f"this worker runs hmblur {version()}, the sweep was started with "
                         f"{task.version}: install the same version on every worker")

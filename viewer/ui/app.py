@@ -32,7 +32,7 @@ from viewer.ui.panel import draw_panel
 from viewer.ui.progressive import Progressive, accumulating_pass
 from viewer.ui.script import Action, Timeline
 from viewer.ui.state import FIXED_STEP, ViewState
-from viewer.render.graph.timing import PassClock
+from viewer.render.timing import PassClock
 from viewer.ui.window import Window
 
 RSS_MARK_FRAME = 50

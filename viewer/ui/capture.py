@@ -8,7 +8,7 @@ import moderngl
 import numpy as np
 
 from viewer.cli.args import Setup
-from viewer.commands.shot import sidecar
+from viewer.io.sidecar import sidecar
 from world.conventions import to_image
 from viewer.io.imageio import OutputSet, linear_to_srgb8
 from ..render.renderer import Renderer

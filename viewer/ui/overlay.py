@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from imgui_bundle import imgui
 
-from viewer.render.graph.timing import describe
+from viewer.render.timing import describe
 
 HISTORY = 120
 GRAPH_WIDTH = 220

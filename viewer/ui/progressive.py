@@ -7,7 +7,7 @@ from __future__ import annotations
 from viewer.render.graph.params import ParamSet
 from viewer.render.graph.frame import Frame
 from ..render.renderer import Renderer
-from viewer.render.graph.timing import PassClock
+from viewer.render.timing import PassClock
 
 
 def accumulating_pass(pipeline):

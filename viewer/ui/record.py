@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from viewer.commands.shot import camera_dict
-from viewer.commands.video import scene_for_sidecar
+from viewer.io.sidecar import camera_dict
+from viewer.io.sidecar import scene_for_sidecar
 from viewer.io.imageio import OutputSet
 from viewer.io.video_writer import VideoPaths, VideoWriter, video_paths
 

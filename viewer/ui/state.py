@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 
-from viewer.commands.shot import camera_dict
+from viewer.io.sidecar import camera_dict
 from viewer.render.graph.params import ParamSet
 from viewer.render.passes.debug_view import ViewSettings
 from ..render.modes import MODE_GROUPS

@@ -14,7 +14,7 @@ from world import conventions
 from world.conventions import to_image
 from viewer.render.graph.params import ParamSet
 from viewer.render.graph.shaders import ProgramCache
-from viewer.render.gpu_scene import GpuScene
+from viewer.render.graph.gpu_scene import GpuScene
 from .host import HostResources
 from .kept import KeptState
 from .pool import ResourcePool
@@ -51,7 +51,7 @@ class Frame:
     # camera and the objects hold still for a frame, and several passes ask.
     object_matrices: dict = field(default_factory=dict)
     # The exposure's length (s), centred on `time`: every pass reads the exposure from here,
-    # never from the scene's camera, so that a sub-exposure step (viewer/render/graph/steps.py)
+    # never from the scene's camera, so that a sub-exposure step (viewer/render/steps.py)
     # is a frame with a shorter shutter. None: the scene camera's shutter, when made.
     shutter: float | None = None
 

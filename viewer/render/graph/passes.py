@@ -10,7 +10,7 @@ import moderngl
 
 from world.conventions import glsl_defines
 from .frame import Frame, PassTimer
-from viewer.render.gpu_scene import set_uniform
+from viewer.render.graph.gpu_scene import set_uniform
 from .host import HostResource
 from .pool import ReadBack, TexSpec
 

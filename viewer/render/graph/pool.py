@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from viewer.render.passes import depth
+from viewer.render.graph import depth
 from .framebuffers import park_framebuffer
 
 

@@ -34,7 +34,7 @@ ORDER = ("off", "reference", "mcguire", "ue4", "guertin", "hybrid")
 def mode(name: str, groups: tuple[str, ...] = (), steps: bool = True, config: type = NoConfig):
     """Register a mode's pipeline builder with its parameter groups and its configuration
     class (`config.of(params)` makes one; the builder's default argument is the default's).
-    `steps`: the mode takes sub-exposure steps (the "motion" group, viewer/render/graph/steps.py,
+    `steps`: the mode takes sub-exposure steps (the "motion" group, viewer/render/steps.py,
     run by the renderer around any pipeline): every real-time blur does; a sharp frame or
     a mode with its own samples over the exposure does not."""
     def register(builder):

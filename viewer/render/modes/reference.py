@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from viewer.render.graph.params import group, param
-from ..regions import RegionAccumulator
+from viewer.render.modes.regions import RegionAccumulator
 from viewer.render.graph.frame import Frame
 from viewer.render.passes.gbuffer import STATIC_RASTER_READ, GBufferPass
 from viewer.render.graph.host import HostResource
@@ -20,7 +20,7 @@ class ReferenceParams:
     samples: int = param(64, unit="sub-frames", lo=1, hi=4096, help="sharp sub-frames averaged over the exposure")
 
 
-# The evaluation region of every pixel (viewer/render/regions.py codes, image rows), made only
+# The evaluation region of every pixel (viewer/render/modes/regions.py codes, image rows), made only
 # where the frame asks for it (Frame.record_visibility).
 REGIONS = HostResource("regions", np.ndarray, "evaluation region per pixel")
 

@@ -16,7 +16,7 @@ import numpy as np
 from world.conventions import BACKGROUND_DEPTH, glsl_defines
 from viewer.render.graph.shaders import ProgramCache
 from viewer.render.graph.frame import read_texture
-from viewer.render.gpu_scene import set_uniform
+from viewer.render.graph.gpu_scene import set_uniform
 from viewer.render.graph.pool import ResourcePool, TexSpec
 
 KINDS = ("colour", "depth", "normal", "id", "velocity", "tiles", "scalar")

@@ -12,9 +12,10 @@ import moderngl
 
 from world.conventions import glsl_defines
 from viewer.render.graph.params import param
-from . import depth, static_raster
+from viewer.render.graph import depth
+from viewer.render.passes import static_raster
 from viewer.render.graph.frame import Frame
-from viewer.render.gpu_scene import set_uniform
+from viewer.render.graph.gpu_scene import set_uniform
 from viewer.render.graph.passes import Pass
 from viewer.render.graph.pool import ReadBack, TexSpec
 

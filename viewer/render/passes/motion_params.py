@@ -1,5 +1,5 @@
 """Parameters of how every real-time mode samples the motion over the exposure: one
-`@group("motion")` read by the renderer around any pipeline (viewer/render/graph/steps.py), and
+`@group("motion")` read by the renderer around any pipeline (viewer/render/steps.py), and
 the `curve_steps` field each real-time mode's own group carries (its default is the
 mode's: the published filters keep their linear behaviour, the hybrid follows curves)."""
 from __future__ import annotations

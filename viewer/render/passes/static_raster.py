@@ -25,7 +25,7 @@ with their matrices; the scene by its GpuScene), never by the frame's time: a su
 at another time finds it correct. Made the second time a key is asked for (a single
 frame, or a camera the viewer is moving, draws as before, at no extra cost), at once for
 a static-only pass (the hybrid's static layer, which is this raster). Only under reversed
-Z: a float depth buffer, which the copies and `far` hold exactly (viewer/render/passes/depth.py).
+Z: a float depth buffer, which the copies and `far` hold exactly (viewer/render/graph/depth.py).
 """
 from __future__ import annotations
 
@@ -37,9 +37,9 @@ import numpy as np
 
 from world.transforms import box_corners
 
-from . import depth
+from viewer.render.graph import depth
 from viewer.render.graph.framebuffers import park_framebuffer
-from viewer.render.gpu_scene import set_uniform
+from viewer.render.graph.gpu_scene import set_uniform
 from viewer.render.graph.kept import KeptSlot
 from viewer.render.graph.pool import TexSpec, union_of_two
 

@@ -28,7 +28,7 @@ class HybridParams:
                                "tile); each about doubles the composite; curve_steps "
                                "(the default) gives less error on every bending scene "
                                "measured, at a similar or lower cost")
-    # 2 where the motion bends (viewer/render/graph/steps.py): whole-image FLIP 0.27-0.63x the
+    # 2 where the motion bends (viewer/render/steps.py): whole-image FLIP 0.27-0.63x the
     # linear blur's on wheel, spinner, keys_arc, rover, basic, turning_car, where path
     # segments reach 0.59-1.08x (docs/performance.md); straight motion stays one frame.
     curve_steps: int = curve_steps_param(2)

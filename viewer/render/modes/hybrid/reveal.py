@@ -36,7 +36,7 @@ from raytrace.reveal import primary_view, reveal
 from world.conventions import flip_row
 from viewer.render.graph.frame import Frame
 from viewer.render.passes.gbuffer import GBufferPass
-from viewer.render.gpu_scene import TEX_KINDS, set_uniform
+from viewer.render.graph.gpu_scene import TEX_KINDS, set_uniform
 from viewer.render.graph.host import HostResource
 from .params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from viewer.render.graph.kept import KeptSlot

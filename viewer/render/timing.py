@@ -13,7 +13,7 @@ from contextlib import contextmanager
 import moderngl
 
 from viewer.render.graph.params import ParamSet
-from .frame import Frame, PassTimer, add_cpu_ms
+from viewer.render.graph.frame import Frame, PassTimer, add_cpu_ms
 from viewer.render.renderer import Renderer
 
 SOFTWARE_RENDERERS = ("llvmpipe", "softpipe", "swiftshader", "software rasterizer", "swrast")

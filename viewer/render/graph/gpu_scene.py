@@ -13,7 +13,7 @@ from world import transforms as tf
 from world.conventions import to_image
 from world.errors import SceneError
 from world.scene import Material, Scene, SceneObject
-from viewer.render.passes import depth
+from viewer.render.graph import depth
 
 # The shaders' light arrays hold a multiple of this many lights (the define MAX_LIGHTS):
 # one program per 16, not per light count.

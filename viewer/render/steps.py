@@ -43,11 +43,11 @@ import moderngl
 
 from world import conventions
 from viewer.render.graph.params import ParamSet
-from .frame import Frame, PassTimer
+from viewer.render.graph.frame import Frame, PassTimer
 from viewer.render.modes import MODE_GROUPS
 from viewer.render.passes.motion_params import MotionParams  # noqa: F401  (registers the "motion" group)
-from .passes import FullscreenPass, Pipeline
-from .pool import TexSpec
+from viewer.render.graph.passes import FullscreenPass, Pipeline
+from viewer.render.graph.pool import TexSpec
 
 GROUP = "motion"
 SUM = "motion_steps_sum"           # the running sum of the sub-frames (f4, unclamped)
