@@ -83,7 +83,7 @@ class SurfaceTable:
 
     def gpu_corners(self) -> np.ndarray:
         """(faces, 3 corners, 8) float32: position, shading normal (the face normal at all
-        three corners of a flat face), uv: what glsl/reveal_shade.frag interpolates."""
+        three corners of a flat face), uv: what glsl/modes/hybrid/reveal_shade.frag interpolates."""
         normal = np.where(self.flat[:, None, None], self.face_normals[:, None, :],
                           self.corner_normal)
         return np.concatenate([self.corner_position, normal, self.corner_uv],

@@ -36,7 +36,7 @@ def _length(v) -> float:
 def displacement_test(depth, ids, disp, min_speed: float, threshold: float,
                       relative_only: bool = False):
     """Step 1: (mask uint8 (H,W), relative displacement (H,W,2)). relative_only: the
-    default mask's test (glsl/raymask_displacement.frag STEP 3), the probes along the
+    default mask's test (glsl/modes/hybrid/raymask_displacement.frag STEP 3), the probes along the
     relative displacement alone decide; the full displacement's only find D_bg."""
     h, w = ids.shape
     disp = np.asarray(disp, dtype=F32)
@@ -89,7 +89,7 @@ def sobel(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def stored_log_depth(depth) -> np.ndarray:
     """log depth as the hybrid G-buffer stores it for the edge test: the normal target's
-    w, half precision (glsl/gbuffer_outputs.glsl)."""
+    w, half precision (glsl/passes/gbuffer_outputs.glsl)."""
     return np.log(np.maximum(np.asarray(depth, np.float32), np.float32(1e-6))).astype(np.float16)
 
 
@@ -170,7 +170,7 @@ def clamp_length(d: np.ndarray, limit: float) -> np.ndarray:
 
 def pack_layers(color, depth, disp, rev_color, rev_depth, rev_disp, max_disp, ids=None,
                 rev_ids=None):
-    """One revealed layer as glsl/hybrid_layers.glsl reads it: front and back as (motion
+    """One revealed layer as glsl/modes/hybrid/hybrid_layers.glsl reads it: front and back as (motion
     (H,W,4), colour); the front motion's 4th channel is the object id, the back's 1 + the
     revealed id where revealed, else 0 (and there the back reads the front's values)."""
     ids = np.zeros(depth.shape) if ids is None else ids

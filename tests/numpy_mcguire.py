@@ -80,7 +80,7 @@ def neighbormax(tiles: np.ndarray, accept=None) -> np.ndarray:
     return out
 
 
-# ---- noise (a port of glsl/noise.glsl hash01) ------------------------------------------------
+# ---- noise (a port of glsl/graph/noise.glsl hash01) ------------------------------------------------
 
 def hash01(x, y, seed: int, stream: int) -> np.ndarray:
     """lowbias32 of the pixel, seed and stream, in [0, 1), bit for bit as in GLSL."""

@@ -14,7 +14,7 @@ F = np.float32
 
 
 def ign(px, py, offset: float, seed: int = 0) -> np.ndarray:
-    """Interleaved gradient noise of glsl/noise.glsl at window points (px, py)."""
+    """Interleaved gradient noise of glsl/graph/noise.glsl at window points (px, py)."""
     a, b = F(F(offset) * F(5.588238)), F(F(seed % 1024) * F(7.13))
     x = (F(px) + a) + b          # the GLSL's order of additions
     y = (F(py) + a) + b

@@ -124,7 +124,7 @@ OUT = TexSpec(4, "f4")
 
 
 class Source(FullscreenPass):
-    name, fragment, produces = "source", "accumulate.frag", ("a", "b")
+    name, fragment, produces = "source", "passes/accumulate.frag", ("a", "b")
 
     def outputs(self, frame):
         return {n: OUT for n in self.produces}
@@ -136,7 +136,7 @@ class Source(FullscreenPass):
 
 class Copy(FullscreenPass):
     """Draws `into` from `source`, declaring only input "a" and output "c"."""
-    name, fragment, inputs, produces = "copy", "accumulate.frag", ("a",), ("c",)
+    name, fragment, inputs, produces = "copy", "passes/accumulate.frag", ("a",), ("c",)
 
     def __init__(self, source="a", into="c"):
         self.source, self.into = source, into

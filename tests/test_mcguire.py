@@ -186,10 +186,10 @@ def test_tilemax_pass_rejects_bad_axis():
 # ---- noise -----------------------------------------------------------------------------------
 
 def test_hash_port_matches_glsl(ctx):
-    src = ("#version 330 core\n" + (GLSL_DIR / "noise.glsl").read_text() +
+    src = ("#version 330 core\n" + (GLSL_DIR / "graph/noise.glsl").read_text() +
            "\nuniform uint u_stream;\nout float o;\n"
            "void main() { o = hash01(ivec2(gl_FragCoord.xy), u_stream); }\n")
-    vs = (GLSL_DIR / "fullscreen.vert").read_text()
+    vs = (GLSL_DIR / "graph/fullscreen.vert").read_text()
     prog = ctx.program(vertex_shader=vs, fragment_shader=src)
     tex = ctx.texture((37, 11), 1, dtype="f4")
     fbo = ctx.framebuffer([tex])

@@ -14,9 +14,9 @@ def test_wheel_contains_code_shaders_and_scenes(tmp_path):
     names = set(zipfile.ZipFile(wheel).namelist())
     need = {"viewer/commands/main.py", "viewer/render/renderer.py", "viewer/render/passes/gbuffer.py",
             "raytrace/embree_scene.py", "world/loader.py", "world/scene.py",
-            "world/camera.py", "viewer/render/modes/hybrid/pipeline.py", "glsl/gbuffer.frag",
-            "glsl/shading.glsl",
-            "glsl/fullscreen.vert", "scenes/living_room.toml", "scenes/assets/painting.png",
+            "world/camera.py", "viewer/render/modes/hybrid/pipeline.py", "glsl/passes/gbuffer.frag",
+            "glsl/passes/shading.glsl",
+            "glsl/graph/fullscreen.vert", "scenes/living_room.toml", "scenes/assets/painting.png",
             "scenes/assets/quad_uv.obj", "scenes/rover.toml", "scenes/assets/rover.glb"}
     assert need <= names, need - names
     for folder in ("glsl", "scenes"):

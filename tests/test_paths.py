@@ -1,8 +1,8 @@
-"""Curved motion in the hybrid (hybrid.segments, glsl/path.glsl): the G-buffer's path points
+"""Curved motion in the hybrid (hybrid.segments, glsl/passes/path.glsl): the G-buffer's path points
 against a numpy projection of M(t_k) for a rotating object, a straight path that changes
 nothing the mask sees, and a reversal (an object that goes and comes back within the
 exposure: chord 0) masked and blurred, the ray mask on synthetic paths against a numpy
-statement of glsl/raymask_displacement.frag's path probes.
+statement of glsl/modes/hybrid/raymask_displacement.frag's path probes.
 
 Synthetic arrays are in GL orientation (row 0 at the bottom, offsets y up) as in
 tests/test_raymask.py; `to_image` flips to and from the frames' image orientation.
@@ -156,7 +156,7 @@ def run_mask(frame):
 
 
 def numpy_path_mask(depth, ids, paths, min_speed=1.0, threshold=0.01):
-    """glsl/raymask_displacement.frag STEP 3 with a path: pixel X of object I is masked when
+    """glsl/modes/hybrid/raymask_displacement.frag STEP 3 with a path: pixel X of object I is masked when
     X - (o_k - o_bg,k) shows another, farther object for some point k, o_bg the path of
     the first background seen at a probe X - o_k (none seen: not masked)."""
     h, w = ids.shape

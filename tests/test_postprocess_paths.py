@@ -1,6 +1,6 @@
 """Path motion in the post-process gathers (mcguire.segments, guertin.segments): the K = 2
 McGuire gather on a tiny synthetic buffer against a numpy statement of its extension
-(glsl/mcguire_gather.frag: taps split over the segments, per-segment weights), one segment
+(glsl/modes/mcguire_gather.frag: taps split over the segments, per-segment weights), one segment
 unchanged, and a rotating scene closer to the reference with two segments than one.
 
 Synthetic arrays are in GL orientation (row 0 at the bottom, offsets y up); `to_image`
@@ -28,7 +28,7 @@ F32 = np.float32
 SIZE = (32, 16)
 
 
-# ---- numpy statement of glsl/path.glsl and the McGuire path gather ---------------------------
+# ---- numpy statement of glsl/passes/path.glsl and the McGuire path gather ---------------------------
 
 def path_at(o, u, segments):
     """o (..., K+1, 2) at time u (a scalar or (...)) of the exposure, linear per segment."""

@@ -50,5 +50,5 @@ def test_shipped_shaders_compile(ctx):
         for in_texture in (0, 1):
             lights = {"MAX_LIGHTS": 16, "LIGHTS_TEXTURE": in_texture, "LIGHTS_PER_ROW": 1024,
                       **kinds}
-            build_program(ctx, "gbuffer.vert", "gbuffer.frag",
+            build_program(ctx, "passes/gbuffer.vert", "passes/gbuffer.frag",
                           {**glsl_defines(), **lights, **layout_defines(layout)}).release()

@@ -433,7 +433,7 @@ def test_tile_coords_list_the_true_tiles_row_by_row():
 
 def _line_leaves_object(ids, vn, k, max_len, turn=0.0):
     """Per pixel (GL rows), brute force: does any point of its neighbourhood line, as
-    glsl/hybrid_bucket.frag taps it (the pixel holding x + 0.5 + s dir, clamped, |s| <=
+    glsl/modes/hybrid/hybrid_bucket.frag taps it (the pixel holding x + 0.5 + s dir, clamped, |s| <=
     |vn| / 2, run where that exceeds 0.5), show another object? turn: the line turned by
     this angle (radians) off vn, as a merged own line may be."""
     h, w = ids.shape

@@ -35,7 +35,7 @@ def test_perspective_matches_opengl_formula():
     expect = np.array([[f / a, 0, 0, 0], [0, f, 0, 0],
                        [0, 0, (fa + n) / (n - fa), 2 * fa * n / (n - fa)], [0, 0, -1, 0]])
     assert np.allclose(tf.perspective(45, a, n, fa), expect)
-    # glsl/motion.glsl's to_window relies on exact zeros off the diagonal of x and y and
+    # glsl/passes/motion.glsl's to_window relies on exact zeros off the diagonal of x and y and
     # on clip w = -z (a symmetric frustum): clip.xy = (P00, P11) * xy exactly.
     p = tf.perspective(45, a, n, fa)
     assert p[0, 1:].tolist() == [0, 0, 0] and p[1, [0, 2, 3]].tolist() == [0, 0, 0]

@@ -16,7 +16,7 @@ lists the "motion" group (viewer/render/modes/__init__.py: every mode but `off`,
 `reference`, which has its own samples).
 
 Seeds: sub-frame k of a frame with seed S is jittered with seed S * N + k, so the N
-sub-frames' noise differs (glsl/noise.glsl keys every jitter by the seed) and is the same
+sub-frames' noise differs (glsl/graph/noise.glsl keys every jitter by the seed) and is the same
 on every run; two seeds' sub-frames never share one (S * N .. S * N + N - 1 are disjoint);
 N = 1 keeps S.
 
@@ -56,12 +56,12 @@ PASS_NAME = "motion_steps"         # the accumulation's entry in pass_ms
 
 class Accumulate(FullscreenPass):
     name = PASS_NAME
-    fragment = "accumulate.frag"       # target += weight * source (with additive blending)
+    fragment = "passes/accumulate.frag"       # target += weight * source (with additive blending)
 
 
 class Mean(FullscreenPass):
     name = PASS_NAME
-    fragment = "steps_mean.frag"       # target = weight * (source + target), blended
+    fragment = "passes/steps_mean.frag"       # target = weight * (source + target), blended
 
 
 _ACC = Accumulate()

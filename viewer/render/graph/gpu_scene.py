@@ -22,7 +22,7 @@ LIGHT_SLOTS = 16
 OTHER_UNIFORM_VECTORS = 64
 TEX_KINDS = {None: 0, "checker": 1, "stripes": 2, "image": 3}
 TEXTURE_UNIT_IMAGE = 7
-# Lights past the uniform storage: a texture (glsl/shading.glsl LIGHTS_TEXTURE) on this
+# Lights past the uniform storage: a texture (glsl/passes/shading.glsl LIGHTS_TEXTURE) on this
 # unit, two texels a light, this many lights a row.
 LIGHT_UNIT = 8
 LIGHTS_PER_ROW = 1024
@@ -42,7 +42,7 @@ def vertex_data(obj: SceneObject) -> np.ndarray:
     return np.hstack([pos, nrm, uv]).astype(np.float32)
 
 
-# A vertex's attributes in the G-buffer program (glsl/gbuffer.vert): (name, floats). A
+# A vertex's attributes in the G-buffer program (glsl/passes/gbuffer.vert): (name, floats). A
 # rigid object's buffer holds the first three; its positions at the exposure's times are
 # its one position (the model matrices move it). A skinned object's holds them all, posed
 # per draw: at t, shutter open and close, and the path's quarter points (SEGMENTS 4).
@@ -231,7 +231,7 @@ class GpuScene:
 
     @staticmethod
     def bind_camera(prog: moderngl.Program, cam, t: float, size: tuple[int, int]):
-        """The camera at the frame time (glsl/motion.glsl; its views at shutter open and
+        """The camera at the frame time (glsl/passes/motion.glsl; its views at shutter open and
         close reach the shaders through bind_object)."""
         set_uniform(prog, "u_view", cam.view(t))
         proj = cam.projection()
@@ -242,7 +242,7 @@ class GpuScene:
         set_uniform(prog, "u_near", float(cam.spec.near))
 
     def light_defines(self) -> dict:
-        """What glsl/shading.glsl needs defined: this scene's lights, and the texture kinds'
+        """What glsl/passes/shading.glsl needs defined: this scene's lights, and the texture kinds'
         codes (TEX_CHECKER, ... as TEX_KINDS numbers them)."""
         return {"MAX_LIGHTS": max(self.max_lights, 1),
                 "LIGHTS_TEXTURE": int(self.light_texture is not None),
@@ -287,7 +287,7 @@ class GpuScene:
                         memo: dict | None = None
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """T(-eye(t)) M(t) (world positions relative to the eye at t), V(t_open) M(t_open),
-        V(t_close) M(t_close) (glsl/motion.glsl) and the normal matrix of M(t): what
+        V(t_close) M(t_close) (glsl/passes/motion.glsl) and the normal matrix of M(t): what
         bind_object sets and reveal_shade's object table holds, composed here in float64 so
         that the shaders' float32 never holds a world translation (a scene far from the
         origin keeps its detail). `memo`: a dict that lives one frame (camera and objects
@@ -317,7 +317,7 @@ class GpuScene:
 
     @staticmethod
     def path_matrices(obj: SceneObject, cam, times, memo: dict | None = None) -> bytes:
-        """V(t_k) M(t_k) for the path's times (glsl/path.glsl), composed in float64, as
+        """V(t_k) M(t_k) for the path's times (glsl/passes/path.glsl), composed in float64, as
         the bytes of a GLSL mat4 array; `memo` as object_matrices'."""
         key = ("path", obj.id, tuple(times))
         out = None if memo is None else memo.get(key)
@@ -335,7 +335,7 @@ class GpuScene:
     def bind_object(self, prog: moderngl.Program, obj: SceneObject, cam, t: float,
                     t_open: float, t_close: float, memo: dict | None = None):
         """Transforms of `obj` at the frame time, and seen by the camera `cam` at shutter
-        open and close (glsl/motion.glsl); `memo` as object_matrices'. Returns them."""
+        open and close (glsl/passes/motion.glsl); `memo` as object_matrices'. Returns them."""
         model_eye, open_, close, normal = self.object_matrices(obj, cam, t, t_open, t_close,
                                                                memo)
         set_uniform(prog, "u_model_eye", model_eye)

@@ -43,7 +43,7 @@ class FullscreenPass(Pass):
         a draw's own variant comes as draw(defines=...)."""
         return {}
 
-    def program(self, frame: Frame, vertex: str = "fullscreen.vert", defines: dict | None = None,
+    def program(self, frame: Frame, vertex: str = "graph/fullscreen.vert", defines: dict | None = None,
                 fragment: str | None = None) -> moderngl.Program:
         return frame.programs.get(vertex, fragment or self.fragment,
                                   {**glsl_defines(), **self.defines(frame), **(defines or {})})
@@ -72,12 +72,12 @@ class FullscreenPass(Pass):
                 tiles.clear_outside(frame, tuple(outputs))
                 frame.pool.mark_tiles(tuple(outputs), tiles)
             return
-        prog = self.program(frame, "fullscreen.vert" if tiles is None else tiles.vertex_shader,
+        prog = self.program(frame, "graph/fullscreen.vert" if tiles is None else tiles.vertex_shader,
                             defines, fragment)
         for unit, (uniform, tex_name) in enumerate(textures.items()):
             frame.pool.get(tex_name).use(unit)
             set_uniform(prog, uniform, unit)
-        set_uniform(prog, "u_seed", int(frame.seed) & 0xFFFFFFFF)   # glsl/noise.glsl
+        set_uniform(prog, "u_seed", int(frame.seed) & 0xFFFFFFFF)   # glsl/graph/noise.glsl
         set_uniform(prog, "u_viewport", tuple(float(x) for x in frame.size))
         for k, v in (uniforms or {}).items():
             set_uniform(prog, k, v)

@@ -5,7 +5,7 @@ Motion Blur Filter" (HPG 2014), as fragment passes:
           -> guertin_tilemax_x -> guertin_tilemax
           -> guertin_neighbormax (3x3, a diagonal tile only where it points toward the
              centre tile)                                       (viewer/render/passes/tiles.py)
-          -> guertin (the reconstruction, glsl/guertin_gather.frag: NeighborMax read at a
+          -> guertin (the reconstruction, glsl/modes/guertin_gather.frag: NeighborMax read at a
              pixel shifted along one axis, never into a diagonal tile; taps alternating
              between the neighbourhood's direction (even) and the pixel's (odd), weighed
              at their unrounded distance, with one low-discrepancy jitter; direction-
@@ -38,7 +38,7 @@ from viewer.render.graph.passes import FullscreenPass, Pipeline
 from viewer.render.graph.pool import ReadBack, TexSpec
 from viewer.render.passes.tiles import PATH_SUFFIXES, tile_passes
 
-# The tap jitter is glsl/noise.glsl's interleaved gradient noise at offset TAP_NOISE (a
+# The tap jitter is glsl/graph/noise.glsl's interleaved gradient noise at offset TAP_NOISE (a
 # low-discrepancy pattern, the paper's Halton jitter); the NeighborMax lookup shift and
 # the axis it goes along are hash01 streams TILE_STREAM_X and TILE_STREAM_Y.
 TAP_NOISE, TILE_STREAM_X, TILE_STREAM_Y = 3.0, 4, 5
@@ -87,7 +87,7 @@ class GuertinConfig(PathConfig):
 
 class Gather(FullscreenPass):
     name = "guertin_gather"
-    fragment = "guertin_gather.frag"
+    fragment = "modes/guertin_gather.frag"
     produces = ("guertin",)
 
     def __init__(self, tiled: bool = True, config: GuertinConfig = GuertinConfig()):

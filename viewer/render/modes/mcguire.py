@@ -6,9 +6,9 @@ Plausible Motion Blur" (docs/algorithms.md section 1), as fragment passes:
           -> mcguire (the reconstruction gather, linear colour)
 
 k is the shared `blur.max_radius` in pixels; it is both the tile size and the blur limit.
-With `mcguire.segments` K > 1 the G-buffer also writes each pixel's path (glsl/path.glsl),
+With `mcguire.segments` K > 1 the G-buffer also writes each pixel's path (glsl/passes/path.glsl),
 the tile passes carry the NeighborMax winner's path, and the gather splits its taps over
-the K segments (glsl/mcguire_gather.frag); K = 1 is the paper's filter.
+the K segments (glsl/modes/mcguire_gather.frag); K = 1 is the paper's filter.
 """
 from __future__ import annotations
 
@@ -29,7 +29,7 @@ from viewer.render.graph.pool import ReadBack, TexSpec
 from viewer.render.passes.tile_runs import FINE
 from viewer.render.passes.tiles import PATH_SUFFIXES, tile_passes
 
-# Which noise stream of glsl/noise.glsl's hash01 the per-pixel tap jitter uses.
+# Which noise stream of glsl/graph/noise.glsl's hash01 the per-pixel tap jitter uses.
 JITTER_STREAM = 1
 
 
@@ -65,7 +65,7 @@ class Gather(FullscreenPass):
     the centre taps can weigh (viewer/render/passes/gather_reach.py), with a path on the tiles
     whose lookup fails the early out (viewer/render/passes/gather_tiles.py): the same image."""
     name = "mcguire_gather"
-    fragment = "mcguire_gather.frag"
+    fragment = "modes/mcguire_gather.frag"
     produces = ("mcguire",)
 
     def __init__(self, tiled: bool = True, config: McGuireConfig = McGuireConfig()):

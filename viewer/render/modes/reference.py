@@ -26,7 +26,7 @@ REGIONS = HostResource("regions", np.ndarray, "evaluation region per pixel")
 
 
 class Accumulate(FullscreenPass):
-    fragment = "accumulate.frag"
+    fragment = "passes/accumulate.frag"
 
 
 class ReferencePass(Pass):

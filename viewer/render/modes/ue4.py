@@ -13,9 +13,9 @@ numpy. Velocity and depth at a tap come from the texel that contains it (UE's po
 sampling), so a tap within half a pixel of a silhouette mixes in the colour of the other
 side under the weight of its own; `ue4.bilinear=false` takes that texel's colour instead.
 
-With `ue4.segments` K > 1 the G-buffer also writes each pixel's path (glsl/path.glsl): the
+With `ue4.segments` K > 1 the G-buffer also writes each pixel's path (glsl/passes/path.glsl): the
 flatten's |v| is the path's half extent, the tile max and the dilation carry the max
-texel's path, and the gather's taps walk the looked-up tile's path (glsl/ue4_gather.frag).
+texel's path, and the gather's taps walk the looked-up tile's path (glsl/modes/ue4_gather.frag).
 """
 from __future__ import annotations
 
@@ -105,7 +105,7 @@ def dilation_reach(max_px: float, tile: int) -> int:
 
 class Flatten(FullscreenPass):
     name = "ue4_flatten"
-    fragment = "ue4_flatten.frag"
+    fragment = "modes/ue4_flatten.frag"
     produces = ("ue4_flat",)
 
     def __init__(self, config: UE4Config = UE4Config()):
@@ -125,7 +125,7 @@ class Flatten(FullscreenPass):
 
 class TileMinMax(FullscreenPass):
     name = "ue4_tiles"
-    fragment = "ue4_tiles.frag"
+    fragment = "modes/ue4_tiles.frag"
 
     def __init__(self, config: UE4Config = UE4Config()):
         self.inputs = ("ue4_flat", *path_targets(config.segments))
@@ -145,7 +145,7 @@ class TileMinMax(FullscreenPass):
 
 class Dilate(FullscreenPass):
     name = "ue4_dilate"
-    fragment = "ue4_dilate.frag"
+    fragment = "modes/ue4_dilate.frag"
 
     def __init__(self, config: UE4Config = UE4Config()):
         self.inputs = ("ue4_tiles", *declared("ue4_tiles", config))
@@ -176,7 +176,7 @@ class Gather(FullscreenPass):
     gather_reach.py), with a path on those where a lookup can fail the early out
     (viewer/render/passes/gather_tiles.py): the same image."""
     name = "ue4_gather"
-    fragment = "ue4_gather.frag"
+    fragment = "modes/ue4_gather.frag"
     produces = ("ue4",)
 
     def __init__(self, tiled: bool = True, config: UE4Config = UE4Config()):

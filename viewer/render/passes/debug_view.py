@@ -1,6 +1,6 @@
 """Draw any pool texture, by name, into a framebuffer: the viewer's buffer view.
 
-One shader (glsl/debug_view.frag) holds every visualisation; which one is used follows the
+One shader (glsl/passes/debug_view.frag) holds every visualisation; which one is used follows the
 buffer's name and format with the same rules as `viewer.io.visualize.visualise` (the CLI's
 `--buffers` pictures), so a buffer looks the same in the window and in a dump. Ranges that
 depend on the data (depth's log range, the longest velocity, a mask's largest value) are
@@ -27,7 +27,7 @@ _SOURCE_TYPE = {"u1": SOURCE_UINT, "u2": SOURCE_UINT, "u4": SOURCE_UINT,
 
 
 def view_defines(dtype: str) -> dict:
-    """glsl/debug_view.frag's defines: the source's sampler type and the codes of
+    """glsl/passes/debug_view.frag's defines: the source's sampler type and the codes of
     SOURCE_TYPE and of u_kind (KIND_<NAME>: the index in KINDS)."""
     return {"SOURCE_TYPE": _SOURCE_TYPE.get(dtype, 0), "SOURCE_UINT": SOURCE_UINT,
             "SOURCE_INT": SOURCE_INT, **{f"KIND_{k.upper()}": i for i, k in enumerate(KINDS)}}
@@ -87,7 +87,7 @@ def data_range(kind: str, a: np.ndarray, channel: int = 0) -> tuple[float, float
 
 
 class DebugView:
-    """Draws pool textures with glsl/debug_view.frag; programs come from the renderer's cache."""
+    """Draws pool textures with glsl/passes/debug_view.frag; programs come from the renderer's cache."""
 
     def __init__(self, programs: ProgramCache):
         self.programs = programs
@@ -111,7 +111,7 @@ class DebugView:
         tex = pool.get(name)
         kind, channel = self.resolve(pool, name, settings)
         ctx = target.ctx
-        prog = self.programs.get("fullscreen.vert", "debug_view.frag",
+        prog = self.programs.get("graph/fullscreen.vert", "passes/debug_view.frag",
                                  {**glsl_defines(), **view_defines(tex.dtype)})
         dest = dest or (0, 0) + tuple(target.size)
         lo, hi = 0.0, 1.0

@@ -2,7 +2,7 @@
 McGuire 2012 and UE4-style along a straight motion (one segment): finer than the tiles
 whose lookup fails the early out (viewer/render/passes/gather_tiles.py), and the same image.
 
-McGuire (glsl/mcguire_gather.frag). A still pixel X (v = 0, so rX = 0.5) weighs a tap Y
+McGuire (glsl/modes/mcguire_gather.frag). A still pixel X (v = 0, so rX = 0.5) weighs a tap Y
 off itself (|Y - X| >= 1 px) by front * cone(d, rY) + front * cone(d, 0.5) +
 2 cyl(d, rY) cyl(d, 0.5): the last two are exactly 0 past 0.525 px, the first past rY =
 max(|vY|, 0.5). So where no pixel Y lies closer than |vY| (a dilation of the k x 1
@@ -16,7 +16,7 @@ such tiles are either copied (no tap can land on X) or drawn with the CENTRE_ONL
 which adds the same weights for the taps landing on X and reads no tap. (A moving pixel's
 own tile is always drawn: it lies within its own reach.)
 
-UE4 (glsl/ue4_gather.frag). A still pixel (|v| = 0) weighs a tap o steps out by the
+UE4 (glsl/modes/ue4_gather.frag). A still pixel (|v| = 0) weighs a tap o steps out by the
 tap's spread, clamp(K |vY| / |vmax| - max(o - 1, 0), 0, 1): nonzero only when the tap
 point lies within |vY| + |vmax| / K of X, the pixel Y holding it a further sqrt(1/2) px
 away. Where no pixel reaches X that far (a dilation of the tile min/max tiles by their

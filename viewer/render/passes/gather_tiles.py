@@ -44,7 +44,7 @@ def within_reach(moving: np.ndarray, tile: int, size: tuple[int, int], reach_px:
 
 
 def half_extents(frame: Frame, paths: tuple[str, ...]) -> np.ndarray:
-    """Half the path extent (glsl/path.glsl path_extent) of each texel of the path
+    """Half the path extent (glsl/passes/path.glsl path_extent) of each texel of the path
     targets `paths` (two points a texel each), as an (H, W, 2) vector (extent, 0), the
     length the early out of a path gather tests."""
     points = []

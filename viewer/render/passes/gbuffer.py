@@ -1,6 +1,6 @@
 """The G-buffer pass: linear colour shaded per docs/scene-format.md, linear view depth, world
 normal, object id and the screen-space displacement over the exposure; for the hybrid's
-curved motion also each pixel's path over the exposure (glsl/path.glsl). Under a camera
+curved motion also each pixel's path over the exposure (glsl/passes/path.glsl). Under a camera
 still over the exposure the static objects' pixels come from a raster kept per view
 (static_raster.py) and only the movers are drawn; the targets are the full draw's."""
 from __future__ import annotations
@@ -26,14 +26,14 @@ GBUFFER = {
     "id": TexSpec(1, "u4"),
     "velocity": TexSpec(2, "f4"),
     "hybrid_front": TexSpec(4, "f4"),    # (D, depth, id): the hybrid mode's packed layer
-    # The path's offsets from the frame-time position, two points a target (glsl/path.glsl).
+    # The path's offsets from the frame-time position, two points a target (glsl/passes/path.glsl).
     "hybrid_path": TexSpec(4, "f4"),
     "hybrid_path2": TexSpec(4, "f4"),
 }
 
 STATIC_RASTER_READ = ReadBack("static_raster", "once per still view", kept=True)
 
-# Segments a path may have (glsl/path.glsl): 1 is the chord alone (no path targets).
+# Segments a path may have (glsl/passes/path.glsl): 1 is the chord alone (no path targets).
 SEGMENT_CHOICES = (1, 2, 4)
 
 
@@ -79,7 +79,7 @@ def path_times(t_open: float, t_close: float, segments: int) -> list[float]:
     return [t_open + (t_close - t_open) * k / segments for k in range(segments + 1)]
 
 
-# Target sets by GBUFFER_LAYOUT (glsl/gbuffer_outputs.glsl), in attachment order. Each
+# Target sets by GBUFFER_LAYOUT (glsl/passes/gbuffer_outputs.glsl), in attachment order. Each
 # mode writes only what it reads (a target costs ~0.3-0.5 ms a frame at 640x360 here).
 LAYOUTS = {
     "full": (0, ("color", "depth", "normal", "id", "velocity")),
@@ -93,7 +93,7 @@ LAYOUTS = {
 
 def layout_defines(layout: str) -> dict:
     """GBUFFER_LAYOUT, this layout's code, and every layout's code as
-    GBUFFER_LAYOUT_<NAME>, so glsl/gbuffer_outputs.glsl compares by name."""
+    GBUFFER_LAYOUT_<NAME>, so glsl/passes/gbuffer_outputs.glsl compares by name."""
     return {"GBUFFER_LAYOUT": LAYOUTS[layout][0],
             **{f"GBUFFER_LAYOUT_{name.upper()}": code for name, (code, _) in LAYOUTS.items()}}
 
@@ -231,7 +231,7 @@ class _Draw:
         fbo.use()
         fbo.viewport = (0, 0) + fbo.size
         fbo.clear(depth=depth.clear_value(ctx))
-        bg = frame.programs.get("fullscreen.vert", "background.frag", self.defines)
+        bg = frame.programs.get("graph/fullscreen.vert", "passes/background.frag", self.defines)
         set_uniform(bg, "u_background", frame.scene.background)
         ctx.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE | moderngl.BLEND)
         frame.programs.empty_vao(bg).render(moderngl.TRIANGLES, vertices=3)
@@ -246,7 +246,7 @@ class _Draw:
         ctx.disable(moderngl.CULL_FACE | moderngl.BLEND)
         ctx.enable(moderngl.DEPTH_TEST)
         ctx.depth_func = depth.nearer(ctx)
-        prog = frame.programs.get("gbuffer.vert", "gbuffer.frag", self.defines)
+        prog = frame.programs.get("passes/gbuffer.vert", "passes/gbuffer.frag", self.defines)
         frame.gpu.bind_camera(prog, frame.camera, self.t, frame.size)
         frame.gpu.bind_lights(prog)
         return prog

@@ -1,7 +1,7 @@
 """The half vector of McGuire et al. 2012, which Guertin et al. 2014 keep: v = D/2 of the
 G-buffer's full displacement, its magnitude clamped to [0.5, k] px (k the tile size and blur
 limit), the gathers' early out at that 0.5 px floor, and the path samplers of their path
-gathers (glsl/path.glsl)."""
+gathers (glsl/passes/path.glsl)."""
 from __future__ import annotations
 
 from .blur_common import max_radius_px
@@ -30,7 +30,7 @@ def path_bindings(frame: Frame, tile_source: str, segments) -> dict[str, str]:
 class VelocityPrep(FullscreenPass):
     """The half vector v = D/2, |v| clamped to [0.5, k] px (zero stays zero), into
     `output` (McGuire names it mcguire_velocity, Guertin guertin_velocity)."""
-    fragment = "mcguire_velocity.frag"
+    fragment = "passes/mcguire_velocity.frag"
     inputs = ("velocity",)
 
     def __init__(self, output: str = "mcguire_velocity"):

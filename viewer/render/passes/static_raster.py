@@ -14,7 +14,7 @@ back by box centre, a strict depth test). So the raster is blitted in with each 
 depth one float farther (`far`): a mover drawn over it wins where it is as near as the
 static or nearer, as a mover drawn before that static does; and before each mover the
 statics that come before it in the order take their exact depth back (a depth-only pass,
-glsl/gbuffer_depth.frag, inside the movers' screen box), so that it loses its ties with
+glsl/passes/gbuffer_depth.frag, inside the movers' screen box), so that it loses its ties with
 them.
 Where every static comes before every mover, the exact depths are blitted; where every
 mover comes first (wheel, living_room, thin), the blit is all.
@@ -136,8 +136,8 @@ class StaticRaster:
 
     def restore_depth(self, frame, fbo: moderngl.Framebuffer, first: int, end: int, box):
         """Write ranks [first, end)'s own depths into `fbo` (depth only) inside `box`
-        through the depth test as the caller set it (glsl/gbuffer_depth.frag)."""
-        prog = frame.programs.get("fullscreen.vert", "gbuffer_depth.frag")
+        through the depth test as the caller set it (glsl/passes/gbuffer_depth.frag)."""
+        prog = frame.programs.get("graph/fullscreen.vert", "passes/gbuffer_depth.frag")
         self.rank.use(0)
         self.depth.use(1)
         set_uniform(prog, "u_rank", 0)

@@ -1,7 +1,7 @@
 """Tile lists: run a fragment pass only on the tiles where it has work.
 
 On a software rasteriser (llvmpipe) every fragment costs, even one that returns at once.
-A pass given a TileList draws the list's quads (glsl/tiles.vert; adjacent tiles merged
+A pass given a TileList draws the list's quads (glsl/passes/tiles.vert; adjacent tiles merged
 into rectangles, which llvmpipe shades faster) with its own fragment shader instead of
 the full-screen triangle; its targets are cleared first outside the tiles (or, for a
 composite or gather, start as a copy of the sharp colour). Without lists (synthetic
@@ -34,7 +34,7 @@ class TileList:
         self.quads = 0                 # quads drawn: one per tile, or merged rectangles
         self.tiles = np.zeros((0, 2), np.int64)
         self.box = None                # (x0, y0, x1, y1) GL pixels around the tiles
-        self.vertex_shader = "tiles.vert"
+        self.vertex_shader = "passes/tiles.vert"
         self.blocks_per_row = None
 
     def set(self, tiles: np.ndarray, tile: int, size: tuple[int, int],
@@ -45,7 +45,7 @@ class TileList:
 
         blocks_per_row: also give every vertex `in_record`, its place in a texture that
         stores tile k's pixels as a tile x tile block at (k % blocks_per_row,
-        k // blocks_per_row) * tile (glsl/reveal_tiles.vert); `cuts`, the first tiles of
+        k // blocks_per_row) * tile (glsl/passes/reveal_tiles.vert); `cuts`, the first tiles of
         the runs drawn apart (part())."""
         self.tiles = np.ascontiguousarray(tiles, np.int64).reshape(-1, 2)
         self.count = len(self.tiles)
@@ -66,7 +66,7 @@ class TileList:
         if blocks_per_row != self.blocks_per_row:
             self._release_buffer()                      # the vertex layout changes
         self.blocks_per_row = blocks_per_row
-        self.vertex_shader = "reveal_tiles.vert" if blocks_per_row else "tiles.vert"
+        self.vertex_shader = "passes/reveal_tiles.vert" if blocks_per_row else "passes/tiles.vert"
         nbytes = max(data.nbytes, 4)
         if self.buffer is None or self.buffer.size < nbytes:
             self._release_buffer()
@@ -158,13 +158,13 @@ def within_reach(sources: np.ndarray, reach, tile: int) -> np.ndarray:
     return tile_kernels.chessboard_distance(sources) <= 1.0 + np.asarray(reach) / tile
 
 
-# glsl/zero_tiles.frag's target kinds (OUTk; 0: no target at location k).
+# glsl/passes/zero_tiles.frag's target kinds (OUTk; 0: no target at location k).
 OUT_FLOAT, OUT_INT = 1, 2
 
 
 class ZeroTiles(FullscreenPass):
-    """Every target of a framebuffer back to 0 over a tile list (glsl/zero_tiles.frag)."""
-    fragment = "zero_tiles.frag"
+    """Every target of a framebuffer back to 0 over a tile list (glsl/passes/zero_tiles.frag)."""
+    fragment = "passes/zero_tiles.frag"
 
     def defines(self, frame: Frame):
         return {"OUT_FLOAT": OUT_FLOAT, "OUT_INT": OUT_INT}

@@ -7,7 +7,7 @@ from the GL origin (bottom-left); the last column and row of tiles may be partia
 
 Every pass is parameterised by its input and output texture names, so another mode can
 run the same chain on its own velocity buffer under its own names. Given paths (the
-hybrid's, glsl/path.glsl), the chain ranks by path extent and carries the winner's path
+hybrid's, glsl/passes/path.glsl), the chain ranks by path extent and carries the winner's path
 in OUTPUT_path (and OUTPUT_path2) beside its chord.
 """
 from __future__ import annotations
@@ -24,7 +24,7 @@ def one_segment(frame: Frame) -> int:
     return 1
 
 
-PATH_SUFFIXES = ("_path", "_path2")       # two path points a target (glsl/path.glsl)
+PATH_SUFFIXES = ("_path", "_path2")       # two path points a target (glsl/passes/path.glsl)
 
 
 @dataclass(frozen=True)
@@ -38,7 +38,7 @@ class StripSpec(TexSpec):
 class TileMaxPass(FullscreenPass):
     """One separable TileMax step: axis "x" reduces k x 1 (full-size input -> strip),
     axis "y" reduces 1 x k (strip -> tiles)."""
-    fragment = "tilemax.frag"
+    fragment = "passes/tilemax.frag"
 
     def __init__(self, source: str, output: str, axis: str, tile=max_radius_px, select=None,
                  segments=one_segment, paths: tuple[str, ...] = (), select_reads=()):
@@ -46,7 +46,7 @@ class TileMaxPass(FullscreenPass):
         rest is cleared to 0, the value of a still strip), or None for all of them;
         select_reads: the host resources it reads (the pass's host_inputs).
         segments(frame): the path segments of the frame; paths: the source's path
-        targets (glsl/path.glsl), read where segments > 1."""
+        targets (glsl/passes/path.glsl), read where segments > 1."""
         if axis not in ("x", "y"):
             raise ValueError(f"TileMaxPass axis must be 'x' or 'y', got {axis!r}")
         self.name = output
@@ -84,7 +84,7 @@ class NeighborMaxPass(FullscreenPass):
     """The largest of the 3x3 tile vectors around each tile (centre wins ties);
     diagonal_toward: a diagonal neighbour only where its vector points toward the tile
     (Guertin et al. 2014)."""
-    fragment = "neighbormax.frag"
+    fragment = "passes/neighbormax.frag"
 
     def __init__(self, source: str, output: str, tile=max_radius_px, segments=one_segment,
                  paths: tuple[str, ...] = (), diagonal_toward: bool = False):

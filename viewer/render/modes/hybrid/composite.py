@@ -1,11 +1,11 @@
 """The hybrid mode's composite: both layers blurred and combined in one resolve.
 
-  (inputs) the layers packed for the inner loop as glsl/hybrid_layers.glsl describes:
+  (inputs) the layers packed for the inner loop as glsl/modes/hybrid/hybrid_layers.glsl describes:
       the front by the G-buffer (layout "hybrid"), the revealed ones by reveal_shade;
   hybrid_tilemax_x / hybrid_tilemax / hybrid_neighbormax: the largest displacement around
       each tile (viewer/render/passes/tiles.py, McGuire's passes on the raster displacement);
-  hybrid_composite -> hybrid: the bucketed gather (glsl/hybrid_bucket.frag, the default),
-      the time-sampled composite (glsl/hybrid_time.frag), or "split" between them; only on
+  hybrid_composite -> hybrid: the bucketed gather (glsl/modes/hybrid/hybrid_bucket.frag, the default),
+      the time-sampled composite (glsl/modes/hybrid/hybrid_time.frag), or "split" between them; only on
       the active tiles where the frame has tile lists (tile_select.py), the
       sharp colour elsewhere. The bucketed gather is compiled per class of tile, since
       llvmpipe pays for a branch in a loop even where no pixel takes it, and for both
@@ -31,13 +31,13 @@ from viewer.render.passes.tile_runs import FINE, tile_coords, within_reach
 from viewer.render.modes.hybrid.tile_select import TILE_LISTS, moving_strips, path_textures, segments, tile_list
 from viewer.render.passes.tiles import tile_passes
 
-# Which noise stream of glsl/noise.glsl's hash01 jitters the time samples or taps.
+# Which noise stream of glsl/graph/noise.glsl's hash01 jitters the time samples or taps.
 JITTER_STREAM = 2
 # outlines_along's widening of the tiles' pixel centres: float rounding of a tap's point
 # (float32 on the GPU: ~1e-5 px over the longest line).
 OUTLINE_MARGIN_PX = 0.05
 # The bucketed composite merges the own line with the neighbourhood's where their
-# directions lie within this angle (glsl/hybrid_bucket.frag MERGE_COS): one line's taps
+# directions lie within this angle (glsl/modes/hybrid/hybrid_bucket.frag MERGE_COS): one line's taps
 # instead of two under a camera pan, whose surfaces all move about the same way (pan:
 # 95% of pixels within 6 degrees of their NeighborMax vector). The merged own lines stray
 # off the neighbourhood's direction by up to the angle's sine times their reach, which
@@ -47,7 +47,7 @@ OUTLINE_MARGIN_PX = 0.05
 MERGE_ANGLE_DEG = 7.0
 MERGE_COS = math.cos(math.radians(MERGE_ANGLE_DEG))
 MERGE_SPREAD = math.sin(math.radians(MERGE_ANGLE_DEG))
-FRAGMENTS = {"time": "hybrid_time.frag", "bucket": "hybrid_bucket.frag"}
+FRAGMENTS = {"time": "modes/hybrid/hybrid_time.frag", "bucket": "modes/hybrid/hybrid_bucket.frag"}
 NEIGHBORMAX = HostResource("neighbormax", np.ndarray,
                            "hybrid_neighbormax read back (GL rows), for near_outlines")
 
@@ -79,7 +79,7 @@ def path_reach(frame: Frame, shape: tuple[int, int]) -> np.ndarray:
     """Per FINE tile (GL rows), how far (px) from its pixels the taps of a neighbourhood
     path can land: half the largest NeighborMax path extent (clamped to the blur limit)
     over the k-tiles it meets, plus rounding and the other pixel of a boundary pair. A
-    path bends, so this bounds it in every direction (glsl/hybrid_bucket.frag)."""
+    path bends, so this bounds it in every direction (glsl/modes/hybrid/hybrid_bucket.frag)."""
     k = max_radius_px(frame)
     w, h = frame.size
     points = []
@@ -130,7 +130,7 @@ def composite_kind(frame: Frame) -> str:
 # 507 ms; vase_pan 1 tile = 5 tiles = .042/.059/.054 at 123 and 370 ms.
 SPLIT_REACH = 1
 # Tiles whose longest |D| is below this get the OWN_STILL variant: half of
-# glsl/hybrid_bucket.frag's "own surface moves" test (dot(D, D) >= 1e-6, |D| >= 1e-3 px),
+# glsl/modes/hybrid/hybrid_bucket.frag's "own surface moves" test (dot(D, D) >= 1e-6, |D| >= 1e-3 px),
 # so float rounding cannot put a pixel on the wrong side.
 STILL_PX = 5e-4
 
@@ -167,8 +167,8 @@ def write_mask_tiles(frame: Frame):
 
 
 class Composite(FullscreenPass):
-    """The composite composite_kind picks: "time" (glsl/hybrid_time.frag), "bucket"
-    (glsl/hybrid_bucket.frag), or "split" between them by tiles."""
+    """The composite composite_kind picks: "time" (glsl/modes/hybrid/hybrid_time.frag), "bucket"
+    (glsl/modes/hybrid/hybrid_bucket.frag), or "split" between them by tiles."""
     name = "hybrid_composite"
     fragment = FRAGMENTS["time"]        # (each draw names its own: _draw)
 

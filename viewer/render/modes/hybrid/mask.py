@@ -3,7 +3,7 @@
 By default (hybrid.range_check off) the mask is the pixels whose hidden background shows
 at some time of the exposure, written as ray_mask by the displacement test's pass alone
 (STEP 3): probes along half the displacement relative to the background, which the probes
-along half the pixel's own displacement find (glsl/raymask_displacement.frag). With a
+along half the pixel's own displacement find (glsl/modes/hybrid/raymask_displacement.frag). With a
 still background that is the poster's displacement test; under a moving camera it marks
 only the band the relative motion uncovers (`pan` 640x360: 1.7 k pixels where the
 poster's test marks 32 k, the same FLIP). With hybrid.range_check on, the paper's three
@@ -59,13 +59,13 @@ SURVIVOR_TILES = HostResource("survivor_tiles", np.ndarray,
 
 class SurfaceTests(FullscreenPass):
     """The displacement test and, on its survivors, the edge test, in one pass
-    (glsl/raymask_displacement.frag, STEP 0); also mask_edge_probe, what the range check
+    (glsl/modes/hybrid/raymask_displacement.frag, STEP 0); also mask_edge_probe, what the range check
     reads per probe. Where the camera moves (reach_test), the survivors of the first lie
     in few of the moving tiles (vase_pan: 60 of 883), so the two run apart: STEP 1 on the
-    moving tiles, the tiles holding a survivor read back (glsl/mask_any.frag), STEP 2
+    moving tiles, the tiles holding a survivor read back (glsl/modes/hybrid/mask_any.frag), STEP 2
     (the Sobel kernel) on those alone."""
     name = "mask_displacement"
-    fragment = "raymask_displacement.frag"
+    fragment = "modes/hybrid/raymask_displacement.frag"
     host_inputs = (TILE_LISTS,)
 
     def __init__(self, config: HybridConfig = HybridConfig()):
@@ -140,9 +140,9 @@ RANGE_TARGETS = ("mask_displacement", "mask_relative", "mask_edge", "mask_edge_p
 
 
 class AnyTiles(FullscreenPass):
-    """Which FINE tiles of a uint mask hold a nonzero texel, read back (glsl/mask_any.frag:
+    """Which FINE tiles of a uint mask hold a nonzero texel, read back (glsl/modes/hybrid/mask_any.frag:
     SOURCE -> NAME_x strip -> NAME), as a GL-rows boolean map."""
-    fragment = "mask_any.frag"
+    fragment = "modes/hybrid/mask_any.frag"
 
     def tiles(self, frame: Frame, source: str, name: str) -> np.ndarray:
         for stage, src, dst in ((0, source, name + "_x"), (1, name + "_x", name)):
@@ -182,9 +182,9 @@ def reach_test(frame: Frame) -> bool:
 class EdgeIdTiles(FullscreenPass):
     """Per FINE tile, a bitmask of the objects (id mod 32) with edge pixels there and the
     largest reach of those edges, then spread to the 3x3 tiles around
-    (glsl/edge_ids.frag): mask_edge_near."""
+    (glsl/modes/hybrid/edge_ids.frag): mask_edge_near."""
     name = "mask_edge_near"
-    fragment = "edge_ids.frag"
+    fragment = "modes/hybrid/edge_ids.frag"
     inputs = ("mask_edge_probe",)
     produces = ("mask_edge_ids_x", "mask_edge_ids", "mask_edge_near", "mask_edge_reach_x",
                 "mask_edge_reach")
@@ -220,7 +220,7 @@ class EdgeIdTiles(FullscreenPass):
 
 class RangeCheck(FullscreenPass):
     name = "ray_mask"
-    fragment = "raymask_range.frag"
+    fragment = "modes/hybrid/raymask_range.frag"
     inputs = ("mask_displacement", "mask_edge_probe", "mask_edge_ids", "mask_edge_near",
               "mask_edge_reach", "hybrid_front")
     produces = ("ray_mask",)

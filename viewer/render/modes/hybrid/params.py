@@ -12,7 +12,7 @@ COMPOSITES = ("bucket", "split", "time")
 
 @group("hybrid")
 class HybridParams:
-    # ---- motion (viewer/render/passes/gbuffer.py, glsl/path.glsl)
+    # ---- motion (viewer/render/passes/gbuffer.py, glsl/passes/path.glsl)
     # 1 by default: at 640x360 2 segments cost 2.3-3.1x McGuire's frame (4: 3.1-4.8x), for
     # whole-image FLIP 0.59-1.08x the linear blur's; curve steps give 0.27-0.83x at
     # 1.95-2.6x (docs/performance.md "Bending motion").

@@ -12,7 +12,7 @@ shade what they reveal on the GPU exactly as the raster layer is shaded.
       object (one draw for all, but an image-textured object's, drawn alone with its
       GpuScene uniforms and image): it interpolates the face's
       corners (a texture of every mesh's faces, uploaded once) and shades with the same
-      glsl/shading.glsl and glsl/motion.glsl as the G-buffer, into the composite's packed
+      glsl/passes/shading.glsl and glsl/passes/motion.glsl as the G-buffer, into the composite's packed
       layer hybrid_back (D, depth, 1 + id) and hybrid_back_color (colour, 1) (a fragment
       pass, because llvmpipe draws one point per pixel at ~1.5 us; two packed targets,
       because each target written costs on llvmpipe).
@@ -72,7 +72,7 @@ class ObjectTable:
     """reveal_shade's per-object uniforms as a texture, a record per object id (record 0
     unused: the background), TEXELS RGBA32F texels: the columns of T(-eye) M(t), of V M at shutter
     open and close, of the normal matrix (xyz), then (albedo, specular), (albedo2,
-    shininess), (texture kind, size, axis, 0) as glsl/reveal_shade.frag's OBJECT_TABLE
+    shininess), (texture kind, size, axis, 0) as glsl/modes/hybrid/reveal_shade.frag's OBJECT_TABLE
     reads them; OBJECTS_PER_ROW records a texture row (a power of two: the shader finds
     its record with a shift), so any number of objects fits. Image-textured objects have
     no record (a draw samples one image): they keep their own draw. The texel offsets
@@ -402,7 +402,7 @@ class RevealTrace(Pass):
                                       "pixels": pixels, "own": own, "t": frame.time})
 
 
-BACK = ("hybrid_back", "hybrid_back_color")    # glsl/hybrid_layers.glsl's back layer
+BACK = ("hybrid_back", "hybrid_back_color")    # glsl/modes/hybrid/hybrid_layers.glsl's back layer
 
 
 class RevealShade(FullscreenPass):
@@ -410,7 +410,7 @@ class RevealShade(FullscreenPass):
     pixels, packed for the composite (BACK), everything else cleared to 0, 'nothing
     revealed'."""
     name = "reveal_shade"
-    fragment = "reveal_shade.frag"
+    fragment = "modes/hybrid/reveal_shade.frag"
     host_inputs = (REVEAL_HITS,)
     # BACK; the static layer, copied in where a hit takes its pixel from it
     produces = (*BACK, *(STATIC_PREFIX + n for n in GBufferPass(layout="front").produces))

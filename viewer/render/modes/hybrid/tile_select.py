@@ -107,7 +107,7 @@ def near_boundary(longest: np.ndarray, boundary: np.ndarray, tile: int) -> np.nd
 
 
 def segments(frame: Frame) -> int:
-    """The hybrid's path segments this frame (glsl/path.glsl): hybrid.segments where the
+    """The hybrid's path segments this frame (glsl/passes/path.glsl): hybrid.segments where the
     G-buffer wrote the path targets (it discards them when it writes none), else 1, the
     chord alone (passes run on buffers without a path)."""
     k = int(frame.params["hybrid"].segments)
@@ -125,7 +125,7 @@ def path_textures(frame: Frame, names=PATH_TEXTURES) -> dict[str, str]:
 
 class MotionTiles(FullscreenPass):
     name = "motion_tiles"
-    fragment = "motion_tiles.frag"
+    fragment = "modes/hybrid/motion_tiles.frag"
     produces = ("motion_tiles_x", "motion_tiles")
 
     def __init__(self, segments: int = 1):

@@ -4,17 +4,17 @@
 // jittered per pixel, rounded to pixel centres and clamped to the screen; each tap is
 // weighted by the three cases of the paper: a blurry tap in front of X (its cone), a tap
 // behind a blurry X (X's cone), and both blurry (2 * cylinder * cylinder).
-// With a path (SEGMENTS > 1, glsl/path.glsl): tap t lands at time u = -t/2 of the
+// With a path (SEGMENTS > 1, glsl/passes/path.glsl): tap t lands at time u = -t/2 of the
 // neighbourhood's path, at X - oN(u), so each segment holds its share of the exposure and
 // of the taps; its weights take the distance |u| K |piece of N| and the radii of the
 // tap's and X's own pieces of that segment (the paper's weights for a straight motion at
 // the piece's speed); X's centre weight the half extent of its path. The early out tests
 // the neighbourhood path's half extent.
-#include "noise.glsl"
+#include "graph/noise.glsl"
 #if SEGMENTS > 1
 #define PATH_READ
 #define PATH_TILES_READ
-#include "path.glsl"
+#include "passes/path.glsl"
 #endif
 uniform sampler2D u_color;
 uniform sampler2D u_depth;

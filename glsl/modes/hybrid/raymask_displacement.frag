@@ -18,12 +18,12 @@
 // test. Survivors of the displacement test are kept where a Sobel kernel on log depth or
 // on the world normal exceeds its threshold: the moving silhouettes (and creases next to
 // them). Both come from the G-buffer's normal target, (normal, log depth) at half
-// precision (glsl/gbuffer_outputs.glsl): one fetch per neighbour. The kernel is divided by 4, so a one-pixel step of size s reads as s.
+// precision (glsl/passes/gbuffer_outputs.glsl): one fetch per neighbour. The kernel is divided by 4, so a one-pixel step of size s reads as s.
 // Outputs: the edge flag, and for the range check's inner loop (one fetch per probe)
 // (half the relative displacement, the object id) at an edge pixel, (0, 0) elsewhere (id
 // 0 is the sky, never a searching pixel's own).
 //
-// With a path (SEGMENTS > 1, glsl/path.glsl) the probes follow it: X's surface lies at
+// With a path (SEGMENTS > 1, glsl/passes/path.glsl) the probes follow it: X's surface lies at
 // X + o_k at the path's time t_k, so X then shows what lies at X - o_k now; each of the
 // path's points is probed (a reversal's far point too, where the chord is short), the
 // relative ones at X - (o_k - o_bg,k), and the speed test reads the path's extent.
@@ -34,7 +34,7 @@
 // the tiles that hold a survivor (viewer/render/hybrid/mask.py). STEP 3 is the mask without
 // the range check (hybrid.range_check off): the displacement test alone, its survivors
 // written straight into the ray mask as their object ids.
-#include "raymask_common.glsl"
+#include "modes/hybrid/raymask_common.glsl"
 #define DISPLACEMENT_TEST (STEP != 2)
 #define EDGE_TEST (STEP == 0 || STEP == 2)
 uniform sampler2D u_front;          // the G-buffer's hybrid_front: (D, depth, id)
@@ -64,7 +64,7 @@ layout(location = 1) out vec2 out_probe;
 #endif
 #if SEGMENTS > 1 && DISPLACEMENT_TEST
 #define PATH_READ
-#include "path.glsl"
+#include "passes/path.glsl"
 #endif
 #if STEP == 2
 uniform usampler2D u_displacement_mask;

@@ -2,7 +2,7 @@
 // NeighborMax (McGuire et al. 2012): the TileMax vector of largest magnitude over the 3x3
 // tiles around this one, tiles outside the grid skipped. The centre is taken first and
 // wins ties, so a neighbourhood of equal speeds keeps its own direction. With a path
-// (SEGMENTS > 1, glsl/tilemax.frag's path targets in u_path0/u_path1) the tile of longest
+// (SEGMENTS > 1, glsl/passes/tilemax.frag's path targets in u_path0/u_path1) the tile of longest
 // path extent wins, and its path is written too.
 // DIAGONAL_TOWARD 1 (Guertin et al. 2014): a diagonal neighbour at offset o counts only
 // where its vector points toward this tile (dot(v, -o) > 0); its blur cannot reach this
@@ -11,7 +11,7 @@ uniform sampler2D u_tiles;
 layout(location = 0) out vec2 out_max;
 #if SEGMENTS > 1
 #define PATH_READ
-#include "path.glsl"
+#include "passes/path.glsl"
 layout(location = 1) out vec4 out_path0;
 #if SEGMENTS == 4
 layout(location = 2) out vec4 out_path1;

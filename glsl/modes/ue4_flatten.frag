@@ -1,12 +1,12 @@
 #version 330 core
 // UE4-style flatten: the half vector v = D/2 (the filter blurs from -v to +v), its length
 // clamped to the shared blur limit, packed with the linear depth: (v.x, v.y, depth, |v|).
-// With a path (SEGMENTS > 1, glsl/path.glsl), |v| is the path's half extent (the farthest
-// the surface goes) and v points along glsl/path.glsl path_direction, so tiles, dilation
+// With a path (SEGMENTS > 1, glsl/passes/path.glsl), |v| is the path's half extent (the farthest
+// the surface goes) and v points along glsl/passes/path.glsl path_direction, so tiles, dilation
 // and the early out cover the path; the gather walks the tile's path itself.
 #if SEGMENTS > 1
 #define PATH_READ
-#include "path.glsl"
+#include "passes/path.glsl"
 #endif
 uniform sampler2D u_velocity;   // full displacement D over the exposure, px, y up
 uniform sampler2D u_depth;      // positive linear view depth, m

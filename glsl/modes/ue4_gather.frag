@@ -4,15 +4,15 @@
 // compare (background taps use the centre's spread, foreground taps their own) and a box
 // spread compare with a one-step edge; the mirror rule exchanges weights within a pair; the
 // result is normalised by the tap count with the centre colour filling the rest.
-// With a path (SEGMENTS > 1, glsl/path.glsl), a tap o steps out lands at time
+// With a path (SEGMENTS > 1, glsl/passes/path.glsl), a tap o steps out lands at time
 // u = -+o / 2K of the looked-up tile's path, at X - oT(u) (X +- o/K vmax when straight):
 // each segment holds its share of the exposure and of the taps, and a tap's spread compare
 // takes the tap's and the centre's own pieces of its segment, at that segment's step size.
-#include "noise.glsl"
+#include "graph/noise.glsl"
 #if SEGMENTS > 1
 #define PATH_READ
 #define PATH_TILES_READ
-#include "path.glsl"
+#include "passes/path.glsl"
 uniform float u_max_px;         // the blur limit per side, px
 
 // A piece's half vector length, as the flatten's |v| of a straight motion at its speed.

@@ -8,7 +8,7 @@ uniform int u_tile;
 layout(location = 0) out vec4 out_tiles;
 #if SEGMENTS > 1
 #define PATH_READ
-#include "path.glsl"
+#include "passes/path.glsl"
 layout(location = 1) out vec4 out_path0;
 #if SEGMENTS == 4
 layout(location = 2) out vec4 out_path1;

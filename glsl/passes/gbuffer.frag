@@ -1,7 +1,7 @@
 #version 330 core
-#include "shading.glsl"
-#include "motion.glsl"
-#include "gbuffer_outputs.glsl"
+#include "passes/shading.glsl"
+#include "passes/motion.glsl"
+#include "passes/gbuffer_outputs.glsl"
 
 in vec3 v_local;
 in vec3 v_normal_local;
@@ -11,7 +11,7 @@ in vec4 v_view;
 in vec4 v_view_open;
 in vec4 v_view_close;
 #if SEGMENTS > 1
-#include "path.glsl"
+#include "passes/path.glsl"
 in vec4 v_view_path[SEGMENTS];
 #endif
 

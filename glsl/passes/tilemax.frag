@@ -2,7 +2,7 @@
 // One separable TileMax step (docs/algorithms.md 1.2): the velocity of largest magnitude over
 // u_tile texels of the source along u_axis, starting at this texel's tile. Texels past the
 // source's edge (a partial last tile) are skipped. Ties keep the first texel in scan order.
-// With a path (SEGMENTS > 1, glsl/path.glsl: u_path0/u_path1 the full-size path targets or
+// With a path (SEGMENTS > 1, glsl/passes/path.glsl: u_path0/u_path1 the full-size path targets or
 // the previous step's), the winner is the texel of longest path extent, and its path is
 // written too (out_path0/out_path1); out_max is then its chord.
 uniform sampler2D u_velocity;
@@ -11,7 +11,7 @@ uniform ivec2 u_axis;          // (1, 0): k x 1, full width -> strip; (0, 1): 1 
 layout(location = 0) out vec2 out_max;
 #if SEGMENTS > 1
 #define PATH_READ
-#include "path.glsl"
+#include "passes/path.glsl"
 layout(location = 1) out vec4 out_path0;
 #if SEGMENTS == 4
 layout(location = 2) out vec4 out_path1;

@@ -6,7 +6,7 @@
 // many fragments: STAGE 0 over u_tile texels along x (full size -> strip), STAGE 1 over
 // u_tile strip texels along y. length() is the one the ray mask passes compare with
 // hybrid.min_speed, so a tile holds a moving pixel exactly when .x reaches that speed.
-// Texels past the screen are skipped. With a path (SEGMENTS > 1, glsl/path.glsl) .x is
+// Texels past the screen are skipped. With a path (SEGMENTS > 1, glsl/passes/path.glsl) .x is
 // the longest path extent instead (twice the farthest point from the frame-time
 // position), what the ray mask then compares: a reversal's chord is short, not its path.
 //
@@ -18,7 +18,7 @@ uniform int u_tile;
 out vec2 out_tile;
 #if SEGMENTS > 1 && STAGE == 0
 #define PATH_READ
-#include "path.glsl"
+#include "passes/path.glsl"
 #endif
 
 void main() {

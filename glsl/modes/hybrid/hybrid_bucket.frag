@@ -36,18 +36,18 @@
 // own lines' spread off the neighbourhood's direction): every tap lands on the own object,
 // so the buckets of other objects stay empty and the unmerged neighbourhood's line adds
 // nothing. All four give the image the full variant gives.
-// With a path (SEGMENTS > 1, glsl/path.glsl) the own and the neighbourhood's lines walk
+// With a path (SEGMENTS > 1, glsl/passes/path.glsl) the own and the neighbourhood's lines walk
 // paths instead: what covers the pixel during segment k (a share 1/K of the exposure) is
 // what lies along that segment reversed, centred at x minus the segment's midpoint offset
 // (the pixel's own path for the own line, the NeighborMax tile's for the neighbourhood's),
 // each tap weighted by its fragment's own segment-k length and 1/K; the own line's taps,
 // in time order, give the presence bits; the lines are never merged.
-#include "noise.glsl"
-#include "hybrid_layers.glsl"
+#include "graph/noise.glsl"
+#include "modes/hybrid/hybrid_layers.glsl"
 uniform sampler2D u_neighbormax;
 #if SEGMENTS > 1
 #define PATH_READ
-#include "path.glsl"
+#include "passes/path.glsl"
 uniform sampler2D u_neighbormax_path0;
 #if SEGMENTS == 4
 uniform sampler2D u_neighbormax_path1;

@@ -20,19 +20,19 @@
 //    with u_skip_middle (odd N) the middle tap, about X itself, is left to it, as McGuire
 //    2012 and McGuire's G3D gather do;
 //  - the depth compare is relative to the nearer depth instead of a fixed extent.
-// With a path (SEGMENTS > 1, glsl/path.glsl), the neighbourhood taps follow the
-// NeighborMax winner's path as in glsl/mcguire_gather.frag: tap t at time u = -t/2, at
+// With a path (SEGMENTS > 1, glsl/passes/path.glsl), the neighbourhood taps follow the
+// NeighborMax winner's path as in glsl/modes/mcguire_gather.frag: tap t at time u = -t/2, at
 // X - oN(u), its direction the piece's, its weights from the distance |u| K |piece| and
 // the tap's and X's own pieces of that segment; the centre-direction taps of a pixel whose
 // wC is its own direction walk its own path the same way (scaled to the neighbourhood's
-// reach), those of slower pixels stay straight along wC (wN: glsl/path.glsl
+// reach), those of slower pixels stay straight along wC (wN: glsl/passes/path.glsl
 // path_direction). The early out and the tap reach take the path's half extent, X's
 // centre weight the half extent of its own path.
-#include "noise.glsl"
+#include "graph/noise.glsl"
 #if SEGMENTS > 1
 #define PATH_READ
 #define PATH_TILES_READ
-#include "path.glsl"
+#include "passes/path.glsl"
 #endif
 uniform sampler2D u_color;
 uniform sampler2D u_depth;

@@ -17,13 +17,13 @@
 // first static surface along the pixel's primary ray (a still camera): that surface is
 // what the raster of the static objects alone shows at the pixel, kept while the view
 // holds (u_static_*), so it is copied, not shaded. The targets are packed for the composite
-// (glsl/hybrid_layers.glsl): (D, depth, 1 + id) and (colour, 1); cleared ones hold 0,
+// (glsl/modes/hybrid/hybrid_layers.glsl): (D, depth, 1 + id) and (colour, 1); cleared ones hold 0,
 // "nothing revealed here".
 #define MATERIAL_PER_FRAGMENT OBJECT_TABLE
-#include "shading.glsl"
-#include "motion.glsl"
+#include "passes/shading.glsl"
+#include "passes/motion.glsl"
 
-noperspective in vec2 v_record; // this pixel's hit record (glsl/reveal_tiles.vert)
+noperspective in vec2 v_record; // this pixel's hit record (glsl/passes/reveal_tiles.vert)
 uniform sampler2D u_hits;       // (face row, u, v, 1 + object id); 0 where no ray
 uniform sampler2D u_faces;      // TEXELS_PER_FACE per face, FACES_PER_ROW faces a row: corner
                                 // c at 2c: (position, normal.x), at 2c + 1: (normal.yz, uv)

@@ -25,7 +25,7 @@ layout(location = 1) out float out_depth;
 layout(location = 2) out uint out_id;
 #elif GBUFFER_LAYOUT == GBUFFER_LAYOUT_HYBRID
 layout(location = 1) out vec4 out_normal;
-// (D.xy, depth, id): glsl/hybrid_layers.glsl's front layer (D not clamped: its readers
+// (D.xy, depth, id): glsl/modes/hybrid/hybrid_layers.glsl's front layer (D not clamped: its readers
 // clamp it to the blur limit where they need to).
 layout(location = 2) out vec4 out_hybrid_front;
 #elif GBUFFER_LAYOUT == GBUFFER_LAYOUT_FRONT
@@ -34,7 +34,7 @@ layout(location = 1) out vec4 out_hybrid_front;
 layout(location = 1) out float out_depth;
 layout(location = 2) out vec2 out_velocity;
 #endif
-// The path targets (glsl/path.glsl), after the layout's own: at PATH_LOCATION(1).
+// The path targets (glsl/passes/path.glsl), after the layout's own: at PATH_LOCATION(1).
 #if SEGMENTS > 1
 layout(location = PATH_LOCATION) out vec4 out_path0;
 #if SEGMENTS == 4
@@ -59,7 +59,7 @@ void write_gbuffer(vec3 color, float depth, vec3 normal, uint id, vec2 velocity)
     out_id = id;
 #elif GBUFFER_LAYOUT == GBUFFER_LAYOUT_HYBRID
     // w: log view depth (half float: steps of ~0.1%), what the ray mask's edge test reads
-    // per neighbour: one fetch of this target, no log there (glsl/raymask_displacement.frag).
+    // per neighbour: one fetch of this target, no log there (glsl/modes/hybrid/raymask_displacement.frag).
     out_normal = vec4(normal, log(max(depth, 1e-6)));
     out_hybrid_front = vec4(velocity, depth, float(id));   // ids are exact as floats below 2^24
 #elif GBUFFER_LAYOUT == GBUFFER_LAYOUT_FRONT

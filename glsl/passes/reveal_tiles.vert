@@ -1,5 +1,5 @@
 #version 330 core
-// Tile quads (glsl/tiles.vert) that also carry where each pixel's hit record lies in the
+// Tile quads (glsl/passes/tiles.vert) that also carry where each pixel's hit record lies in the
 // block-packed record texture (viewer/render/hybrid/reveal.py layer_hits): the record
 // coordinate is an affine function of the window position, so its interpolated value at
 // a fragment is that fragment's record (floor it).

@@ -13,13 +13,13 @@
 // displacement at the pixel (what the moving foreground uncovers). Where nothing
 // covers (data missing: unmasked inner blur, off-screen), the closest miss stands in,
 // preferring surfaces behind the pixel's own. The average over the times is the pixel.
-// With a path (SEGMENTS > 1, glsl/path.glsl) the front layer's motion at time u is its
+// With a path (SEGMENTS > 1, glsl/passes/path.glsl) the front layer's motion at time u is its
 // path's offset there, not u D.
-#include "noise.glsl"
-#include "hybrid_layers.glsl"
+#include "graph/noise.glsl"
+#include "modes/hybrid/hybrid_layers.glsl"
 #if SEGMENTS > 1
 #define PATH_READ
-#include "path.glsl"
+#include "passes/path.glsl"
 #endif
 uniform sampler2D u_neighbormax;    // largest displacement over the 3x3 tiles
 uniform sampler2D u_tilemax;        // largest displacement per tile

@@ -1,5 +1,5 @@
 #version 330 core
-#include "motion.glsl"
+#include "passes/motion.glsl"
 // G-buffer geometry: mesh-space position, normal (face normal for flat shading, trimesh
 // vertex normal for smooth) and UV per vertex; everything else is derived per fragment.
 in vec3 in_position;
@@ -29,7 +29,7 @@ out vec4 v_view;
 out vec4 v_view_open;           // the point's view position at shutter open / close
 out vec4 v_view_close;
 #if SEGMENTS > 1
-#include "path.glsl"
+#include "passes/path.glsl"
 // V(t_k) M(t_k) for k = 0..K (GpuScene.path_matrices); the points' view positions, the
 // middle one (the frame time: v_view) left out.
 uniform mat4 u_modelview_path[PATH_POINTS];

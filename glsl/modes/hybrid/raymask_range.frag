@@ -8,7 +8,7 @@
 // skips it where it would find nothing, and bounds it by the largest reach of the edges
 // it passes: the result is the same, the cost far lower where everything moves (camera
 // motion) but few edges survive.
-#include "raymask_common.glsl"
+#include "modes/hybrid/raymask_common.glsl"
 uniform usampler2D u_displacement_mask;
 uniform sampler2D u_edge_probe;   // raymask_displacement.frag: (half |relative D|, id) at edges
 uniform sampler2D u_front;        // the G-buffer's hybrid_front: (D, depth, id)

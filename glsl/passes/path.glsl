@@ -1,7 +1,7 @@
 // Each pixel's screen-space path over the exposure (viewer/render/gbuffer.py PATH_TARGETS):
 // SEGMENTS (2 or 4) linear pieces between the window positions at t_k = t - s/2 + k s/K,
 // k = 0..K, each projected from V(t_k) M(t_k) per vertex and interpolated like the open
-// and close positions of glsl/motion.glsl. A point is stored as its offset (px, GL axes)
+// and close positions of glsl/passes/motion.glsl. A point is stored as its offset (px, GL axes)
 // from the surface's own window position at the frame time; the middle one, k = K/2, is
 // that position itself (offset 0) and not stored: K offsets, two to an RGBA target
 // (u_path0: k = 0, 1 (K = 4) or 0, 2 (K = 2); u_path1: k = 3, 4). The chord D, the
