@@ -108,10 +108,13 @@ def test_renderer_caches_a_pipeline_per_configuration(ctx):
         four = r.pipeline("hybrid", params("hybrid.segments=4"))
         assert four is not default and four is r.pipeline("hybrid", params("hybrid.segments=4"))
         r.render("hybrid", 0.0, params("hybrid.segments=4"))
-        assert PATHS <= set(r.pool.names())
-        # The default frame after it: the G-buffer drops the stale path targets.
+        assert PATHS <= set(r.buffers())
+        # The default frame after it: its buffers are its own pipeline's, in its order,
+        # whatever the pool still holds of the other configuration's.
         r.render("hybrid", 0.0)
-        assert not PATHS & set(r.pool.names())
+        assert list(r.buffers()) == default.textures() and not PATHS & set(r.buffers())
+        r.render("hybrid", 0.0, params("motion.steps=2"))
+        assert list(r.buffers()) == default.textures() + ["motion_steps_sum"]
         # A pipeline run with the parameters of another configuration is refused.
         frame = r.frame(0.0, params("hybrid.range_check=true"))
         with pytest.raises(RuntimeError, match="built for HybridConfig"):

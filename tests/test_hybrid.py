@@ -626,7 +626,7 @@ def test_split_composite_is_time_near_the_mask_and_bucket_elsewhere(ctx):
 
 def test_mask_tiles_are_made_only_where_the_time_composite_reads_them(ctx):
     # ray_mask_tiles, the time composite's summary of the ray mask, holds the k-tiles of
-    # the pixels masked this frame, and is dropped where the bucketed composite runs.
+    # the pixels masked this frame, and is not among the bucketed composite's buffers.
     scene = load_scene(CONFORMANCE / "basic.toml")
     r = Renderer(ctx, scene, SMALL)
     try:
@@ -635,7 +635,7 @@ def test_mask_tiles_are_made_only_where_the_time_composite_reads_them(ctx):
         k = max_radius_px(r.frame(0.0, ParamSet()))
         tiles = r.buffers()["ray_mask_tiles"][..., 1]
         r.render("hybrid", 0.013, params(composite="bucket"))
-        assert "ray_mask_tiles" not in r.pool.names()
+        assert "ray_mask_tiles" not in r.buffers() and "ray_mask" in r.buffers()
     finally:
         r.release()
     jj, ii = np.nonzero(mask)

@@ -19,7 +19,7 @@ from world.conventions import to_image
 from viewer.render.graph.params import ParamSet
 from viewer.render.passes.blur_common import max_radius_px
 from viewer.render.passes.gbuffer import GBUFFER
-from viewer.render.modes.mcguire import EARLY_OUT_PX, JITTER_STREAM, Gather
+from viewer.render.modes.mcguire import EARLY_OUT_PX, JITTER_STREAM, Gather, McGuireConfig
 from viewer.render.graph.pool import TexSpec
 from viewer.render.renderer import Renderer
 from world.loader import load_scene
@@ -145,7 +145,7 @@ def test_two_segment_gather_matches_numpy(synthetic_frame, jitter, seed, samples
     upload(frame, "mcguire_neighbormax", np.zeros(tiles.shape[:2] + (2,)),
            TexSpec(2, "f4", tile=k))
     upload(frame, "mcguire_neighbormax_path", pack(tiles), TexSpec(4, "f4", tile=k))
-    g = Gather(tiled=True)
+    g = Gather(tiled=True, config=McGuireConfig(2))
     g.allocate(frame)
     g.execute(frame)
     assert frame.stats["mcguire_neighbormax_gather_tiles"] == tiles.shape[0] * tiles.shape[1] - 1

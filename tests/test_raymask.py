@@ -233,7 +233,7 @@ def test_without_the_range_check_the_mask_is_the_displacement_tests_survivors(
         synthetic_frame, seed):
     """hybrid.range_check off (the default): ray_mask holds the displacement test's
     survivors (as their object ids) and nothing else; no edge test, no range check, and
-    the targets of a frame that ran them before are dropped."""
+    none of their targets in the configuration's pipeline."""
     rng = np.random.default_rng(seed)
     w, h = 30, 16
     frame = synthetic_frame((w, h), params(edge_depth=0.04, edge_normal=0.25))
@@ -251,9 +251,15 @@ def test_without_the_range_check_the_mask_is_the_displacement_tests_survivors(
     np.testing.assert_array_equal(three["ray_mask"], with_range)
     assert np.count_nonzero(want) > 10 and np.count_nonzero(with_range != want) > 5
     assert set(got) == {"ray_mask"} and three["mask_edge"].any()
+    # The configuration's pipeline makes none of the range check's targets (what an
+    # earlier configuration left in the pool is neither read nor listed).
+    from viewer.render.modes.hybrid.config import HybridConfig
+    from viewer.render.modes.hybrid.pipeline import hybrid_pipeline
+    made = set(hybrid_pipeline(HybridConfig(range_check=False)).textures())
     for name in ("mask_displacement", "mask_relative", "mask_edge", "mask_edge_probe",
                  "mask_edge_ids", "mask_edge_near"):
-        assert name not in frame.pool.names(), name
+        assert name not in made, name
+        assert name in hybrid_pipeline(HybridConfig(range_check=True)).textures(), name
 
 
 def test_masked_pixels_read_in_image_order_from_gl_rows():

@@ -23,7 +23,7 @@ from viewer.render.graph.kept import KeptState
 from .modes import MODES
 from viewer.render.graph.registry import mode_config
 from viewer.render.graph.pool import ResourcePool
-from viewer.render.steps import MakeFrame, Measure, run_steps, step_count, sub_exposures
+from viewer.render.steps import SUM, MakeFrame, Measure, run_steps, step_count, sub_exposures
 
 
 @dataclass
@@ -45,6 +45,7 @@ class Renderer:
         self.pool = ResourcePool(ctx)
         self._pipelines: dict = {}
         self.kept = KeptState()          # state kept across frames (e.g. the ray tracer)
+        self.made: list[str] = []        # the textures the last frame made, in order
         self.resize(size)
 
     def _check_size(self, size):
@@ -98,8 +99,10 @@ class Renderer:
             return bend["px"]
         n = step_count(mode, params, shutter, measure_bend)
         pose = self._pose(float(t), shutter, n) if self.scene.assets else None
-        frame = run_steps(make_frame, self.pipeline(mode, params), float(t), shutter, seed, n,
-                          measure)
+        pipeline = self.pipeline(mode, params)
+        self.pool.begin()
+        frame = run_steps(make_frame, pipeline, float(t), shutter, seed, n, measure)
+        self.made = [n for n in (*pipeline.textures(), SUM) if n in self.pool.made]
         if pose is not None:   # (host work before the first pass: reported as one of them)
             frame.pass_ms["scene_pose"], frame.pass_cpu_ms["scene_pose"] = pose[:2]
             frame.stats["skinned_vertices"] = pose[2]
@@ -137,9 +140,10 @@ class Renderer:
         return self.pipeline(mode).output         # (the same under every configuration)
 
     def buffers(self) -> dict[str, np.ndarray]:
-        """Every texture in the pool, image orientation."""
+        """Every texture the last frame made, image orientation, in pipeline order (the
+        pool may also hold textures of other modes and configurations run before)."""
         from viewer.render.graph.frame import read_texture
-        return {n: read_texture(self.pool.get(n)) for n in self.pool.names()}
+        return {n: read_texture(self.pool.get(n)) for n in self.made}
 
     def release(self):
         self.kept.release()

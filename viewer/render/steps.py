@@ -119,7 +119,6 @@ def run_steps(make_frame: MakeFrame, pipeline: Pipeline, t: float, shutter: floa
     output = pipeline.output
     if n == 1:
         frame = make_frame(*subs[0])
-        frame.pool.discard(SUM)        # (a stepped frame's: not this one's, kept from view)
         pipeline.run(frame, measure=measure)
         return frame
     stats: dict = {}

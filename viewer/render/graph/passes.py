@@ -143,6 +143,11 @@ class Pipeline:
             with measure(frame, p.name), frame.host.opened_to(p), frame.pool.opened_to(p):
                 p.execute(frame)
 
+    def textures(self) -> list[str]:
+        """Every texture the passes make, in the order made: this pipeline's names (the
+        pool may hold other pipelines' textures too; nothing reads those)."""
+        return list(dict.fromkeys(n for p in self.passes for n in p.produces))
+
     def host_resources(self) -> list[tuple[HostResource, Pass, list[Pass]]]:
         """(resource, producer, readers) of every host resource, in the order made."""
         return [(r, p, [q for q in self.passes if r in q.host_inputs])

@@ -58,6 +58,7 @@ class ResourcePool:
         # texture zero elsewhere (mark_tiles); dropped by any other write.
         self._tiles: dict[str, tuple] = {}
         self._pass = None                  # the pass a pipeline is running, if any
+        self.made: set[str] = set()        # allocated or written since begin()
 
     @contextmanager
     def opened_to(self, p):
@@ -82,6 +83,7 @@ class ResourcePool:
     def check_write(self, names):
         """Raise unless the open pass (if any) declares every one of `names` it writes."""
         self._check(names, write=True)
+        self.made.update(names)
 
     def read_back(self, name: str, texture: moderngl.Texture | None = None,
                   viewport=None, components: int | None = None, dtype: str | None = None
@@ -101,11 +103,16 @@ class ResourcePool:
             viewport=viewport, components=components or self.spec(name).components,
             dtype=dtype or self.spec(name).dtype)
 
+    def begin(self):
+        """A frame starts: `made` collects the textures it allocates or writes."""
+        self.made = set()
+
     def resize(self, size: tuple[int, int]):
         self.size = (int(size[0]), int(size[1]))
 
     def texture(self, name: str, spec: TexSpec) -> moderngl.Texture:
         self._check((name,), write=True)
+        self.made.add(name)
         size = spec.size(self.size)
         have = self._tex.get(name)
         if have and have[0] == spec and have[1] == size:
@@ -143,6 +150,8 @@ class ResourcePool:
         """The framebuffer of textures `names` (and the depth buffer), to draw into, or
         with `read` to copy or read from."""
         self._check(names, write=not read)
+        if not read:
+            self.made.update(names)
         key = (names, depth, self.size if depth else None)
         fbo = self._fbo.get(key)
         if fbo is None:

@@ -30,7 +30,7 @@ from viewer.render.graph.params import group, param
 from viewer.render.passes.blur_common import max_radius_px
 from viewer.render.graph.frame import Frame
 from viewer.render.passes.gather_tiles import draw_gather, gather_tiles, jitter_reach
-from viewer.render.passes.gbuffer import GBufferPass, PathConfig, path_targets, segments_in, segments_param
+from viewer.render.passes.gbuffer import GBufferPass, PathConfig, path_targets, segments_param
 from viewer.render.passes.motion_params import curve_steps_param
 from viewer.render.passes.half_velocity import EARLY_OUT_PX, VelocityPrep, path_bindings
 from viewer.render.graph.registry import mode
@@ -77,7 +77,6 @@ class GuertinParams:
     curve_steps: int = curve_steps_param(1)     # the published linear blur by default
 
 
-segments = segments_in("guertin")
 
 
 @dataclass(frozen=True)
@@ -91,6 +90,7 @@ class Gather(FullscreenPass):
     produces = ("guertin",)
 
     def __init__(self, tiled: bool = True, config: GuertinConfig = GuertinConfig()):
+        self.segments = config.segments
         self.tiled = tiled
         paths = path_targets(config.segments)
         tile_paths = tuple(f"guertin_neighbormax{s}" for s in PATH_SUFFIXES[:len(paths)])
@@ -103,7 +103,7 @@ class Gather(FullscreenPass):
     def defines(self, frame: Frame):
         return {"EARLY_OUT_PX": EARLY_OUT_PX, "TAP_NOISE": f"{TAP_NOISE!r}",
                 "TILE_STREAM_X": f"{TILE_STREAM_X}u", "TILE_STREAM_Y": f"{TILE_STREAM_Y}u",
-                "SEGMENTS": segments(frame)}
+                "SEGMENTS": self.segments}
 
     def outputs(self, frame: Frame):
         return {"guertin": TexSpec(4, "f4")}
@@ -111,7 +111,7 @@ class Gather(FullscreenPass):
     def execute(self, frame: Frame):
         p = frame.params["guertin"]
         r = max_radius_px(frame)
-        paths = path_bindings(frame, "guertin_neighbormax", segments)
+        paths = path_bindings("guertin_neighbormax", self.segments)
         tile_paths = tuple(v for key, v in paths.items() if key.startswith("u_tile_"))
         tiles = (gather_tiles(frame, "guertin_neighbormax", slice(0, 2), r, EARLY_OUT_PX,
                               jitter_reach(p.tile_jitter, r), tile_paths)
@@ -130,7 +130,7 @@ def guertin_passes(tiled: bool = True, config: GuertinConfig = GuertinConfig()) 
     """The filter's passes after a G-buffer (colour, depth, velocity; the path of
     config.segments pieces) exists."""
     return [VelocityPrep("guertin_velocity"),
-            *tile_passes("guertin_velocity", "guertin", segments=segments,
+            *tile_passes("guertin_velocity", "guertin", segments=config.segments,
                          paths=path_targets(config.segments), diagonal_toward=True),
             Gather(tiled, config)]
 

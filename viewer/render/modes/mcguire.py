@@ -20,7 +20,7 @@ from viewer.render.passes.blur_common import max_radius_px
 from viewer.render.graph.frame import Frame
 from viewer.render.passes.gather_reach import mcguire_maps
 from viewer.render.passes.gather_tiles import draw_gather, gather_tiles, tile_list
-from viewer.render.passes.gbuffer import GBufferPass, PathConfig, path_targets, segments_in, segments_param
+from viewer.render.passes.gbuffer import GBufferPass, PathConfig, path_targets, segments_param
 from viewer.render.passes.motion_params import curve_steps_param
 from viewer.render.passes.half_velocity import EARLY_OUT_PX, VelocityPrep, path_bindings
 from viewer.render.graph.registry import mode
@@ -51,7 +51,6 @@ class McGuireParams:
     curve_steps: int = curve_steps_param(1)     # the published linear blur by default
 
 
-segments = segments_in("mcguire")
 
 
 @dataclass(frozen=True)
@@ -69,6 +68,7 @@ class Gather(FullscreenPass):
     produces = ("mcguire",)
 
     def __init__(self, tiled: bool = True, config: McGuireConfig = McGuireConfig()):
+        self.segments = config.segments
         self.tiled = tiled
         paths = path_targets(config.segments)
         tile_paths = tuple(f"mcguire_neighbormax{s}" for s in PATH_SUFFIXES[:len(paths)])
@@ -81,7 +81,7 @@ class Gather(FullscreenPass):
 
     def defines(self, frame: Frame):
         return {"EARLY_OUT_PX": EARLY_OUT_PX, "JITTER_STREAM": f"{JITTER_STREAM}u",
-                "SEGMENTS": segments(frame), "CENTRE_ONLY": 0}
+                "SEGMENTS": self.segments, "CENTRE_ONLY": 0}
 
     def outputs(self, frame: Frame):
         return {"mcguire": TexSpec(4, "f4")}
@@ -89,7 +89,7 @@ class Gather(FullscreenPass):
     def execute(self, frame: Frame):
         p = frame.params["mcguire"]
         k = max_radius_px(frame)
-        paths = path_bindings(frame, "mcguire_neighbormax", segments)
+        paths = path_bindings("mcguire_neighbormax", self.segments)
         tile_paths = tuple(v for key, v in paths.items() if key.startswith("u_tile_"))
         tiles, variants = self.tiles(frame, k, p, tile_paths)
         draw_gather(self, frame, "mcguire",
@@ -119,7 +119,7 @@ class Gather(FullscreenPass):
 def mcguire_passes(tiled: bool = True, config: McGuireConfig = McGuireConfig()) -> list:
     """The filter's passes after a G-buffer (colour, depth, velocity; the path of
     config.segments pieces) exists."""
-    return [VelocityPrep(), *tile_passes("mcguire_velocity", "mcguire", segments=segments,
+    return [VelocityPrep(), *tile_passes("mcguire_velocity", "mcguire", segments=config.segments,
                                          paths=path_targets(config.segments)),
             Gather(tiled, config)]
 

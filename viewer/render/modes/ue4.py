@@ -28,7 +28,7 @@ from viewer.render.passes.blur_common import max_radius_px
 from viewer.render.graph.frame import Frame
 from viewer.render.passes.gather_reach import ue4_map
 from viewer.render.passes.gather_tiles import draw_gather, gather_tiles, jitter_reach, tile_list
-from viewer.render.passes.gbuffer import GBufferPass, PathConfig, path_targets, segments_in, segments_param
+from viewer.render.passes.gbuffer import GBufferPass, PathConfig, path_targets, segments_param
 from viewer.render.passes.motion_params import curve_steps_param
 from viewer.render.passes.half_velocity import GBUFFER_PATHS, path_bindings
 from viewer.render.graph.registry import mode
@@ -66,7 +66,6 @@ class UE4Params:
     curve_steps: int = curve_steps_param(1)     # the published linear blur by default
 
 
-segments = segments_in("ue4")
 PATH_SUFFIXES = ("_path", "_path2")
 
 
@@ -75,14 +74,9 @@ class UE4Config(PathConfig):
     group: ClassVar[str] = "ue4"
 
 
-def declared(base: str, config: UE4Config) -> tuple[str, ...]:
-    """BASE's path targets under `config` (none for one segment)."""
-    return tuple(base + x for x in PATH_SUFFIXES[:config.segments // 2])
-
-
-def paths_of(frame, base: str) -> tuple[str, ...]:
-    """BASE's path targets this frame (none for one segment)."""
-    return tuple(base + x for x in PATH_SUFFIXES[:segments(frame) // 2])
+def declared(base: str, segments: int) -> tuple[str, ...]:
+    """BASE's path targets for `segments` path pieces (none for one)."""
+    return tuple(base + x for x in PATH_SUFFIXES[:segments // 2])
 
 
 def samplers(names: tuple[str, ...]) -> dict[str, str]:
@@ -109,17 +103,18 @@ class Flatten(FullscreenPass):
     produces = ("ue4_flat",)
 
     def __init__(self, config: UE4Config = UE4Config()):
+        self.segments = config.segments
         self.inputs = ("velocity", "depth", *path_targets(config.segments))
 
     def defines(self, frame):
-        return {"SEGMENTS": segments(frame)}
+        return {"SEGMENTS": self.segments}
 
     def outputs(self, frame):
         return {"ue4_flat": FLAT}
 
     def execute(self, frame):
         self.draw(frame, self.produces, {"u_velocity": "velocity", "u_depth": "depth",
-                                         **samplers(GBUFFER_PATHS[:segments(frame) // 2])},
+                                         **samplers(GBUFFER_PATHS[:self.segments // 2])},
                   {"u_max_px": float(max_radius_px(frame))})
 
 
@@ -128,18 +123,19 @@ class TileMinMax(FullscreenPass):
     fragment = "modes/ue4_tiles.frag"
 
     def __init__(self, config: UE4Config = UE4Config()):
+        self.segments = config.segments
         self.inputs = ("ue4_flat", *path_targets(config.segments))
-        self.produces = ("ue4_tiles", *declared("ue4_tiles", config))
+        self.produces = ("ue4_tiles", *declared("ue4_tiles", config.segments))
 
     def defines(self, frame):
-        return {"SEGMENTS": segments(frame)}
+        return {"SEGMENTS": self.segments}
 
     def outputs(self, frame):
-        return {name: tile_spec(frame) for name in ("ue4_tiles", *paths_of(frame, "ue4_tiles"))}
+        return {name: tile_spec(frame) for name in ("ue4_tiles", *declared("ue4_tiles", self.segments))}
 
     def execute(self, frame):
-        self.draw(frame, ("ue4_tiles", *paths_of(frame, "ue4_tiles")),
-                  {"u_flat": "ue4_flat", **samplers(GBUFFER_PATHS[:segments(frame) // 2])},
+        self.draw(frame, ("ue4_tiles", *declared("ue4_tiles", self.segments)),
+                  {"u_flat": "ue4_flat", **samplers(GBUFFER_PATHS[:self.segments // 2])},
                   {"u_tile": frame.params["ue4"].tile})
 
 
@@ -148,20 +144,21 @@ class Dilate(FullscreenPass):
     fragment = "modes/ue4_dilate.frag"
 
     def __init__(self, config: UE4Config = UE4Config()):
-        self.inputs = ("ue4_tiles", *declared("ue4_tiles", config))
-        self.produces = ("ue4_dilated", *declared("ue4_dilated", config))
+        self.segments = config.segments
+        self.inputs = ("ue4_tiles", *declared("ue4_tiles", config.segments))
+        self.produces = ("ue4_dilated", *declared("ue4_dilated", config.segments))
 
     def defines(self, frame):
-        return {"SEGMENTS": segments(frame)}
+        return {"SEGMENTS": self.segments}
 
     def outputs(self, frame):
         return {name: tile_spec(frame)
-                for name in ("ue4_dilated", *paths_of(frame, "ue4_dilated"))}
+                for name in ("ue4_dilated", *declared("ue4_dilated", self.segments))}
 
     def execute(self, frame):
         p = frame.params["ue4"]
-        self.draw(frame, ("ue4_dilated", *paths_of(frame, "ue4_dilated")),
-                  {"u_tiles": "ue4_tiles", **samplers(paths_of(frame, "ue4_tiles"))},
+        self.draw(frame, ("ue4_dilated", *declared("ue4_dilated", self.segments)),
+                  {"u_tiles": "ue4_tiles", **samplers(declared("ue4_tiles", self.segments))},
                   {"u_tile": float(p.tile), "u_reach": dilation_reach(max_radius_px(frame), p.tile),
                    "u_guard": bool(p.fast_path_guard), "u_tile_jitter": p.tile_jitter})
 
@@ -180,15 +177,16 @@ class Gather(FullscreenPass):
     produces = ("ue4",)
 
     def __init__(self, tiled: bool = True, config: UE4Config = UE4Config()):
+        self.segments = config.segments
         self.tiled = tiled
         self.inputs = ("color", "ue4_flat", "ue4_tiles", "ue4_dilated",
-                       *path_targets(config.segments), *declared("ue4_dilated", config))
+                       *path_targets(config.segments), *declared("ue4_dilated", config.segments))
         # The tiles to draw come from the tile textures read back (tiles()).
         lookups = ("ue4_dilated",) if config.segments > 1 else ("ue4_dilated", "ue4_tiles")
         self.reads_back = tuple(ReadBack(n) for n in lookups) if tiled else ()
 
     def defines(self, frame):
-        return {"EARLY_OUT_PX": EARLY_OUT_PX, "SEGMENTS": segments(frame)}
+        return {"EARLY_OUT_PX": EARLY_OUT_PX, "SEGMENTS": self.segments}
 
     def outputs(self, frame):
         return {"ue4": TexSpec(4, "f4")}
@@ -198,7 +196,7 @@ class Gather(FullscreenPass):
         tiles = self.tiles(frame, p) if self.tiled else None
         draw_gather(self, frame, "ue4",
                     {"u_color": "color", "u_flat": "ue4_flat", "u_tiles": "ue4_dilated",
-                     **path_bindings(frame, "ue4_dilated", segments)},
+                     **path_bindings("ue4_dilated", self.segments)},
                     {"u_tile": p.tile, "u_max_px": float(max_radius_px(frame)), "u_taps": p.taps,
                      "u_depth_scale": p.depth_scale,
                      "u_tile_jitter": p.tile_jitter, "u_tap_jitter": p.tap_jitter,
@@ -208,7 +206,7 @@ class Gather(FullscreenPass):
     def tiles(self, frame, p):
         """draw_gather's tiles (None: full screen)."""
         reach = jitter_reach(p.tile_jitter, p.tile)
-        if segments(frame) > 1:
+        if self.segments > 1:
             return gather_tiles(frame, "ue4_dilated", slice(2, 4), p.tile, EARLY_OUT_PX, reach)
         draw = ue4_map(frame, p.tile, reach, p.taps, max_radius_px(frame), bool(p.fast_path),
                        p.fast_ratio, EARLY_OUT_PX)

@@ -42,17 +42,6 @@ def path_targets(segments: int) -> tuple[str, ...]:
     return ("hybrid_path", "hybrid_path2")[:segments // 2]
 
 
-def segments_in(group: str):
-    """segments(frame) for passes reading GROUP.segments: that count where the G-buffer
-    wrote its path targets this frame, else 1, the chord alone (a pass run on buffers
-    without a path)."""
-    def segments(frame: Frame) -> int:
-        k = int(frame.params[group].segments)
-        names = frame.pool.names()
-        return k if all(n in names for n in path_targets(k)) else 1
-    return segments
-
-
 @dataclass(frozen=True)
 class PathConfig:
     """A real-time blur's configuration (viewer/render/graph/registry.py): the path segments
@@ -109,9 +98,9 @@ class GBufferPass(Pass):
         mode's configuration; 1 the chord alone), None for a mode without paths."""
         self.prefix = prefix
         self.static_only = static_only
-        self.layout_name = layout
-        self.path_segments = segments
-        self.produces = self.targets(layout, segments or 1)
+        self.layout = layout
+        self.segments = segments or 1
+        self.produces = self.targets(layout, self.segments)
         # The kept static raster's depth and ranks, read once a view where movers are
         # drawn over it (static_raster.py); a static-only pass copies it whole.
         self.reads_back = () if static_only else (STATIC_RASTER_READ,)
@@ -119,28 +108,14 @@ class GBufferPass(Pass):
     def targets(self, layout: str, segments: int = 1) -> tuple[str, ...]:
         return tuple(self.prefix + n for n in LAYOUTS[layout][1] + path_targets(segments))
 
-    def segments(self, frame: Frame) -> int:
-        """Path segments this frame writes (1: the chord D alone)."""
-        return self.path_segments or 1
-
-    def layout(self, frame: Frame) -> str:
-        """The layout this frame writes."""
-        return self.layout_name
-
     def outputs(self, frame: Frame):
         return {p: GBUFFER[p[len(self.prefix):]]
-                for p in self.targets(self.layout(frame), self.segments(frame))}
+                for p in self.produces}
 
     def execute(self, frame: Frame, time: float | None = None):
         t = frame.time if time is None else time
         t_open, t_close = frame.exposure_at(t)
-        layout = self.layout(frame)
-        segments = self.segments(frame)
-        names = self.targets(layout, segments)
-        if self.path_segments is not None:
-            # (a path written under another configuration: not this frame's)
-            for stale in set(self.targets(layout, max(SEGMENT_CHOICES))) - set(names):
-                frame.pool.discard(stale)
+        layout, segments, names = self.layout, self.segments, self.produces
         defines = {**glsl_defines(), **frame.gpu.light_defines(), **layout_defines(layout),
                    "SEGMENTS": segments, "PATH_LOCATION": len(LAYOUTS[layout][1]),
                    "PATH_LOCATION1": len(LAYOUTS[layout][1]) + 1}

@@ -17,10 +17,10 @@ EARLY_OUT_PX = 0.5 + 1e-3
 GBUFFER_PATHS = ("hybrid_path", "hybrid_path2")
 
 
-def path_bindings(frame: Frame, tile_source: str, segments) -> dict[str, str]:
-    """A path gather's samplers for segments(frame) (none for one): the pixel's and the
-    taps' paths, and the NeighborMax winner's (TILE_SOURCE_path, _path2)."""
-    n = segments(frame) // 2
+def path_bindings(tile_source: str, segments: int) -> dict[str, str]:
+    """A path gather's samplers for `segments` path pieces (none for one): the pixel's and
+    the taps' paths, and the NeighborMax winner's (TILE_SOURCE_path, _path2)."""
+    n = segments // 2
     names = {"u_path0": GBUFFER_PATHS[0], "u_path1": GBUFFER_PATHS[1],
              "u_tile_path0": tile_source + "_path", "u_tile_path1": tile_source + "_path2"}
     return {key: names[key] for key in ("u_path0", "u_tile_path0", "u_path1", "u_tile_path1")

@@ -20,10 +20,6 @@ from viewer.render.graph.passes import FullscreenPass, Pass
 from viewer.render.graph.pool import TexSpec
 
 
-def one_segment(frame: Frame) -> int:
-    return 1
-
-
 PATH_SUFFIXES = ("_path", "_path2")       # two path points a target (glsl/passes/path.glsl)
 
 
@@ -41,11 +37,11 @@ class TileMaxPass(FullscreenPass):
     fragment = "passes/tilemax.frag"
 
     def __init__(self, source: str, output: str, axis: str, tile=max_radius_px, select=None,
-                 segments=one_segment, paths: tuple[str, ...] = (), select_reads=()):
+                 segments: int = 1, paths: tuple[str, ...] = (), select_reads=()):
         """select(frame, k): a TileList over the output's texels that can be nonzero (the
         rest is cleared to 0, the value of a still strip), or None for all of them;
         select_reads: the host resources it reads (the pass's host_inputs).
-        segments(frame): the path segments of the frame; paths: the source's path
+        segments: the configuration's path segments; paths: the source's path
         targets (glsl/passes/path.glsl), read where segments > 1."""
         if axis not in ("x", "y"):
             raise ValueError(f"TileMaxPass axis must be 'x' or 'y', got {axis!r}")
@@ -57,14 +53,14 @@ class TileMaxPass(FullscreenPass):
         self.host_inputs = tuple(select_reads)
 
     def defines(self, frame: Frame):
-        return {"SEGMENTS": self.segments(frame)}
+        return {"SEGMENTS": self.segments}
 
     def outputs(self, frame: Frame):
         k = self.tile(frame)
         strip = self.axis == "x"
         spec = StripSpec(2, "f4", tile=k) if strip else TexSpec(2, "f4", tile=k)
         path = StripSpec(4, "f4", tile=k) if strip else TexSpec(4, "f4", tile=k)
-        n = self.segments(frame) // 2
+        n = self.segments // 2
         return {self.output: spec, **{name: path for name in self.path_outputs[:n]}}
 
     def execute(self, frame: Frame):
@@ -73,7 +69,7 @@ class TileMaxPass(FullscreenPass):
         tiles = self.select(frame, k) if self.select is not None else None
         if tiles is not None:
             uniforms["u_viewport"] = tuple(float(x) for x in tiles.size)
-        n = self.segments(frame) // 2
+        n = self.segments // 2
         textures = {"u_velocity": self.source,
                     **{f"u_path{j}": self.paths[j] for j in range(n)}}
         self.draw(frame, (self.output, *self.path_outputs[:n]), textures, uniforms,
@@ -86,7 +82,7 @@ class NeighborMaxPass(FullscreenPass):
     (Guertin et al. 2014)."""
     fragment = "passes/neighbormax.frag"
 
-    def __init__(self, source: str, output: str, tile=max_radius_px, segments=one_segment,
+    def __init__(self, source: str, output: str, tile=max_radius_px, segments: int = 1,
                  paths: tuple[str, ...] = (), diagonal_toward: bool = False):
         self.name = output
         self.path_outputs = tuple(output + s for s in PATH_SUFFIXES[:len(paths)])
@@ -96,27 +92,27 @@ class NeighborMaxPass(FullscreenPass):
         self.diagonal_toward = diagonal_toward
 
     def defines(self, frame: Frame):
-        return {"SEGMENTS": self.segments(frame), "DIAGONAL_TOWARD": int(self.diagonal_toward)}
+        return {"SEGMENTS": self.segments, "DIAGONAL_TOWARD": int(self.diagonal_toward)}
 
     def outputs(self, frame: Frame):
         k = self.tile(frame)
-        n = self.segments(frame) // 2
+        n = self.segments // 2
         return {self.output: TexSpec(2, "f4", tile=k),
                 **{name: TexSpec(4, "f4", tile=k) for name in self.path_outputs[:n]}}
 
     def execute(self, frame: Frame):
-        n = self.segments(frame) // 2
+        n = self.segments // 2
         self.draw(frame, (self.output, *self.path_outputs[:n]),
                   {"u_tiles": self.source, **{f"u_path{j}": self.paths[j] for j in range(n)}})
 
 
 def tile_passes(source: str, prefix: str, tile=max_radius_px, select_x=None,
-                segments=one_segment, paths: tuple[str, ...] = (),
+                segments: int = 1, paths: tuple[str, ...] = (),
                 diagonal_toward: bool = False, select_reads=()) -> list[Pass]:
     """TileMax x, TileMax y and NeighborMax of `source`, producing PREFIX_tilemax_x,
     PREFIX_tilemax and PREFIX_neighbormax; select_x, select_reads: TileMaxPass's `select`
     for the first and the host resources it reads; paths: the source's path targets,
-    carried along where segments(frame) > 1; diagonal_toward: NeighborMaxPass's."""
+    carried along where segments > 1; diagonal_toward: NeighborMaxPass's."""
     tx, ty, nm = f"{prefix}_tilemax_x", f"{prefix}_tilemax", f"{prefix}_neighbormax"
     names = lambda base: tuple(base + s for s in PATH_SUFFIXES[:len(paths)])  # noqa: E731
     return [TileMaxPass(source, tx, "x", tile, select_x, segments, paths, select_reads),

@@ -28,7 +28,7 @@ from viewer.render.graph.pool import ReadBack, TexSpec
 from .reveal import MASKED_PIXELS
 from viewer.render.passes.tile_kernels import mark_tiles, outlines_along, pixel_tiles, square_max
 from viewer.render.passes.tile_runs import FINE, tile_coords, within_reach
-from viewer.render.modes.hybrid.tile_select import TILE_LISTS, moving_strips, path_textures, segments, tile_list
+from viewer.render.modes.hybrid.tile_select import TILE_LISTS, moving_strips, path_textures, tile_list
 from viewer.render.passes.tiles import tile_passes
 
 # Which noise stream of glsl/graph/noise.glsl's hash01 jitters the time samples or taps.
@@ -52,7 +52,7 @@ NEIGHBORMAX = HostResource("neighbormax", np.ndarray,
                            "hybrid_neighbormax read back (GL rows), for near_outlines")
 
 
-def near_outlines(frame: Frame, todo: np.ndarray) -> np.ndarray:
+def near_outlines(frame: Frame, todo: np.ndarray, segments: int) -> np.ndarray:
     """FINE tiles (GL rows) where a tap of the neighbourhood's line, or of an own line
     merged with it, can land on another object than its pixel's: all of them without
     tile lists. The line runs along the pixel's NeighborMax vector (read back: a few
@@ -65,8 +65,8 @@ def near_outlines(frame: Frame, todo: np.ndarray) -> np.ndarray:
     lists = frame.host.get(TILE_LISTS)
     if lists is None or lists.boundary.shape != todo.shape:
         return np.ones(todo.shape, bool)
-    if segments(frame) > 1:
-        return todo & within_reach(lists.boundary, path_reach(frame, todo.shape), FINE)
+    if segments > 1:
+        return todo & within_reach(lists.boundary, path_reach(frame, todo.shape, segments), FINE)
     vn = frame.host.get(NEIGHBORMAX)
     if vn is None:                      # (not read back: the composite run on its own)
         vn = read_neighbormax(frame)
@@ -75,7 +75,7 @@ def near_outlines(frame: Frame, todo: np.ndarray) -> np.ndarray:
                           2.0 * k, OUTLINE_MARGIN_PX, MERGE_SPREAD)
 
 
-def path_reach(frame: Frame, shape: tuple[int, int]) -> np.ndarray:
+def path_reach(frame: Frame, shape: tuple[int, int], segments: int) -> np.ndarray:
     """Per FINE tile (GL rows), how far (px) from its pixels the taps of a neighbourhood
     path can land: half the largest NeighborMax path extent (clamped to the blur limit)
     over the k-tiles it meets, plus rounding and the other pixel of a boundary pair. A
@@ -83,7 +83,7 @@ def path_reach(frame: Frame, shape: tuple[int, int]) -> np.ndarray:
     k = max_radius_px(frame)
     w, h = frame.size
     points = []
-    for name in ("hybrid_neighbormax_path", "hybrid_neighbormax_path2")[:segments(frame) // 2]:
+    for name in ("hybrid_neighbormax_path", "hybrid_neighbormax_path2")[:segments // 2]:
         tex = frame.pool.get(name)
         points.append(np.frombuffer(frame.pool.read_back(name),
                                     np.float32).reshape(tex.size[1], tex.size[0], 2, 2))
@@ -173,6 +173,7 @@ class Composite(FullscreenPass):
     fragment = FRAGMENTS["time"]        # (each draw names its own: _draw)
 
     def __init__(self, config: HybridConfig = HybridConfig()):
+        self.segments = config.segments
         tile_paths = config.tile_paths("hybrid_neighbormax")
         self.inputs = ("color", "hybrid_front", "hybrid_back", "hybrid_back_color",
                        "hybrid_tilemax", "hybrid_neighbormax", *config.paths, *tile_paths)
@@ -187,7 +188,7 @@ class Composite(FullscreenPass):
 
     def defines(self, frame: Frame):
         p = frame.params["hybrid"]
-        return {"MAX_SEEDS": int(p.seeds), "SEGMENTS": segments(frame),
+        return {"MAX_SEEDS": int(p.seeds), "SEGMENTS": self.segments,
                 "JITTER_STREAM": f"{JITTER_STREAM}u", "MERGE_COS": repr(MERGE_COS)}
 
     def outputs(self, frame: Frame):
@@ -195,8 +196,6 @@ class Composite(FullscreenPass):
 
     def execute(self, frame: Frame):
         kind = composite_kind(frame)
-        if kind == "bucket":
-            frame.pool.discard(MASK_TILES)     # (made by an earlier time composite)
         tiles = tile_list(frame, "active")
         lists = frame.host.get(TILE_LISTS)
         if tiles is not None and tiles.count < lists.shape[0] * lists.shape[1]:
@@ -223,7 +222,7 @@ class Composite(FullscreenPass):
         # needed only where it is the own line (SIMPLE).
         still = plain & (lists.longest < STILL_PX)
         moving = plain & ~still
-        simple = moving & ~near_outlines(frame, moving)
+        simple = moving & ~near_outlines(frame, moving, self.segments)
         parts = (first, ("bucket", moving & ~simple, 0, 0, 0), ("bucket", simple, 0, 0, 1),
                  ("bucket", still, 0, 1, 0))
         for which, selected, back, own_still, single in parts:
@@ -239,8 +238,8 @@ class Composite(FullscreenPass):
         textures = {"u_front_color": "color", "u_front": "hybrid_front",
                     "u_back_color": "hybrid_back_color", "u_back": "hybrid_back",
                     "u_tilemax": "hybrid_tilemax", "u_neighbormax": "hybrid_neighbormax",
-                    **path_textures(frame),
-                    **path_textures(frame, {"u_neighbormax_path0": "hybrid_neighbormax_path",
+                    **path_textures(self.segments),
+                    **path_textures(self.segments, {"u_neighbormax_path0": "hybrid_neighbormax_path",
                                             "u_neighbormax_path1": "hybrid_neighbormax_path2"})}
         if kind == "time":
             write_mask_tiles(frame)
@@ -258,7 +257,7 @@ class Composite(FullscreenPass):
 def composite_tile_passes(config: HybridConfig = HybridConfig()) -> list:
     """The raster displacement's tiles for the composite (and NeighborMax on the host,
     where the composite reads it): they need only the G-buffer and the tile lists."""
-    return [*tile_passes("hybrid_front", "hybrid", select_x=moving_strips, segments=segments,
+    return [*tile_passes("hybrid_front", "hybrid", select_x=moving_strips, segments=config.segments,
                          paths=config.paths, select_reads=(TILE_LISTS,)),
             *((ReadNeighborMax(),) if config.reads_neighbormax else ())]
 

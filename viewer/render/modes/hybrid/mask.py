@@ -40,7 +40,7 @@ from .config import HybridConfig
 from viewer.render.graph.passes import FullscreenPass
 from viewer.render.graph.pool import ReadBack, TexSpec
 from viewer.render.passes.tile_runs import FINE, tile_coords, within_reach
-from viewer.render.modes.hybrid.tile_select import TILE_LISTS, path_textures, segments, tile_list, tile_strips
+from viewer.render.modes.hybrid.tile_select import TILE_LISTS, path_textures, tile_list, tile_strips
 from viewer.render.passes.tiles import StripSpec
 
 MASK = TexSpec(1, "u1")
@@ -73,6 +73,7 @@ class SurfaceTests(FullscreenPass):
         written as ray_mask; with it the targets of the three steps' first two."""
         self._any = AnyTiles()
         self.range_check = config.range_check
+        self.segments = config.segments
         if self.range_check:
             self.inputs = ("hybrid_front", "normal", *config.paths)
             self.produces = RANGE_TARGETS
@@ -82,7 +83,7 @@ class SurfaceTests(FullscreenPass):
             self.inputs, self.produces = ("hybrid_front", *config.paths), ("ray_mask",)
 
     def defines(self, frame: Frame):
-        return {"SEGMENTS": segments(frame)}
+        return {"SEGMENTS": self.segments}
 
     def outputs(self, frame: Frame):
         specs = {"mask_displacement": MASK, "mask_relative": RELATIVE, "mask_edge": MASK,
@@ -101,13 +102,9 @@ class SurfaceTests(FullscreenPass):
                  "u_depth_threshold": float(p.depth_threshold)}
         second = {"u_edge_depth": float(p.edge_depth), "u_edge_normal": float(p.edge_normal)}
         if not self.range_check:
-            # The mask is the displacement test's survivors, written as ray_mask at once;
-            # the range check's targets are not this configuration's (dropped where an
-            # earlier one made them, so that none shows an older frame's mask).
-            for n in RANGE_TARGETS[:-1] + EdgeIdTiles.produces:
-                frame.pool.discard(n)
+            # The mask is the displacement test's survivors, written as ray_mask at once.
             return self.draw(frame, ("ray_mask",),
-                             {"u_front": "hybrid_front", **path_textures(frame)}, first,
+                             {"u_front": "hybrid_front", **path_textures(self.segments)}, first,
                              tiles=tiles, defines={"STEP": 3})
         if not reach_test(frame):
             # Where the edge outputs were written (EdgeIdTiles).
@@ -116,10 +113,10 @@ class SurfaceTests(FullscreenPass):
             frame.host.put(SURVIVOR_TILES, None)
             return self.draw(frame, self.produces[:4],
                              {"u_front": "hybrid_front", "u_normal": "normal",
-                              **path_textures(frame)},
+                              **path_textures(self.segments)},
                              {**first, **second}, tiles=tiles, defines={"STEP": 0})
         self.draw(frame, ("mask_displacement", "mask_relative"),
-                  {"u_front": "hybrid_front", **path_textures(frame)}, first, tiles=tiles,
+                  {"u_front": "hybrid_front", **path_textures(self.segments)}, first, tiles=tiles,
                   defines={"STEP": 1})
         survivors = self._any.tiles(frame, "mask_displacement", "mask_survivors")
         lists = frame.host[TILE_LISTS]

@@ -106,21 +106,12 @@ def near_boundary(longest: np.ndarray, boundary: np.ndarray, tile: int) -> np.nd
     return within_reach(boundary, 0.5 * longest.astype(np.float64) + 2.0, tile)
 
 
-def segments(frame: Frame) -> int:
-    """The hybrid's path segments this frame (glsl/passes/path.glsl): hybrid.segments where the
-    G-buffer wrote the path targets (it discards them when it writes none), else 1, the
-    chord alone (passes run on buffers without a path)."""
-    k = int(frame.params["hybrid"].segments)
-    names = frame.pool.names()
-    return k if all(n in names for n in path_targets(k)) else 1
-
-
 PATH_TEXTURES = {"u_path0": "hybrid_path", "u_path1": "hybrid_path2"}
 
 
-def path_textures(frame: Frame, names=PATH_TEXTURES) -> dict[str, str]:
+def path_textures(segments: int, names=PATH_TEXTURES) -> dict[str, str]:
     """The sampler bindings of the path targets this frame has (none for one segment)."""
-    return dict(list(names.items())[:segments(frame) // 2])
+    return dict(list(names.items())[:segments // 2])
 
 
 class MotionTiles(FullscreenPass):
@@ -129,10 +120,11 @@ class MotionTiles(FullscreenPass):
     produces = ("motion_tiles_x", "motion_tiles")
 
     def __init__(self, segments: int = 1):
+        self.segments = segments
         self.inputs = ("hybrid_front", *path_targets(segments))   # D, id; the path
 
     def defines(self, frame: Frame):
-        return {"SEGMENTS": segments(frame)}
+        return {"SEGMENTS": self.segments}
 
     def outputs(self, frame: Frame):
         return {"motion_tiles_x": StripSpec(2, "f4", tile=FINE),
@@ -141,7 +133,7 @@ class MotionTiles(FullscreenPass):
     def execute(self, frame: Frame):
         for stage, src, dst in ((0, "hybrid_front", "motion_tiles_x"),
                                 (1, "motion_tiles_x", "motion_tiles")):
-            paths = path_textures(frame) if stage == 0 else {}
+            paths = path_textures(self.segments) if stage == 0 else {}
             self.draw(frame, (dst,), {"u_source": src, **paths}, {"u_tile": FINE},
                       defines={"STAGE": stage})
 
