@@ -13,7 +13,7 @@ from world.camera import Camera
 from world.errors import SceneError
 from world.loader import builtin_scene_names, builtin_scene_path, load_scene
 
-NAMES = ["living_room", "pan", "rover", "spinner", "thin", "turning_car", "wheel"]
+NAMES = ["fan", "living_room", "pan", "rover", "spinner", "thin", "turning_car", "wheel"]
 
 
 def world(obj, t, local_points):
@@ -233,3 +233,22 @@ def test_turning_car_turns_29_degrees_within_the_shutter_over_a_textured_road(sc
     assert len(parts) == 5 and all(o.moving and not o.own_moving for o in parts)
     assert by_name(s, "ground").material.texture is not None
     assert displacement(s, chassis, centre(chassis)).max() > 200     # px at 1280x720
+
+
+def test_fan_blades_turn_60_degrees_within_the_shutter_along_curved_screen_paths(scenes):
+    s = scenes["fan"]
+    rotor = by_name(s, "rotor")
+    t0, t1 = s.exposure(s.render.time)
+    r0, r1 = (rotor.matrix(t)[:3, :3] for t in (t0, t1))
+    turn = np.degrees(np.arccos(np.clip((np.trace(r0.T @ r1) - 1.0) / 2.0, -1.0, 1.0)))
+    assert turn == pytest.approx(60.0, abs=0.5)
+    blades = [o for o in s.objects if o.parent is rotor]
+    assert len(blades) == 4 and all(o.moving and not o.own_moving for o in blades)
+    # The axle is tilted from the view: a blade tip's screen path is an arc whose middle
+    # lies far off its chord (the sagitta), not a straight streak.
+    tip = np.array([[0.17, 0.0, 0.0]])
+    times = np.linspace(t0, t1, 9)
+    path = np.array([screen(s, by_name(s, "blade red"), t, tip)[0][0] for t in times])
+    chord = path[0] + np.linspace(0, 1, 9)[:, None] * (path[-1] - path[0])
+    assert np.linalg.norm(path - chord, axis=1).max() > 20.0       # px at 1280x720
+    assert np.linalg.norm(path[-1] - path[0]) > 100.0
