@@ -1,4 +1,4 @@
-"""world/gltf.py: the glTF 2.0 reader of scene format v1.2 (no GL).
+"""world/gltf/: the glTF 2.0 reader of scene format v1.2 (no GL).
 
 Real sample assets (tests/conformance/gltf/) for hierarchy, the 180-degree flip, the
 embedded PNG and the two-joint skin; tiny assets built by hand (tests/gltf_builder.py)
@@ -25,7 +25,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from PIL import Image
 
-import world.gltf as gl
+import world.gltf.reader as gl
 from gltf_builder import BYTE, FLOAT, SHORT, UBYTE, UINT, USHORT, Builder, make_glb
 from world.gltf import (GltfError, GltfSampler, load_gltf, sample, skin_vertices)
 
