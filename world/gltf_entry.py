@@ -13,7 +13,8 @@ import sys
 import numpy as np
 
 from world.gltf import GltfError, GltfPart, load_gltf
-from world.gltf_scene import AssetInstance, AssetNode, Skin
+from world.gltf_scene import AssetInstance, AssetNode
+from world.skinning import Skin
 from world.scene import Material, Mesh, Placement, SceneObject, Texture
 
 ENTRY_KEYS = ("name", "gltf", "animation", "time_offset", "time_scale", "loop", "position",

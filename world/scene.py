@@ -119,11 +119,7 @@ class ObjectKeys:
 
     def matrix(self, t: float) -> np.ndarray:
         """M(t) = T(p(t)) @ R(q(t)) @ S(s(t))."""
-        p, q, s = self.pose(t)
-        m = np.eye(4)
-        m[:3, :3] = tf.quat_matrix(q) * s      # R @ diag(s): column k scaled by s[k]
-        m[:3, 3] = p
-        return m
+        return tf.trs(*self.pose(t))
 
     def retimed(self, t0: float, speed: float) -> "ObjectKeys":
         """The same path run `speed` times as fast about the time t0 (pose'(t) =
