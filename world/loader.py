@@ -26,7 +26,7 @@ from PIL import Image
 
 import scenes
 
-from world import asset_scene, limits
+from world import asset_scene, images, limits
 from world.assets import asset_file
 from world.errors import SceneError
 from world.scene import (INTERPOLATIONS, CameraKeys, CameraSpec, Light, Material, Mesh, ObjectKeys,
@@ -530,7 +530,7 @@ class _Loader:
                 if w * h > limits.MAX_IMAGE_PIXELS:
                     self.fail(key, f"expected an image of at most {limits.MAX_IMAGE_PIXELS} "
                               f"pixels (e.g. 4096x4096), {path} is {w}x{h}")
-                linear = image_linear(im)
+                linear = images.linear_rgb(im)
         except SceneError:
             raise
         except Exception as e:   # Pillow raises many types for bad files
@@ -659,23 +659,6 @@ class _Loader:
         return Mesh(vertices=vertices, faces=faces, vertex_normals=vn, face_normals=fn, uv=uv)
 
 
-# Pillow's single-channel modes wider than 8 bits, and their full scale: convert("RGB")
-# would clip them to 255 (a 16-bit grey PNG opens as "I;16", or "I" in older Pillows).
-_WIDE_GREY = {"I;16": 65535.0, "I;16L": 65535.0, "I;16B": 65535.0, "I;16N": 65535.0,
-              "I": 65535.0, "F": 1.0}
-
-
-def image_srgb(im: Image.Image) -> np.ndarray:
-    """An image's sRGB-encoded values in [0, 1], (H, W, 3) float64: 8-bit modes through
-    Pillow's RGB conversion (alpha dropped, palettes expanded), 16-bit grey at its own
-    precision, float grey as is."""
-    scale = _WIDE_GREY.get(im.mode)
-    if scale is None:
-        return np.asarray(im.convert("RGB"), dtype=np.float64) / 255.0
-    grey = np.clip(np.asarray(im, dtype=np.float64) / scale, 0.0, 1.0)
-    return np.repeat(grey[..., None], 3, axis=-1)
-
-
 def check_camera(data: dict, source: str) -> CameraSpec:
     """A camera table ([camera], docs/scene-format.md) from elsewhere than a scene file (an
     image's sidecar), checked as a scene file's is; errors name `source`."""
@@ -699,27 +682,5 @@ def merge_camera(spec: CameraSpec, data: dict, source: str) -> CameraSpec:
     return check_camera(merged, source)
 
 
-# The linear value of each 8-bit sRGB code: an 8-bit image decodes through this table to
-# float32 (4 bytes a channel; the same values as srgb_to_linear(code / 255) in float64).
-_SRGB8_LINEAR = None
-
-
-def image_linear(im: Image.Image) -> np.ndarray:
-    """An image's linear values, (H, W, 3) float32: 8-bit modes through a 256-entry table
-    (no float64 copy of the image), others through image_srgb."""
-    global _SRGB8_LINEAR
-    if im.mode in _WIDE_GREY:
-        return srgb_to_linear(image_srgb(im)).astype(np.float32)
-    if _SRGB8_LINEAR is None:
-        _SRGB8_LINEAR = srgb_to_linear(np.arange(256) / 255.0).astype(np.float32)
-    return _SRGB8_LINEAR[np.asarray(im.convert("RGB"))]
-
-
-def srgb_to_linear(c: np.ndarray) -> np.ndarray:
-    """The standard sRGB decoding (IEC 61966-2-1) of values in [0, 1]."""
-    c = np.asarray(c, dtype=np.float64)
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-
-
 __all__ = ["load_scene", "load_asset", "builtin_scene_names", "builtin_scene_path", "check_camera",
-           "merge_camera", "image_srgb", "srgb_to_linear"]
+           "merge_camera"]

@@ -25,8 +25,9 @@ from pathlib import Path
 
 import numpy as np
 import pygltflib as G
+from PIL import Image
 
-from world import limits
+from world import images, limits
 from world import transforms as tf
 from world.gltf.accessors import FLOATISH, Accessors
 from world.gltf.container import Container, read_document
@@ -496,19 +497,9 @@ class _Reader:
                                      f"nodes[{i}] (skins[{nd.skin}], meshes[{nd.mesh}].primitives[{k}])")
 
 
-_SRGB_LUT8 = None
-
-
-def _srgb_lut(levels: int) -> np.ndarray:
-    c = np.arange(levels, dtype=np.float64) / (levels - 1)
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4).astype(np.float32)
-
-
 def _decode_image(data: bytes, where: str, reader: _Reader) -> np.ndarray:
-    """An embedded or referenced PNG/JPEG -> (H, W, 3) float32 linear RGB (sRGB decoded
-    through a lookup table), top row first. Pixel counts checked from the header first."""
-    global _SRGB_LUT8
-    from PIL import Image
+    """An embedded or referenced PNG/JPEG -> (H, W, 3) float32 linear RGB, top row first.
+    Pixel counts checked from the header first."""
     try:
         with Image.open(io.BytesIO(data), formats=("PNG", "JPEG")) as im:
             w, h = im.size
@@ -519,18 +510,11 @@ def _decode_image(data: bytes, where: str, reader: _Reader) -> np.ndarray:
             if reader.image_pixels + w * h > limits.MAX_GLTF_TOTAL_IMAGE_PIXELS:
                 fail(f"{where}: the asset's images exceed {limits.MAX_GLTF_TOTAL_IMAGE_PIXELS} pixels together")
             reader.image_pixels += w * h
-            if im.mode in ("I;16", "I;16L", "I;16B", "I;16N", "I"):
-                grey = np.clip(np.asarray(im, dtype=np.int64), 0, 65535)
-                lin = _srgb_lut(65536)[grey]
-                return np.repeat(lin[..., None], 3, axis=2)
-            rgb = np.asarray(im.convert("RGB"), dtype=np.uint8)
+            return images.linear_rgb(im)
     except GltfError:
         raise
     except Exception as e:                       # Pillow raises many types for bad data
         raise GltfError(f"{where}: cannot decode the image ({type(e).__name__}: {str(e)[:80]})") from None
-    if _SRGB_LUT8 is None:
-        _SRGB_LUT8 = _srgb_lut(256)
-    return _SRGB_LUT8[rgb]
 
 
 def load_gltf(path) -> GltfAsset:
