@@ -133,3 +133,41 @@ def _plain(instance, obj, t):
         return obj.matrix(t)
     finally:
         instance.retime = saved
+
+
+def test_a_rigid_node_draws_a_mesh_whose_primitives_differ_in_joints(tmp_path):
+    """JOINTS_0/WEIGHTS_0 on one primitive only: a rigid node's mesh needs no joints (the
+    entry once asked every primitive for them), a skinned node's must have them all (the
+    reader says which primitive lacks them)."""
+    tri = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
+    b = Builder()
+    j = b.accessor(np.zeros((3, 4), np.uint8), 5121)
+    w = b.accessor(np.float32([[1, 0, 0, 0]] * 3))
+    first = {"attributes": {"POSITION": b.accessor(tri), "JOINTS_0": j, "WEIGHTS_0": w}}
+    second = {"attributes": {"POSITION": b.accessor(tri + np.float32([2, 0, 0]))}}
+    b.add("meshes", {"primitives": [first, second]})
+    b.add("nodes", {"mesh": 0})
+    b.doc["scenes"] = [{"nodes": [0]}]
+    b.write(tmp_path, "mixed.gltf")
+    p = tmp_path / "mixed.toml"
+    p.write_text("""
+[camera]
+position = [0.0, 0.0, 3.0]
+look_at = [0.0, 0.0, 0.0]
+fov_y = 45.0
+[[objects]]
+name = "m"
+gltf = "mixed.gltf"
+""")
+    (o,) = load_scene(p).objects
+    assert o.skin is None and len(o.mesh.faces) == 2
+    np.testing.assert_array_equal(o.mesh.vertices[3:, 0], [2, 3, 2])
+    b.add("nodes", {"name": "joint"})
+    b.doc["nodes"][0]["skin"] = 0
+    b.add("skins", {"joints": [1]})
+    b.doc["scenes"] = [{"nodes": [0, 1]}]
+    b.write(tmp_path, "mixed.gltf")
+    from world.errors import SceneError
+    with pytest.raises(SceneError, match=r"nodes\[0\] \(skins\[0\], meshes\[0\]\.primitives\[1\]\): "
+                                         r"a skinned primitive needs JOINTS_0 and WEIGHTS_0"):
+        load_scene(p)

@@ -73,7 +73,7 @@ def load_entry(loader, t: dict, number: int, first_id: int):
             arrays = shared[node.mesh]
         else:
             loader.budget(sum(len(p.faces) for p in asset.meshes[node.mesh]), key)
-            arrays = _mesh(loader, asset.meshes[node.mesh], key)
+            arrays = _mesh(loader, asset.meshes[node.mesh], key, node.skin is not None)
             loader.triangles += len(arrays["mesh"].faces)
             if node.skin is None:
                 shared[node.mesh] = arrays
@@ -83,7 +83,8 @@ def load_entry(loader, t: dict, number: int, first_id: int):
             for first, count, m, has_uv in ranges])
         skin = None
         if node.skin is not None:
-            skin = _skin(loader, instance, node.skin, arrays, key)
+            skin = Skin(instance, node.skin, mesh.vertices, mesh.vertex_normals,
+                        arrays["joints"], arrays["weights"])
             if not skin.moving:        # a still skin: its pose once, drawn as a rigid mesh
                 mesh = _posed(mesh, *skin.deformed(0.0))
                 skin = None
@@ -143,14 +144,14 @@ def _unit(n: np.ndarray) -> np.ndarray:
     return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
 
 
-def _mesh(loader, parts: list[GltfPart], key: str) -> dict:
+def _mesh(loader, parts: list[GltfPart], key: str, skinned: bool) -> dict:
     """One Mesh of a glTF mesh's primitives, in order. A primitive with NORMAL is smooth
     (its normals interpolated); one without is flat: its corners unshared, each with its
     face's normal. UVs turned to this project's convention (origin bottom-left: v -> 1 -
     v); zeros for a primitive without TEXCOORD_0 where another has them. Returns the mesh,
-    the face ranges with their material and whether they have UVs, joints and weights."""
+    the face ranges with their material and whether they have UVs, and for a `skinned`
+    node's mesh its joints and weights (the reader checked that every primitive has them)."""
     pos, nrm, uvs, faces, joints, weights, ranges = [], [], [], [], [], [], []
-    skinned = [p.joints is not None for p in parts]
     any_uv = any(p.uv is not None for p in parts)
     nv = nf = 0
     for p in parts:
@@ -171,10 +172,7 @@ def _mesh(loader, parts: list[GltfPart], key: str) -> dict:
             uv = cols["uv"]
             uvs.append(np.zeros((len(v), 2)) if uv is None
                        else np.stack([uv[:, 0], 1.0 - uv[:, 1]], axis=1))
-        if any(skinned):
-            if cols["joints"] is None:
-                loader.fail(key, "a skinned mesh's primitives all need JOINTS_0 and WEIGHTS_0; "
-                            "one has none")
+        if skinned:
             joints.append(cols["joints"])
             weights.append(cols["weights"])
         faces.append(f + nv)
@@ -196,23 +194,6 @@ def _mesh(loader, parts: list[GltfPart], key: str) -> dict:
     return {"mesh": mesh, "ranges": ranges,
             "joints": padded(joints, 0) if joints else None,
             "weights": padded(weights, 0.0) if weights else None}
-
-
-def _skin(loader, instance: AssetInstance, skin: int, arrays: dict, key: str) -> Skin:
-    joints, weights = arrays["joints"], arrays["weights"]
-    if joints is None:
-        loader.fail(key, "a node with a skin needs a mesh with JOINTS_0 and WEIGHTS_0")
-    count = len(instance.asset.skins[skin].joints)
-    if count == 0:
-        loader.fail(key, f"skins[{skin}] has no joints")
-    used = weights != 0
-    if (joints[used] >= count).any() or (joints < 0).any():
-        loader.fail(key, f"a vertex names a joint past skins[{skin}]'s {count} joints")
-    if not (weights.sum(axis=1) > 0).all():
-        loader.fail(key, "a vertex's skin weights sum to 0")
-    mesh = arrays["mesh"]
-    return Skin(instance, skin, mesh.vertices, mesh.vertex_normals,
-                np.where(used, joints, 0), weights)
 
 
 def _posed(mesh: Mesh, vertices: np.ndarray, normals: np.ndarray) -> Mesh:

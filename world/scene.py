@@ -285,10 +285,6 @@ class SceneObject(Placement):
         skinned mesh's posed at t, else the mesh's own."""
         return self.mesh.vertices if self.skin is None else self.skin.deformed(t)[0]
 
-    def normals_at(self, t: float) -> np.ndarray:
-        """The vertex normals in the object's own space at time t, as vertices_at."""
-        return self.mesh.vertex_normals if self.skin is None else self.skin.deformed(t)[1]
-
 
 @dataclass
 class CameraSpec:
