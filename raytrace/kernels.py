@@ -17,10 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from world import jit_notice
-
 _JIT = dict(cache=True, nogil=True)
-jit_notice.install()
 
 
 # A direction component of 0 gives an infinite inverse; clamped to this, the slab test

@@ -6,12 +6,9 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from world import jit_notice
 from world import transforms as tf
 from world.conventions import pixel_centres_ndc
 from world.scene import CameraSpec
-
-jit_notice.install()
 
 
 @dataclass

@@ -45,7 +45,8 @@ _installed = False
 
 
 def install() -> CompileNotice:
-    """Register the notice with numba (once a process); the kernel modules call this."""
+    """Register the notice with numba (once a process): the CLI and the warm-up call this
+    before any work; importing a kernel module registers nothing."""
     global _installed
     if not _installed:
         event.register("numba:compile", _NOTICE)

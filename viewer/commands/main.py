@@ -9,6 +9,7 @@ import textwrap
 import threading
 from pathlib import Path
 
+from world import jit_notice
 from world.errors import UserError, printable
 from viewer.cli.args import OTHER_SCENE_DIRS
 from viewer.io.ending import Terminated, catch_signals, received, restore_signals
@@ -111,6 +112,7 @@ def main(argv=None) -> int:
                 parser.print_help(sys.stderr)
                 return 2
             args = parser.parse_args(argv)
+            jit_notice.install()
             return int(args.run(args) or 0)
         finally:
             end_line()                     # (a progress bar's line, cut short)
