@@ -14,7 +14,7 @@ import sys
 
 from numba.core import event
 
-EXPECTED_S = 40          # seconds: the whole set on one core (38 s of CPU measured)
+EXPECTED_S = 40          # seconds the notice announces: the whole set on one core
 PACKAGES = ("world.", "viewer.", "raytrace.")
 
 

@@ -138,6 +138,8 @@ class _Loader:
         self.path = path
         self.document = document        # a scene document made elsewhere, else the file's
         self.triangles = 0          # of the meshes built so far (limits.MAX_TRIANGLES)
+        # Every earlier object and glTF node by name, for `parent` (v1.2).
+        self.named: dict[str, list] = {}
 
     def fail(self, key: str, expected: str):
         if "[" in key:
@@ -244,8 +246,6 @@ class _Loader:
                   for i, t in enumerate(self.at_most(self.array_of_tables(
                       doc.get("lights", []), "lights"), "lights", limits.MAX_LIGHTS), 1)]
         objects, assets = [], []
-        # Every earlier object and glTF node by name, for `parent` (v1.2).
-        self.named: dict[str, list] = {}
         entries = self.at_most(self.array_of_tables(doc.get("objects", []), "objects"),
                                "objects", limits.MAX_OBJECTS)
         for i, t in enumerate(entries, 1):

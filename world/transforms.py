@@ -16,8 +16,8 @@ def _f64(v) -> np.ndarray:
 
 def _undecorated(f):
     """pyrr's argument-converting decorator inspects the function's signature on every
-    call (~8-30 us, a moving object's matrices ask three times a frame); the arguments
-    here are float64 arrays already, so the function beneath it is called."""
+    call; the arguments here are float64 arrays already, so the function beneath it is
+    called."""
     return getattr(f, "__wrapped__", f)
 
 
