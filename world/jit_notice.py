@@ -1,10 +1,10 @@
 """One line on stderr before numba compiles the project's kernels, with the expected wait.
 
-The kernels (`raytrace/kernels.py`, `viewer/render/modes/hybrid/tile_kernels.py`, `hybrid/reveal_kernels.py`,
-the camera's rays in `world/camera.py`) are compiled on the first hybrid frame and cached
-on disk beside their modules (`__pycache__`), so a later process loads them in well under
-a second; `scripts/setup.sh` compiles them ahead
-(`python -m viewer.cli.warmup`). Where the cache is cold anyway (an install that skipped
+The kernels (`raytrace/kernels.py`, `viewer/render/passes/tile_kernels.py`,
+`viewer/render/modes/hybrid/reveal_kernels.py`, the camera's rays in `world/camera.py`) are
+compiled on the first hybrid frame and cached on disk beside their modules
+(`__pycache__`), so a later process loads them in well under a second; `scripts/setup.sh`
+compiles them ahead (`python -m viewer.cli.warmup`). Where the cache is cold anyway (an install that skipped
 the set-up, or kernels just edited), the user sees why the first frame waits. numba fires
 its "numba:compile" event only on a cache miss, so a warm cache prints nothing.
 """
