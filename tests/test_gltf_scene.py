@@ -15,9 +15,9 @@ from gltf_builder import Builder
 BOX = CONFORMANCE / "gltf" / "BoxAnimated.gltf"
 
 
-def scene_with(tmp_path, entry: str, name="s"):
-    shutil.copy(BOX, tmp_path / BOX.name)     # (a scene names files in its own folder)
-    p = tmp_path / f"{name}.toml"
+def entry_file(tmp_path, gltf: str, name: str, entry: str = "", file: str | None = None):
+    """A scene file holding one `gltf` entry named `name` (with the `entry` lines)."""
+    p = tmp_path / f"{file or name}.toml"
     p.write_text(f"""
 [camera]
 position = [0.0, 1.0, 6.0]
@@ -25,11 +25,16 @@ look_at = [0.0, 0.5, 0.0]
 fov_y = 45.0
 shutter = 0.05
 [[objects]]
-name = "a"
-gltf = "{BOX.name}"
+name = "{name}"
+gltf = "{gltf}"
 {entry}
 """)
-    return load_scene(p)
+    return p
+
+
+def scene_with(tmp_path, entry: str, name="s"):
+    shutil.copy(BOX, tmp_path / BOX.name)     # (a scene names files in its own folder)
+    return load_scene(entry_file(tmp_path, BOX.name, "a", entry, name))
 
 
 def test_mesh_used_by_several_nodes_is_built_and_uploaded_once():
@@ -81,17 +86,7 @@ def test_features_left_out_are_named_once_on_stderr(tmp_path, capsys):
     b.add("cameras", {"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}})
     b.doc["scenes"] = [{"nodes": [0]}]
     b.write(tmp_path, "cam.gltf")
-    p = tmp_path / "cam.toml"
-    p.write_text("""
-[camera]
-position = [0.0, 0.0, 3.0]
-look_at = [0.0, 0.0, 0.0]
-fov_y = 45.0
-[[objects]]
-name = "tri"
-gltf = "cam.gltf"
-""")
-    sc = load_scene(p)
+    sc = load_scene(entry_file(tmp_path, "cam.gltf", "tri"))
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "camera" in err and "objects[1] (tri)" in err
     assert sc.objects[0].name == "tri/node0"
@@ -149,16 +144,7 @@ def test_a_rigid_node_draws_a_mesh_whose_primitives_differ_in_joints(tmp_path):
     b.add("nodes", {"mesh": 0})
     b.doc["scenes"] = [{"nodes": [0]}]
     b.write(tmp_path, "mixed.gltf")
-    p = tmp_path / "mixed.toml"
-    p.write_text("""
-[camera]
-position = [0.0, 0.0, 3.0]
-look_at = [0.0, 0.0, 0.0]
-fov_y = 45.0
-[[objects]]
-name = "m"
-gltf = "mixed.gltf"
-""")
+    p = entry_file(tmp_path, "mixed.gltf", "m")
     (o,) = load_scene(p).objects
     assert o.skin is None and len(o.mesh.faces) == 2
     np.testing.assert_array_equal(o.mesh.vertices[3:, 0], [2, 3, 2])

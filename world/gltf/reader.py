@@ -111,6 +111,12 @@ class _Reader:
         if what not in self.ignored:
             self.ignored.append(what)
 
+    def entries(self, key: str):
+        """(index, "key[index]", the JSON object) of each entry of the top-level array `key`."""
+        for i, item in enumerate(self.doc.get(key, [])):
+            where = f"{key}[{i}]"
+            yield i, where, obj(item, where)
+
     def accessor(self, i: int, where_used: str, types=None, components=None,
                  normalized_ok=True) -> np.ndarray:
         return self.accessors.get(i, where_used, types, components, normalized_ok)
@@ -230,9 +236,7 @@ class _Reader:
 
     def materials(self) -> list[GltfMaterial]:
         out = []
-        for i, m in enumerate(self.doc.get("materials", [])):
-            where = f"materials[{i}]"
-            obj(m, where)
+        for i, where, m in self.entries("materials"):
             name = m.get("name")
             name = name if isinstance(name, str) and name else f"material{i}"
             pbr = obj(m.get("pbrMetallicRoughness", {}), f"{where}.pbrMetallicRoughness")
@@ -279,9 +283,7 @@ class _Reader:
 
     def meshes(self, n_materials: int) -> list[list[GltfPart]]:
         out = []
-        for mi, m in enumerate(self.doc.get("meshes", [])):
-            where = f"meshes[{mi}]"
-            obj(m, where)
+        for mi, where, m in self.entries("meshes"):
             prims = array(m, "primitives", where, required=True)
             if not prims:
                 fail(f"{where}.primitives: empty")
@@ -373,9 +375,7 @@ class _Reader:
 
     def skins(self, n_nodes: int) -> list[GltfSkin]:
         out = []
-        for si, s in enumerate(self.doc.get("skins", [])):
-            where = f"skins[{si}]"
-            obj(s, where)
+        for si, where, s in self.entries("skins"):
             joints = array(s, "joints", where, required=True)
             if not joints:
                 fail(f"{where}.joints: a skin with no joints")
@@ -406,9 +406,7 @@ class _Reader:
 
     def animations(self, nodes: list[GltfNode]) -> list[GltfAnimation]:
         out = []
-        for ai, an in enumerate(self.doc.get("animations", [])):
-            where = f"animations[{ai}]"
-            obj(an, where)
+        for ai, where, an in self.entries("animations"):
             name = an.get("name")
             name = name if isinstance(name, str) and name else f"animation{ai}"
             samplers = [obj(s, f"{where}.samplers[{k}]") for k, s in enumerate(array(an, "samplers", where))]
