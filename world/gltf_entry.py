@@ -14,8 +14,9 @@ import numpy as np
 
 from world.gltf import GltfError, GltfPart, load_gltf
 from world.gltf_scene import AssetInstance, AssetNode
+from world.images import ImageError
 from world.skinning import Skin
-from world.scene import Material, Mesh, Placement, SceneObject, Texture
+from world.scene import Material, Mesh, Placement, SceneObject
 
 ENTRY_KEYS = ("name", "gltf", "animation", "time_offset", "time_scale", "loop", "position",
               "rotation", "scale", "velocity", "angular_velocity", "interpolation", "keys",
@@ -36,7 +37,7 @@ def load_entry(loader, t: dict, number: int, first_id: int):
     rel = loader.string(t["gltf"], f"{k}.gltf")
     path = loader.file(rel, f"{k}.gltf", "glTF")
     try:
-        asset = load_gltf(path)
+        asset = load_gltf(path, loader.images)
     except GltfError as e:
         loader.fail(f"{k}.gltf", f"{path}: {e}")
     animation = t.get("animation", "all")
@@ -63,7 +64,7 @@ def load_entry(loader, t: dict, number: int, first_id: int):
     if asset.ignored:
         print(f"{loader.path}: {k}.gltf: ignored (scene format v1.2 draws none of these): "
               + ", ".join(asset.ignored), file=sys.stderr)
-    materials = _Materials(asset, specular, shininess)
+    materials = _Materials(loader, f"{k}.gltf", asset, specular, shininess)
     objects = []
     shared: dict[int, dict] = {}       # a glTF mesh drawn by several rigid nodes: one Mesh
     for i in asset.mesh_nodes():
@@ -99,11 +100,13 @@ def load_entry(loader, t: dict, number: int, first_id: int):
 class _Materials:
     """Scene materials of the asset's materials: albedo baseColorFactor.rgb, times the
     baseColorTexture where the mesh has TEXCOORD_0 (the factor premultiplied into the
-    image: bilinear filtering is linear, so the product is the same), specular and
-    shininess from the entry. Each made once."""
+    image: bilinear filtering is linear, so the product is the same; the scene's images
+    make each image and factor pair once), specular and shininess from the entry. Each
+    made once."""
 
-    def __init__(self, asset, specular: float, shininess: float):
-        self.asset, self.specular, self.shininess = asset, specular, shininess
+    def __init__(self, loader, key: str, asset, specular: float, shininess: float):
+        self.loader, self.key, self.asset = loader, key, asset
+        self.specular, self.shininess = specular, shininess
         self.made: dict = {}
 
     def get(self, index: int | None, textured: bool) -> Material:
@@ -117,8 +120,10 @@ class _Materials:
             albedo = np.clip(base[:3], 0.0, None)
             texture = None
             if textured and image is not None:
-                texture = Texture(kind="image",
-                                  image=(image * albedo.astype(np.float32)).astype(np.float32))
+                try:
+                    texture = self.loader.images.texture(self.loader.images.tinted(image, albedo))
+                except ImageError as e:
+                    self.loader.fail(self.key, f"{self.asset.path}: materials[{index}]: {e}")
             self.made[key] = Material(albedo=albedo, specular=self.specular,
                                       shininess=self.shininess, texture=texture)
         return self.made[key]

@@ -24,6 +24,10 @@ MAX_SCENE_BYTES = 16 << 20
 MAX_MESH_BYTES = 256 << 20
 MAX_IMAGE_BYTES = 256 << 20
 MAX_IMAGE_PIXELS = 4096 * 4096          # a texture: 16.8 Mpx, 200 MB as float32 RGB
+# Texels a scene's images hold together (scene-file textures and glTF images alike, each
+# distinct image once, a glTF image tinted by a material's colour once more): each is
+# 12 bytes decoded and as much again on the GPU.
+MAX_SCENE_IMAGE_PIXELS = 2 * 4096 * 4096
 # glTF assets (world/gltf/), each bounded before it is allocated so that a small hostile
 # file cannot make the program allocate gigabytes.
 MAX_GLTF_FILE_BYTES = 256 << 20         # any one .gltf/.glb/.bin/image file or data URI
@@ -33,8 +37,6 @@ MAX_GLTF_TRIANGLES = 2 ** 24            # triangles of all mesh-node instances o
 MAX_GLTF_NODES = 2 ** 16
 MAX_GLTF_JOINTS = 2 ** 16               # per skin
 MAX_GLTF_ITEMS = 2 ** 16                # entries of any array (meshes, accessors, ...)
-MAX_GLTF_IMAGE_PIXELS = 2 ** 24         # per image, from its header, before decoding
-MAX_GLTF_TOTAL_IMAGE_PIXELS = 2 ** 26
 MAX_GLTF_JSON_DEPTH = 64
 # `--params FILE.json`: a sidecar is a few kB; JSON nesting and integers beyond these are
 # not a sidecar's.

@@ -22,7 +22,6 @@ from pathlib import Path
 
 import numpy as np
 import trimesh
-from PIL import Image
 
 import scenes
 
@@ -78,13 +77,22 @@ def load_scene(source) -> Scene:
             raise SceneError(path, "", "file not found")
     if asset_scene.is_asset(path):      # a bare glTF asset: a scene made around it
         return load_asset(path)[0]
-    return _Loader(path).load()
+    return _out_of_memory_said(path, _Loader(path).load)
 
 
 def load_asset(path) -> tuple[Scene, dict]:
     """(Scene, the scene document it was loaded from) of a bare .gltf/.glb file
     (world.asset_scene; docs/scene-format.md, "A glTF file as a scene")."""
-    return asset_scene.load_asset_scene(Path(path), _Loader)
+    return _out_of_memory_said(path, lambda: asset_scene.load_asset_scene(Path(path), _Loader))
+
+
+def _out_of_memory_said(path, load):
+    """load(), with a MemoryError a SceneError naming the scene file (the files a scene
+    names say so themselves, with their key, where they are read)."""
+    try:
+        return load()
+    except MemoryError:
+        raise SceneError(path, "", "out of memory while loading the scene") from None
 
 
 def _is_file(p: Path) -> bool:
@@ -138,6 +146,7 @@ class _Loader:
         self.path = path
         self.document = document        # a scene document made elsewhere, else the file's
         self.triangles = 0          # of the meshes built so far (limits.MAX_TRIANGLES)
+        self.images = images.SceneImages()      # the scene's decoded images, each once
         # Every earlier object and glTF node by name, for `parent` (v1.2).
         self.named: dict[str, list] = {}
 
@@ -504,7 +513,10 @@ class _Loader:
                           "this mesh has none (primitives never do)")
             rel = self.string(self.require(v, "path", k, "an image file"), f"{k}.path")
             path = self.file(rel, f"{k}.path", "image")
-            return Texture(kind=kind, path=path, image=self.image(path, f"{k}.path"))
+            try:
+                return self.images.texture(self.images.from_file(path), path)
+            except images.ImageError as e:
+                self.fail(f"{k}.path", f"{path}: {e}")
         axis = 0
         if kind == "stripes":
             axis = self.integer(self.require(v, "axis", k, "0, 1 or 2"), f"{k}.axis")
@@ -523,22 +535,6 @@ class _Loader:
         cap = limits.MAX_IMAGE_BYTES if what == "image" else limits.MAX_MESH_BYTES
         return asset_file(self.path, rel, key, what, cap)
 
-    def image(self, path: Path, key: str) -> np.ndarray:
-        try:
-            with Image.open(path) as im:          # (lazy: the header only, so far)
-                w, h = im.size
-                if w * h > limits.MAX_IMAGE_PIXELS:
-                    self.fail(key, f"expected an image of at most {limits.MAX_IMAGE_PIXELS} "
-                              f"pixels (e.g. 4096x4096), {path} is {w}x{h}")
-                linear = images.linear_rgb(im)
-        except SceneError:
-            raise
-        except Exception as e:   # Pillow raises many types for bad files
-            self.fail(key, f"expected a readable image, {path} failed: {type(e).__name__}: {e}")
-        if linear.size == 0:
-            self.fail(key, f"expected a non-empty image, {path} has no pixels")
-        return linear
-
     # -- meshes
 
     def mesh(self, v, k: str) -> Mesh:
@@ -553,6 +549,8 @@ class _Loader:
                 tm = trimesh.load(str(path), force="mesh")
             except SceneError:
                 raise
+            except MemoryError:
+                self.fail(k, f"{path}: out of memory reading the mesh")
             except Exception as e:   # trimesh raises many types for bad files
                 self.fail(k, f"expected a readable mesh file, {path} failed: "
                           f"{type(e).__name__}: {e}")

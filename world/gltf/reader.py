@@ -20,12 +20,10 @@ pixels.
 """
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import numpy as np
 import pygltflib as G
-from PIL import Image
 
 from world import images, limits
 from world import transforms as tf
@@ -79,10 +77,10 @@ class _Reader:
     """One asset's reading: the document and its top-level arrays checked on construction,
     the asset built by load()."""
 
-    def __init__(self, path: Path):
+    def __init__(self, path: Path, scene_images: images.SceneImages | None = None):
         self.path = Path(path)
+        self.scene_images = images.SceneImages() if scene_images is None else scene_images
         self.ignored: list[str] = []
-        self.image_pixels = 0
         self.part_vertices = 0
         self.part_triangles = 0
         self.doc, glb_bin = read_document(self.path)
@@ -277,7 +275,10 @@ class _Reader:
             data = self.container.view_bytes(vi)
         else:
             fail(f"{where}: neither uri nor bufferView")
-        return _decode_image(data, where, self)
+        try:
+            return self.scene_images.from_bytes(data, ("PNG", "JPEG"))
+        except images.ImageError as e:
+            raise GltfError(f"{where}: {e}") from None
 
     # -- meshes
 
@@ -495,30 +496,12 @@ class _Reader:
                                      f"nodes[{i}] (skins[{nd.skin}], meshes[{nd.mesh}].primitives[{k}])")
 
 
-def _decode_image(data: bytes, where: str, reader: _Reader) -> np.ndarray:
-    """An embedded or referenced PNG/JPEG -> (H, W, 3) float32 linear RGB, top row first.
-    Pixel counts checked from the header first."""
+def load_gltf(path, scene_images: images.SceneImages | None = None) -> GltfAsset:
+    """Read and check a .gltf or .glb; GltfError (one line) for anything malformed. Its
+    images are decoded by `scene_images` (the scene's: shared with its other images and
+    counted against its limit), else by a SceneImages of their own."""
     try:
-        with Image.open(io.BytesIO(data), formats=("PNG", "JPEG")) as im:
-            w, h = im.size
-            if w <= 0 or h <= 0:
-                fail(f"{where}: an image with no pixels")
-            if w * h > limits.MAX_GLTF_IMAGE_PIXELS:
-                fail(f"{where}: {w}x{h} pixels, more than the limit of {limits.MAX_GLTF_IMAGE_PIXELS}")
-            if reader.image_pixels + w * h > limits.MAX_GLTF_TOTAL_IMAGE_PIXELS:
-                fail(f"{where}: the asset's images exceed {limits.MAX_GLTF_TOTAL_IMAGE_PIXELS} pixels together")
-            reader.image_pixels += w * h
-            return images.linear_rgb(im)
-    except GltfError:
-        raise
-    except Exception as e:                       # Pillow raises many types for bad data
-        raise GltfError(f"{where}: cannot decode the image ({type(e).__name__}: {str(e)[:80]})") from None
-
-
-def load_gltf(path) -> GltfAsset:
-    """Read and check a .gltf or .glb; GltfError (one line) for anything malformed."""
-    try:
-        return _Reader(Path(path)).load()
+        return _Reader(Path(path), scene_images).load()
     except GltfError:
         raise
     except MemoryError:
