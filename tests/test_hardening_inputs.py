@@ -306,5 +306,9 @@ def test_the_limits_are_in_the_scene_format_doc():
                   f"+-{limits.MAX_TIME:.0e}".replace("e+0", "e"),
                   f"{limits.MAX_TRIANGLES:,}", f"{limits.MAX_FRAME_PIXELS:,}",
                   f"{limits.MAX_IMAGE_PIXELS:,}", f"{limits.MAX_SCENE_IMAGE_PIXELS:,}",
-                  "asset_file"):
+                  f"{limits.MAX_GLTF_VERTICES:,}", f"{limits.MAX_GLTF_COMPONENTS:,}",
+                  f"{limits.MAX_GLTF_FILE_BYTES >> 20} MiB", f"{limits.MAX_GLTF_NODES}",
+                  f"{limits.MAX_GLTF_JOINTS}", f"{limits.MAX_GLTF_ITEMS}",
+                  f"{limits.MAX_GLTF_JSON_DEPTH} levels", f"{limits.MAX_NAME_CHARS} characters",
+                  f"{limits.MAX_OBJECTS}", "asset_file"):
         assert value in doc, value

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from world import limits
 from world.errors import SceneError
 
 SUFFIXES = (".gltf", ".glb")
@@ -85,7 +86,8 @@ def frame(doc: dict, scene) -> None:
         t = 0.5 * (span[0] + span[1])
     if not scene.objects:
         raise SceneError(scene.path, "", "the asset has no mesh to show")
-    lo, hi = bounds(scene, times)
+    with np.errstate(all="ignore"):
+        lo, hi = bounds(scene, times)
     centre = 0.5 * (lo + hi)
     back = VIEW / np.linalg.norm(VIEW)                       # from the centre to the eye
     right = np.cross(-back, [0.0, 1.0, 0.0])
@@ -102,13 +104,25 @@ def frame(doc: dict, scene) -> None:
                       np.abs(corners @ up) / (FILL * tan)) + toward
     distance = max(float(need.max()), MIN_DISTANCE)
     depth = distance - toward
-    cam = doc["camera"]
-    cam["position"] = [_round(x) for x in centre + distance * back]
-    cam["look_at"] = [_round(x) for x in centre]
+    position = [_round(x) for x in centre + distance * back]
     # all of the box between near and far, with room to move the camera in the viewer
-    cam["near"] = _round(max(0.1 * float(depth.min()), 1e-4 * distance))
-    cam["far"] = _round(4.0 * float(depth.max()))
+    near = _round(max(0.1 * float(depth.min()), 1e-4 * distance))
+    far = _round(4.0 * float(depth.max()))
+    most = limits.MAX_SCENE_NUMBER
+    if not all(abs(x) <= most for x in position + [far]):
+        raise SceneError(scene.path, "", f"the asset spans {_span(lo, hi)} over its animation: "
+                         f"a camera framing it would stand {distance:.3g} from its centre and "
+                         f"see {far:.3g} deep, beyond the +-{most:g} a scene holds; place it in "
+                         "a scene file with a smaller scale")
+    cam = doc["camera"]
+    cam["position"] = position
+    cam["look_at"] = [_round(x) for x in centre]
+    cam["near"], cam["far"] = near, far
     doc["render"]["time"] = _round(t)
+
+
+def _span(lo: np.ndarray, hi: np.ndarray) -> str:
+    return f"{[float(f'{x:.3g}') for x in lo]} to {[float(f'{x:.3g}') for x in hi]}"
 
 
 def _round(x: float) -> float:

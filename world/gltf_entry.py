@@ -8,10 +8,13 @@ World(node, t)); a skinned one from the entry's root (M(t) = P(t)) and deforms i
 """
 from __future__ import annotations
 
+import os
 import sys
+from pathlib import Path
 
 import numpy as np
 
+from world import limits
 from world.gltf import GltfError, GltfPart, load_gltf
 from world.gltf_scene import AssetInstance, AssetNode
 from world.images import ImageError
@@ -30,16 +33,17 @@ def load_entry(loader, t: dict, number: int, first_id: int):
     if "mesh" in t:
         loader.fail(f"{k}.mesh", "not allowed together with gltf (the asset brings its meshes)")
     loader.table(t, k, ENTRY_KEYS)
-    name = loader.string(t.get("name", f"object{number}"), f"{k}.name")
+    name = loader.name(t.get("name", f"object{number}"), f"{k}.name")
     if "parent" in t:
         loader.fail(f"{k}.parent", "not allowed on a gltf entry: place the asset with its own "
                     "position, rotation, scale, velocities or keys")
     rel = loader.string(t["gltf"], f"{k}.gltf")
     path = loader.file(rel, f"{k}.gltf", "glTF")
+    errors = _AssetErrors(loader, f"{k}.gltf", path)
     try:
         asset = load_gltf(path, loader.images)
     except GltfError as e:
-        loader.fail(f"{k}.gltf", f"{path}: {e}")
+        errors.fail(str(e))
     animation = t.get("animation", "all")
     if isinstance(animation, bool) or not isinstance(animation, (str, int)):
         loader.fail(f"{k}.animation", "expected an animation's name or index, \"all\" or "
@@ -60,22 +64,55 @@ def load_entry(loader, t: dict, number: int, first_id: int):
     instance = AssetInstance(name, asset, anims, time_offset, time_scale, loop, root)
     instance.nodes = [AssetNode(instance, i, f"{name}/{asset.nodes[i].name}")
                       for i in asset.depth_first()]
-    by_index = {n.index: n for n in instance.nodes}
     if asset.ignored:
         print(f"{loader.path}: {k}.gltf: ignored (scene format v1.2 draws none of these): "
               + ", ".join(asset.ignored), file=sys.stderr)
-    materials = _Materials(loader, f"{k}.gltf", asset, specular, shininess)
+    _count(loader, errors, asset, first_id)
+    materials = _Materials(loader, errors, asset, specular, shininess)
+    return instance, _objects(instance, materials, first_id)
+
+
+class _AssetErrors:
+    """Mistakes of the asset itself, named by its file and the glTF item (`nodes[3].scale`),
+    after the entry's key where a scene file names the asset; a bare asset is its own
+    scene file, and its entry no key the user wrote."""
+
+    def __init__(self, loader, key: str, path: Path):
+        self.loader, self.key, self.path = loader, key, path
+        self.bare = Path(os.path.realpath(loader.path)) == path
+
+    def fail(self, what: str):
+        if self.bare:
+            self.loader.fail("", what)
+        self.loader.fail(self.key, f"{self.path}: {what}")
+
+
+def _count(loader, errors: _AssetErrors, asset, first_id: int) -> None:
+    """The entry's objects and the triangles they draw (a mesh drawn by several nodes
+    counts once for each) against the scene's limits, with the scene's earlier objects,
+    before a mesh is built."""
+    drawn = asset.mesh_nodes()
+    if first_id - 1 + len(drawn) > limits.MAX_OBJECTS:
+        errors.fail(f"its {len(drawn)} mesh nodes would bring the scene's objects to "
+                    f"{first_id - 1 + len(drawn)}, more than the limit of {limits.MAX_OBJECTS}")
+    triangles = sum(len(p.faces) for i in drawn for p in asset.meshes[asset.nodes[i].mesh])
+    loader.budget(triangles, errors.key)
+    loader.triangles += triangles
+
+
+def _objects(instance: AssetInstance, materials: "_Materials", first_id: int) -> list[SceneObject]:
+    """One SceneObject per mesh node: a rigid node hanging from its AssetNode (a mesh drawn
+    by several rigid nodes built once), a skinned one from the entry's root."""
+    asset, name = instance.asset, instance.name
+    by_index = {n.index: n for n in instance.nodes}
     objects = []
-    shared: dict[int, dict] = {}       # a glTF mesh drawn by several rigid nodes: one Mesh
+    shared: dict[int, dict] = {}
     for i in asset.mesh_nodes():
         node = asset.nodes[i]
-        key = f"{k}.gltf: nodes[{i}] ({node.name})"
         if node.skin is None and node.mesh in shared:
             arrays = shared[node.mesh]
         else:
-            loader.budget(sum(len(p.faces) for p in asset.meshes[node.mesh]), key)
-            arrays = _mesh(loader, asset.meshes[node.mesh], key, node.skin is not None)
-            loader.triangles += len(arrays["mesh"].faces)
+            arrays = _mesh(asset.meshes[node.mesh], node.skin is not None)
             if node.skin is None:
                 shared[node.mesh] = arrays
         mesh, ranges = arrays["mesh"], arrays["ranges"]
@@ -89,12 +126,11 @@ def load_entry(loader, t: dict, number: int, first_id: int):
             if not skin.moving:        # a still skin: its pose once, drawn as a rigid mesh
                 mesh = _posed(mesh, *skin.deformed(0.0))
                 skin = None
-        obj = SceneObject(name=f"{name}/{node.name}", id=first_id + len(objects), mesh=mesh,
-                          material=parts[0][2], shading="smooth",
-                          parent=root if node.skin is not None else by_index[i],
-                          skin=skin, parts=_parts(parts))
-        objects.append(obj)
-    return instance, objects
+        objects.append(SceneObject(name=f"{name}/{node.name}", id=first_id + len(objects),
+                                   mesh=mesh, material=parts[0][2], shading="smooth",
+                                   parent=instance.root if node.skin is not None else by_index[i],
+                                   skin=skin, parts=_parts(parts)))
+    return objects
 
 
 class _Materials:
@@ -104,8 +140,8 @@ class _Materials:
     make each image and factor pair once), specular and shininess from the entry. Each
     made once."""
 
-    def __init__(self, loader, key: str, asset, specular: float, shininess: float):
-        self.loader, self.key, self.asset = loader, key, asset
+    def __init__(self, loader, errors: _AssetErrors, asset, specular: float, shininess: float):
+        self.loader, self.errors, self.asset = loader, errors, asset
         self.specular, self.shininess = specular, shininess
         self.made: dict = {}
 
@@ -123,7 +159,7 @@ class _Materials:
                 try:
                     texture = self.loader.images.texture(self.loader.images.tinted(image, albedo))
                 except ImageError as e:
-                    self.loader.fail(self.key, f"{self.asset.path}: materials[{index}]: {e}")
+                    self.errors.fail(f"materials[{index}]: {e}")
             self.made[key] = Material(albedo=albedo, specular=self.specular,
                                       shininess=self.shininess, texture=texture)
         return self.made[key]
@@ -149,7 +185,7 @@ def _unit(n: np.ndarray) -> np.ndarray:
     return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
 
 
-def _mesh(loader, parts: list[GltfPart], key: str, skinned: bool) -> dict:
+def _mesh(parts: list[GltfPart], skinned: bool) -> dict:
     """One Mesh of a glTF mesh's primitives, in order. A primitive with NORMAL is smooth
     (its normals interpolated); one without is flat: its corners unshared, each with its
     face's normal. UVs turned to this project's convention (origin bottom-left: v -> 1 -
@@ -189,8 +225,6 @@ def _mesh(loader, parts: list[GltfPart], key: str, skinned: bool) -> dict:
     mesh = Mesh(vertices=vertices, faces=allf, vertex_normals=np.concatenate(nrm),
                 face_normals=face_normals(vertices, allf),
                 uv=np.concatenate(uvs) if any_uv else None)
-    if len(allf) == 0:
-        loader.fail(key, "expected a mesh with triangles, this one has none")
     width = max((j.shape[1] for j in joints), default=0)
 
     def padded(a, fill):           # JOINTS_1 on some primitives only: pad the others

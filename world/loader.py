@@ -181,6 +181,13 @@ class _Loader:
             self.fail(key, f"expected a string, got {describe_value(v)}")
         return v
 
+    def name(self, v, key: str) -> str:
+        s = self.string(v, key)
+        if len(s) > limits.MAX_NAME_CHARS:
+            self.fail(key, f"expected a name of at most {limits.MAX_NAME_CHARS} characters, "
+                      f"got {len(s)}")
+        return s
+
     def table(self, v, key: str, allowed) -> dict:
         if not isinstance(v, dict):
             self.fail(key, f"expected a table, got {describe_value(v)}")
@@ -246,7 +253,7 @@ class _Loader:
         doc = self.parse() if self.document is None else self.document
         self.table(doc, "", ("name", "background", "ambient", "camera", "render", "lights",
                              "objects"))
-        name = self.string(doc.get("name", self.path.stem), "name")
+        name = self.name(doc.get("name", self.path.stem), "name")
         background = self.colour(doc.get("background", [0, 0, 0]), "background")
         ambient = self.colour(doc.get("ambient", [0, 0, 0]), "ambient")
         camera = self.camera(self.require(doc, "camera", "", "a [camera] table"))
@@ -425,7 +432,7 @@ class _Loader:
         """How errors name objects entry `number`: objects[k] (name)."""
         k = f"objects[{number}]"
         name = t.get("name", f"object{number}")
-        return f"{k} ({name})" if isinstance(name, str) else k
+        return f"{k} ({name})" if isinstance(name, str) and len(name) <= limits.MAX_NAME_CHARS else k
 
     def object(self, t: dict, number: int, oid: int) -> SceneObject:
         k = self.entry_key(t, number)
@@ -433,7 +440,7 @@ class _Loader:
         self.table(t, k, ("name", "mesh", "position", "rotation", "scale", "shading",
                           "material", "velocity", "angular_velocity", "interpolation", "keys",
                           "parent"))
-        name = self.string(name, f"{k}.name")
+        name = self.name(name, f"{k}.name")
         placement = self.placement(t, k)
         mesh_value = self.require(t, "mesh", k, "a file path or a primitive table")
         mesh = self.mesh(mesh_value, f"{k}.mesh")

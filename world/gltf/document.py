@@ -82,13 +82,39 @@ def array(o: dict, key: str, where: str, required=False) -> list:
     return v
 
 
-def numbers(o: dict, key: str, where: str, n: int, default) -> np.ndarray:
+def numbers(o: dict, key: str, where: str, n: int, default,
+            bound: float = limits.MAX_SCENE_NUMBER) -> np.ndarray:
+    """n numbers, each finite and within +-bound (the shaders' float32 keeps 7 digits)."""
     if key not in o:
         return np.array(default, dtype=np.float64)
     v = o[key]
-    if not isinstance(v, list) or len(v) != n or not all(is_num(x) for x in v):
-        fail(f"{where}.{key}: expected {n} finite numbers")
+    if not isinstance(v, list) or len(v) != n or not all(is_num(x) and abs(x) <= bound for x in v):
+        fail(f"{where}.{key}: expected {n} finite numbers within +-{bound:g}, got {show(v)}")
     return np.array(v, dtype=np.float64)
+
+
+def within(a: np.ndarray, where: str, what: str = "values",
+           bound: float = limits.MAX_SCENE_NUMBER) -> np.ndarray:
+    """`a` (an accessor's elements along the first axis), unless an element holds a value
+    that is not finite or lies beyond +-bound."""
+    bad = ~(np.abs(a) <= bound)               # (NaN compares false)
+    if bad.any():
+        k = int(np.nonzero(bad.reshape(len(a), -1).any(axis=1))[0][0])
+        v = float(a.reshape(len(a), -1)[k][bad.reshape(len(a), -1)[k]][0])
+        if not np.isfinite(v):
+            fail(f"{where}: non-finite {what} (element {k}: {v!r})")
+        fail(f"{where}: {what} within +-{bound:g} expected, element {k} holds {v:.7g}")
+    return a
+
+
+def name(o: dict, where: str, default: str) -> str:
+    """The item's name (`default` where it has none), of at most limits.MAX_NAME_CHARS."""
+    v = o.get("name")
+    if not isinstance(v, str) or not v:
+        return default
+    if len(v) > limits.MAX_NAME_CHARS:
+        fail(f"{where}.name: {len(v)} characters, more than the limit of {limits.MAX_NAME_CHARS}")
+    return v
 
 
 def string(o: dict, key: str, where: str, default=None):

@@ -27,38 +27,24 @@ import pygltflib as G
 
 from world import images, limits
 from world import transforms as tf
+from world.gltf import checks
 from world.gltf.accessors import FLOATISH, Accessors
 from world.gltf.container import Container, read_document
 from world.gltf.curves import INTERPOLATIONS, GltfSampler
-from world.gltf.document import (GltfError, array, fail, integer, is_int, kept, numbers, obj,
-                                 ref, show, string)
+from world.gltf.document import (GltfError, array, fail, integer, is_int, kept, name, numbers,
+                                 obj, ref, show, string, within)
 from world.gltf.model import (GltfAnimation, GltfAsset, GltfChannel, GltfMaterial, GltfNode,
                               GltfPart, GltfSkin)
 
 TRS_PATHS = ("translation", "rotation", "scale")
 WXYZ = [3, 0, 1, 2]                    # glTF's (x, y, z, w) -> (w, x, y, z)
+_FLOAT_MAX = float(np.finfo(np.float64).max)     # (a bound that lets every finite value by)
 
 # Required extensions this reader can honour by ignoring them (the format ignores what they
 # add: material models, lights, texture transforms) or by decoding them (quantized
 # attributes are ordinary normalized/integer accessors here).
 _TOLERATED_REQUIRED = ("KHR_mesh_quantization", "KHR_lights_punctual", "KHR_texture_transform",
                        "KHR_materials_variants", "KHR_xmp_json_ld")
-
-
-def _check_skin_part(part: GltfPart, n_joints: int, where: str) -> None:
-    if part.joints is None or part.weights is None:
-        raise GltfError(f"{where}: a skinned primitive needs JOINTS_0 and WEIGHTS_0")
-    total = part.weights.sum(axis=1)
-    bad = np.nonzero(~(total > 0.0))[0]
-    if bad.size:
-        raise GltfError(f"{where}: the weights of vertex {int(bad[0])} sum to {float(total[bad[0]])!r}"
-                        " (must be > 0)")
-    used = part.weights != 0.0
-    out = used & ((part.joints >= n_joints) | (part.joints < 0))
-    if out.any():
-        v = int(np.nonzero(out.any(axis=1))[0][0])
-        jj = int(part.joints[v][out[v]][0])
-        raise GltfError(f"{where}: vertex {v} uses joint {jj}, but the skin has {n_joints} joints")
 
 
 def _check_depth(doc) -> None:
@@ -81,8 +67,6 @@ class _Reader:
         self.path = Path(path)
         self.scene_images = images.SceneImages() if scene_images is None else scene_images
         self.ignored: list[str] = []
-        self.part_vertices = 0
-        self.part_triangles = 0
         self.doc, glb_bin = read_document(self.path)
         doc = self.doc
         _check_depth(doc)
@@ -122,18 +106,22 @@ class _Reader:
     def load(self) -> GltfAsset:
         nodes = self.nodes()
         roots = self.scene(nodes)
+        for key in ("mesh", "skin"):
+            n = len(self.doc.get(f"{key}es" if key == "mesh" else f"{key}s", []))
+            for nd in nodes:
+                i = getattr(nd, key)
+                if i is not None and i >= n:
+                    fail(f"nodes[{nd.index}].{key}: {i} is not an index of {key}"
+                         f"{'es' if key == 'mesh' else 's'} ({n} entries)")
+        checks.check_drawn(self.doc, self.accessors.items, nodes, roots)
         materials = self.materials()
         meshes = self.meshes(len(materials))
         skins = self.skins(len(nodes))
-        for nd in nodes:
-            if nd.mesh is not None and nd.mesh >= len(meshes):
-                fail(f"nodes[{nd.index}].mesh: {nd.mesh} is not an index of meshes ({len(meshes)} entries)")
-            if nd.skin is not None and nd.skin >= len(skins):
-                fail(f"nodes[{nd.index}].skin: {nd.skin} is not an index of skins ({len(skins)} entries)")
         animations = self.animations(nodes)
-        asset_obj = GltfAsset(self.path, nodes, meshes, materials, skins, animations, roots, self.ignored)
-        self.check_scene_size(asset_obj)
-        return asset_obj
+        asset = GltfAsset(self.path, nodes, meshes, materials, skins, animations, roots, self.ignored)
+        checks.check_skins(asset)
+        checks.check_reach(asset)
+        return asset
 
     def extensions(self) -> None:
         used = self.doc.get("extensionsUsed", [])
@@ -166,8 +154,7 @@ class _Reader:
         for i, nd in enumerate(raw):
             where = f"nodes[{i}]"
             obj(nd, where)
-            name = nd.get("name")
-            name = name if isinstance(name, str) and name else f"node{i}"
+            node_name = name(nd, where, f"node{i}")
             children = array(nd, "children", where)
             for c in children:
                 if not is_int(c) or not 0 <= c < n:
@@ -194,7 +181,7 @@ class _Reader:
                 self.ignore("cameras")
             if "weights" in nd:
                 self.ignore("morph target weights")
-            out.append(GltfNode(i, name, None, [int(c) for c in children], matrix, t, r, s, mesh, skin))
+            out.append(GltfNode(i, node_name, None, [int(c) for c in children], matrix, t, r, s, mesh, skin))
         for i, p in enumerate(parent):
             out[i].parent = p
         # cycles: with one parent each, the nodes on (or below) a cycle are exactly those
@@ -219,14 +206,15 @@ class _Reader:
         else:
             return [nd.index for nd in nodes if nd.parent is None]
         sc = obj(scenes[s], where)
-        roots = []
+        roots, listed = [], set()
         for r in array(sc, "nodes", where):
             if not is_int(r) or not 0 <= r < len(nodes):
                 fail(f"{where}.nodes: {show(r)} is not an index of nodes ({len(nodes)} entries)")
             if nodes[r].parent is not None:
                 fail(f"{where}.nodes: nodes[{r}] is not a root (its parent is nodes[{nodes[r].parent}])")
-            if r in roots:
+            if nodes[r].index in listed:
                 fail(f"{where}.nodes: nodes[{r}] listed twice")
+            listed.add(nodes[r].index)
             roots.append(int(r))
         return roots
 
@@ -235,8 +223,7 @@ class _Reader:
     def materials(self) -> list[GltfMaterial]:
         out = []
         for i, where, m in self.entries("materials"):
-            name = m.get("name")
-            name = name if isinstance(name, str) and name else f"material{i}"
+            material_name = name(m, where, f"material{i}")
             pbr = obj(m.get("pbrMetallicRoughness", {}), f"{where}.pbrMetallicRoughness")
             color = numbers(pbr, "baseColorFactor", f"{where}.pbrMetallicRoughness", 4, [1.0, 1.0, 1.0, 1.0])
             image = None
@@ -260,7 +247,7 @@ class _Reader:
                 self.ignore("alpha")
             if isinstance(m.get("extensions"), dict) and m["extensions"]:
                 self.ignore("KHR_materials_* extensions")
-            out.append(GltfMaterial(color, image, name))
+            out.append(GltfMaterial(color, image, material_name))
         return out
 
     def image(self, i: int) -> np.ndarray:
@@ -305,21 +292,11 @@ class _Reader:
         for k in attrs:
             if k.startswith("COLOR_"):
                 self.ignore("vertex colours")
-
-        def acc(name, types, comps, norm_ok=None):
-            if name not in attrs:
-                return None
-            i = ref(attrs, name, f"{where}.attributes", self.accessors.items, "accessors")
-            return self.accessor(i, f"{where}.attributes.{name}", types, comps, norm_ok)
-
-        pos = acc("POSITION", ("VEC3",), None)
+        pos = self.attribute(attrs, "POSITION", where, ("VEC3",), None)
         if pos is None:
             fail(f"{where}.attributes: no POSITION")
         n = pos.shape[0]
-        if pos.dtype != np.float64:
-            pos = pos.astype(np.float64)           # KHR_mesh_quantization: non-normalized ints
-        if not np.isfinite(pos).all():
-            fail(f"{where}.attributes.POSITION: non-finite values")
+        pos = within(pos.astype(np.float64, copy=False), f"{where}.attributes.POSITION")   # (quantized: ints)
 
         def same_count(arr, name):
             if arr is not None and arr.shape[0] != n:
@@ -328,49 +305,54 @@ class _Reader:
                 fail(f"{where}.attributes.{name}: non-finite values")
             return arr
 
-        nrm = same_count(acc("NORMAL", ("VEC3",), (G.FLOAT, G.BYTE, G.SHORT), True), "NORMAL")
-        uv = same_count(acc("TEXCOORD_0", ("VEC2",), FLOATISH, None), "TEXCOORD_0")
-        if uv is not None and uv.dtype != np.float64:
-            uv = uv.astype(np.float64)             # KHR_mesh_quantization: non-normalized ints
+        nrm = same_count(self.attribute(attrs, "NORMAL", where, ("VEC3",), (G.FLOAT, G.BYTE, G.SHORT), True), "NORMAL")
+        uv = same_count(self.attribute(attrs, "TEXCOORD_0", where, ("VEC2",), FLOATISH, None), "TEXCOORD_0")
+        if uv is not None:
+            uv = within(uv.astype(np.float64, copy=False), f"{where}.attributes.TEXCOORD_0")
         joints = weights = None
         for s in ("0", "1"):
-            j = same_count(acc(f"JOINTS_{s}", ("VEC4",), (G.UNSIGNED_BYTE, G.UNSIGNED_SHORT), False),
-                           f"JOINTS_{s}")
-            w = same_count(acc(f"WEIGHTS_{s}", ("VEC4",), (G.FLOAT, G.UNSIGNED_BYTE, G.UNSIGNED_SHORT), True),
-                           f"WEIGHTS_{s}")
+            j = same_count(self.attribute(attrs, f"JOINTS_{s}", where, ("VEC4",),
+                                          (G.UNSIGNED_BYTE, G.UNSIGNED_SHORT), False), f"JOINTS_{s}")
+            w = same_count(self.attribute(attrs, f"WEIGHTS_{s}", where, ("VEC4",),
+                                          (G.FLOAT, G.UNSIGNED_BYTE, G.UNSIGNED_SHORT), True), f"WEIGHTS_{s}")
             if (j is None) != (w is None):
                 fail(f"{where}.attributes: JOINTS_{s} and WEIGHTS_{s} must come together")
             if j is None:
                 break
+            if (w < 0.0).any():
+                fail(f"{where}.attributes.WEIGHTS_{s}: a negative weight at vertex "
+                     f"{int(np.nonzero((w < 0.0).any(axis=1))[0][0])} (weights are >= 0)")
             joints = j if joints is None else np.concatenate([joints, j], axis=1)
             weights = w if weights is None else np.concatenate([weights, w], axis=1)
-        if "indices" in p:
-            ii = ref(p, "indices", where, self.accessors.items, "accessors")
-            idx = self.accessor(ii, f"{where}.indices", ("SCALAR",),
-                                   (G.UNSIGNED_BYTE, G.UNSIGNED_SHORT, G.UNSIGNED_INT), False)
-            idx = idx[:, 0]
-            if idx.size % 3:
-                fail(f"{where}.indices: {idx.size} indices, not a multiple of 3")
-            if idx.size and int(idx.max()) >= n:
-                fail(f"{where}.indices: index {int(idx.max())} out of range of the {n} vertices")
-            faces = idx.reshape(-1, 3)
-        else:
-            if n % 3:
-                fail(f"{where}: {n} vertices without indices, not a multiple of 3")
-            if self.part_vertices + n > limits.MAX_GLTF_VERTICES:
-                fail(f"{where}: the asset's primitives have more than {limits.MAX_GLTF_VERTICES} vertices together")
-            faces = np.arange(n, dtype=np.int64).reshape(-1, 3)
-        self.part_vertices += n
-        self.part_triangles += faces.shape[0]
-        if self.part_vertices > limits.MAX_GLTF_VERTICES or self.part_triangles > limits.MAX_GLTF_TRIANGLES:
-            fail(f"{where}: the asset's primitives have more than {limits.MAX_GLTF_VERTICES} vertices or "
-                  f"{limits.MAX_GLTF_TRIANGLES} triangles together")
+        faces = self.faces(p, where, n)
         mat = ref(p, "material", where, range(n_materials), "materials")
         part = GltfPart(pos, nrm, uv, faces, joints, weights, mat)
         for arr in (pos, nrm, uv, faces, joints, weights):
             if arr is not None:
                 arr.flags.writeable = False
         return part
+
+    def attribute(self, attrs: dict, name: str, where: str, types, comps, norm_ok=None):
+        """The decoded accessor of attribute `name`, None where the primitive has none."""
+        if name not in attrs:
+            return None
+        i = ref(attrs, name, f"{where}.attributes", self.accessors.items, "accessors")
+        return self.accessor(i, f"{where}.attributes.{name}", types, comps, norm_ok)
+
+    def faces(self, p: dict, where: str, n: int) -> np.ndarray:
+        """(m, 3) int64: the indices in threes, or without indices the vertices in order."""
+        if "indices" not in p:
+            if n % 3:
+                fail(f"{where}: {n} vertices without indices, not a multiple of 3")
+            return np.arange(n, dtype=np.int64).reshape(-1, 3)
+        ii = ref(p, "indices", where, self.accessors.items, "accessors")
+        idx = self.accessor(ii, f"{where}.indices", ("SCALAR",),
+                            (G.UNSIGNED_BYTE, G.UNSIGNED_SHORT, G.UNSIGNED_INT), False)[:, 0]
+        if idx.size % 3:
+            fail(f"{where}.indices: {idx.size} indices, not a multiple of 3")
+        if idx.size and int(idx.max()) >= n:
+            fail(f"{where}.indices: index {int(idx.max())} out of range of the {n} vertices")
+        return idx.reshape(-1, 3)
 
     # -- skins
 
@@ -393,8 +375,7 @@ class _Reader:
                 m = self.accessor(ai, f"{where}.inverseBindMatrices", ("MAT4",), (G.FLOAT,))
                 if m.shape[0] < J:
                     fail(f"{where}.inverseBindMatrices: {m.shape[0]} matrices for {J} joints")
-                if not np.isfinite(m).all():
-                    fail(f"{where}.inverseBindMatrices: non-finite values")
+                within(m[:J], f"{where}.inverseBindMatrices")
                 ibm = m[:J].reshape(J, 4, 4).transpose(0, 2, 1).copy()
             else:
                 ibm = np.tile(np.eye(4), (J, 1, 1))
@@ -408,8 +389,7 @@ class _Reader:
     def animations(self, nodes: list[GltfNode]) -> list[GltfAnimation]:
         out = []
         for ai, where, an in self.entries("animations"):
-            name = an.get("name")
-            name = name if isinstance(name, str) and name else f"animation{ai}"
+            animation_name = name(an, where, f"animation{ai}")
             samplers = [obj(s, f"{where}.samplers[{k}]") for k, s in enumerate(array(an, "samplers", where))]
             times: dict[int, np.ndarray] = {}
             for k, s in enumerate(samplers):
@@ -439,15 +419,13 @@ class _Reader:
                 if (k, path) not in built:
                     built[(k, path)] = self.sampler(samplers[k], times[k], path, f"{where}.samplers[{k}]")
                 channels.append(GltfChannel(node, path, built[(k, path)]))
-            out.append(GltfAnimation(name, channels, span))
+            out.append(GltfAnimation(animation_name, channels, span))
         return out
 
     def key_times(self, s: dict, where: str) -> np.ndarray:
         i = ref(s, "input", where, self.accessors.items, "accessors", required=True)
         t = self.accessor(i, f"{where}.input", ("SCALAR",), (G.FLOAT,))
-        t = t[:, 0]
-        if not np.isfinite(t).all():
-            fail(f"{where}.input: non-finite key times")
+        t = within(t[:, 0], f"{where}.input", "key times", limits.MAX_TIME)
         if t.size > 1 and not (np.diff(t) > 0).all():
             k = int(np.nonzero(~(np.diff(t) > 0))[0][0])
             fail(f"{where}.input: key times not strictly increasing (key {k + 1}: {float(t[k + 1])!r} after {float(t[k])!r})")
@@ -466,8 +444,8 @@ class _Reader:
         if v.shape[0] != per * n:
             fail(f"{where}: {n} key times but {v.shape[0]} output values "
                   f"(expected {per * n} for {interp})")
-        if not np.isfinite(v).all():
-            fail(f"{where}.output: non-finite key values")
+        # (a rotation's length is normalised away: finite is enough)
+        within(v, f"{where}.output", "key values", _FLOAT_MAX if path == "rotation" else limits.MAX_SCENE_NUMBER)
         if interp == "CUBICSPLINE":
             v = v.reshape(n, 3, c)
             if path == "rotation" and not (np.einsum("ij,ij->i", v[:, 1], v[:, 1]) > 0).all():
@@ -477,23 +455,6 @@ class _Reader:
         if path == "rotation":             # keys normalised (not tangents), then reordered
             v = (v if interp == "CUBICSPLINE" else tf.quat_normalised(v))[..., WXYZ]
         return GltfSampler(times, v, interp)
-
-    # -- totals
-
-    def check_scene_size(self, asset: GltfAsset) -> None:
-        nv = nt = 0
-        for i in asset.mesh_nodes():
-            nd = asset.nodes[i]
-            for part in asset.meshes[nd.mesh]:
-                nv += part.positions.shape[0]
-                nt += part.faces.shape[0]
-            if nv > limits.MAX_GLTF_VERTICES or nt > limits.MAX_GLTF_TRIANGLES:
-                fail(f"the scene's mesh nodes have more than {limits.MAX_GLTF_VERTICES} vertices or "
-                      f"{limits.MAX_GLTF_TRIANGLES} triangles")
-            if nd.skin is not None:
-                for k, part in enumerate(asset.meshes[nd.mesh]):
-                    _check_skin_part(part, len(asset.skins[nd.skin].joints),
-                                     f"nodes[{i}] (skins[{nd.skin}], meshes[{nd.mesh}].primitives[{k}])")
 
 
 def load_gltf(path, scene_images: images.SceneImages | None = None) -> GltfAsset:
