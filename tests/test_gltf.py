@@ -1295,3 +1295,17 @@ def test_matrix_column_padding(tmp_path):
     np.testing.assert_array_equal(v2, [[1, 2, 3, 4], [5, 6, 7, 8]])
     v3 = r.accessor(1, "test")
     np.testing.assert_array_equal(v3, [np.arange(1, 10) / 32767.0])
+
+
+def test_reading_a_file_allocates_its_size_not_the_limit(tmp_path):
+    """An external buffer of a few bytes is read into that many (a read sized by the
+    256 MiB limit allocated the whole limit first, each file)."""
+    import tracemalloc
+    p = one_triangle().write(tmp_path, "x.gltf", external="x.bin")
+    tracemalloc.start()
+    try:
+        a = load_gltf(p)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert a.mesh_nodes() == [0] and peak < 8 << 20, peak

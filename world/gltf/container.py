@@ -35,11 +35,11 @@ def read_regular(path: Path, what: str) -> bytes:
         raise GltfError(f"{what}: {path} is {st.st_size} bytes, more than the limit of {cap}")
     try:
         with open(path, "rb") as f:
-            data = f.read(cap + 1)
+            data = f.read(st.st_size + 1)        # (read(n) allocates n bytes first)
     except OSError as e:
         raise GltfError(f"{what}: cannot read {path}: {e.strerror or e}") from None
-    if len(data) > cap:
-        raise GltfError(f"{what}: {path} is more than the limit of {cap} bytes")
+    if len(data) > st.st_size:
+        raise GltfError(f"{what}: {path} grew while it was read")
     return data
 
 
