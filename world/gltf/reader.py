@@ -13,10 +13,11 @@ What the scene loader does with it (SCENE_FORMAT.md, v1.2): one object per
 a = animation_time(t, ...); a skinned node draws its skinned vertices and P(t) only (its
 own World is not applied); `ignored` is printed once.
 
-Sizes are bounded before anything is allocated (world/limits.py, MAX_GLTF_*), so that a
-small hostile file cannot make the program allocate gigabytes: file sizes, decoded
-accessor components, vertices and triangles of the drawn scene, nodes, joints, image
-pixels.
+Sizes are bounded before anything is allocated (world/limits.py), so that a small
+hostile file cannot make the program allocate gigabytes: file sizes, decoded accessor
+components, the objects, triangles and vertices the scene draws (checks.py, before a
+mesh is read), nodes, joints, names, image pixels (world/images.py, the scene's images
+together). Numbers are finite and in range where they enter (document.numbers, within).
 """
 from __future__ import annotations
 
