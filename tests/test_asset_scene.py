@@ -150,7 +150,7 @@ def test_printed_scene_loads_back_to_the_same_scene(asset, tmp_path, capsys, mon
     out = tmp_path / "edit" / "rover.toml"
     assert main(["scene", str(GLB), "--out", str(out)]) == 0
     written = tomllib.loads(out.read_text())
-    assert written["objects"][0]["gltf"] == os.path.relpath(GLB, out.parent)
+    assert written["objects"][0]["gltf"] == str(GLB)         # a built-in asset: absolute
     assert {k: v for k, v in written.items() if k != "objects"} == {
         k: v for k, v in doc.items() if k != "objects"}
     same_scene(load_scene(out), scene)
@@ -162,6 +162,69 @@ def test_printed_scene_loads_back_to_the_same_scene(asset, tmp_path, capsys, mon
     assert printed.startswith(f"# Written by `hmblur scene {os.path.relpath(GLB)}`:\n")
     (tmp_path / "here.toml").write_text(printed)
     same_scene(load_scene(tmp_path / "here.toml"), scene)
+
+
+def spun_box_asset(folder):
+    """A box turning about +Y over 0..2 s with its buffer in an external .bin."""
+    from tests.gltf_builder import Builder
+    import trimesh
+    box = trimesh.creation.box(extents=[1.0, 0.6, 0.4])
+    b = Builder()
+    m = b.triangle_mesh(box.vertices.astype(np.float32), box.faces.astype(np.uint16))
+    b.add("nodes", {"mesh": m, "name": "box"})
+    b.doc["scenes"] = [{"nodes": [0]}]
+    s = math.sqrt(0.5)
+    ti = b.accessor(np.float32([0.0, 1.0, 2.0]))
+    ri = b.accessor(np.float32([[0, 0, 0, 1], [0, s, 0, s], [0, 1, 0, 0]]))
+    b.add("animations", {"samplers": [{"input": ti, "output": ri}],
+                         "channels": [{"sampler": 0, "target": {"node": 0, "path": "rotation"}}]})
+    folder.mkdir(parents=True)
+    return b.write(folder, "box.gltf", external="box.bin")
+
+
+def test_scene_out_writes_where_it_loads_else_refuses(tmp_path, ctx):
+    from viewer.render.renderer import Renderer
+    from world.loader import load_asset, load_scene
+    asset = spun_box_asset(tmp_path / "assets" / "box")
+    bare, _ = load_asset(asset)
+
+    def image(scene):
+        r = Renderer(ctx, scene, (64, 36))
+        try:
+            return r.render("off", scene.render.time).image
+        finally:
+            r.release()
+    want = image(bare)
+    (tmp_path / "link").symlink_to(tmp_path / "assets")
+    # the asset's folder, folders above it, one reached through a link
+    for out in (asset.parent / "box.toml", tmp_path / "assets" / "box.toml",
+                tmp_path / "box.toml", tmp_path / "link" / "box.toml"):
+        assert main(["scene", str(asset), "--out", str(out)]) == 0
+        loaded = load_scene(out)
+        same_scene(loaded, bare)
+        assert np.array_equal(image(loaded), want)
+    assert tomllib.loads((tmp_path / "box.toml").read_text())["objects"][0]["gltf"] == \
+        "assets/box/box.gltf"
+    # outside the asset's folder and every folder above it: one line, nothing written
+    for out in (tmp_path / "elsewhere" / "box.toml", asset.parent / "deeper" / "box.toml"):
+        line = one_line_error(["scene", str(asset), "--out", str(out)], f"--out {out}",
+                              f"write it in {asset.parent} or a folder above it")
+        assert "Asset files" in line and not out.exists() and not out.parent.exists()
+    # a scene printed to stdout names the asset from the current folder; where no scene
+    # saved there would load it, a note says so
+    for cwd in (tmp_path, asset.parent, tmp_path / "link"):
+        p = subprocess.run([sys.executable, "-m", "viewer", "scene", str(asset)], cwd=cwd,
+                           capture_output=True, text=True, timeout=240)
+        assert p.returncode == 0 and p.stderr == "", p.stderr
+        (cwd / "printed.toml").write_text(p.stdout)
+        same_scene(load_scene(cwd / "printed.toml"), bare)
+    (tmp_path / "elsewhere").mkdir()
+    p = subprocess.run([sys.executable, "-m", "viewer", "scene", str(asset)],
+                       cwd=tmp_path / "elsewhere", capture_output=True, text=True, timeout=240)
+    assert p.returncode == 0 and len(p.stderr.splitlines()) == 1
+    assert p.stderr.startswith("hmblur: note: saved in the current folder, this scene would "
+                               f"not load {asset}")
+    assert tomllib.loads(p.stdout)["objects"][0]["gltf"] == "../assets/box/box.gltf"
 
 
 def one_line_error(args, *words):
