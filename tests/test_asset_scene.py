@@ -327,3 +327,72 @@ def test_panel_lists_the_assets_animations(asset):
     scene, _ = asset
     assert animation_lines(scene) == [
         "rover: drive 0.00-5.00 s, swing 0.00-5.00 s (looped)"]
+
+
+# ---------------------------------------------------------------- choosing an animation
+
+def test_an_entrys_animation_can_be_chosen(asset):
+    from world.errors import SceneError
+    from world.loader import load_scene
+    from viewer.ui.panel import animation_choices, chosen_index
+    scene, _ = asset
+    for choice, played in (("swing", (1,)), (0, (0,)), ("none", ()), ("all", (0, 1))):
+        chosen = load_scene(str(GLB), {"rover": choice})
+        assert chosen.assets[0].animations == played, choice
+        inst = chosen.assets[0]
+        labels, values = animation_choices(inst)
+        assert labels == values == ["all", "drive", "swing", "none"]
+        assert values[chosen_index(inst, values, None)] == {
+            "swing": "swing", 0: "drive", "none": "none", "all": "all"}[choice]
+    # a scene file's entry, by its name; the other objects as they were
+    keyed = load_scene("rover", {"rover": "drive"})
+    assert keyed.assets[0].animations == (0,)
+    assert [o.name for o in keyed.objects] == [o.name for o in load_scene("rover").objects]
+    for bad, words in (({"rover": "fly"}, "no animation named 'fly'"),
+                       ({"rover": 7}, "animation index 7 out of range"),
+                       ({"truck": "all"}, "animations: no gltf entry named 'truck'")):
+        with pytest.raises(SceneError, match=words):
+            load_scene(str(GLB), bad)
+
+
+def test_the_viewer_chooses_an_animation_above_the_fold(tmp_path):
+    # 1280x720 with the hybrid's long parameter list: the animation section is drawn
+    # within the window; the choice made there reaches the screenshot's sidecar, from
+    # which `shot --params` renders the same image (and without it, another).
+    from tests.xvfb import Xvfb
+    script = tmp_path / "s.txt"
+    script.write_text("2 animation rover swing\n3 key P\n")
+    bad = tmp_path / "bad.txt"
+    bad.write_text("2 animation rover fly\n")
+    display = Xvfb().start()
+    try:
+        runs = [subprocess.run([sys.executable, "-m", "viewer", "view", str(GLB), "--size",
+                                "1280x720", "--frames", "5", "--script", str(path),
+                                "--stats-json", str(tmp_path / f"{path.stem}.json"),
+                                "--shot-dir", str(tmp_path)], cwd=ROOT, env=display.env(),
+                               capture_output=True, text=True, timeout=240)
+                for path in (script, bad)]
+    finally:
+        display.stop()
+    assert runs[0].returncode == 0, runs[0].stderr
+    st = json.loads((tmp_path / "s.json").read_text())
+    assert st["errors"] == [] and st["animations"] == {"rover": "swing"}
+    sections = st["panel_sections"]
+    assert sections["Animation"][0] < sections["Parameters"][0]
+    assert sections["Animation"][1] <= 720 and sections["Buffer view"][1] <= 720
+    assert sections["Parameters"][1] > 720                  # (what used to push it down)
+    shot_png = tmp_path / "rover_hybrid_000.png"
+    side = json.loads(shot_png.with_suffix(".json").read_text())
+    assert side["animations"] == {"rover": "swing"}
+    again, other = tmp_path / "again.png", tmp_path / "other.png"
+    assert main(["shot", "--params", str(shot_png.with_suffix(".json")), "--out",
+                 str(again)]) == 0
+    assert again.read_bytes() == shot_png.read_bytes()
+    del side["animations"]
+    (tmp_path / "all.json").write_text(json.dumps(side))
+    assert main(["shot", "--params", str(tmp_path / "all.json"), "--out", str(other)]) == 0
+    assert other.read_bytes() != shot_png.read_bytes()
+    # a choice that does not load: shown in the panel, the run exits 2 with one line
+    assert runs[1].returncode == 2
+    (line,) = runs[1].stderr.strip().splitlines()
+    assert "animation rover fly" in line and "no animation named 'fly'" in line

@@ -20,11 +20,14 @@ from viewer.eval.temporal import flicker
 from viewer.io.video_writer import gif_durations
 
 BASIC = str(CONFORMANCE / "basic.toml")
-SMALL = ["--size", "64x36", "--frames", "3", "--samples", "4"]
+SMALL = ["--size", "64x36", "--frames", "3"]
 
 
 def video(tmp_path, out, *args):
-    assert main(["video", BASIC, *SMALL, "--out", str(tmp_path / out), *args]) == 0
+    # --samples only where the reference is drawn (it is refused elsewhere)
+    modes = args[args.index("--modes") + 1].split(",") if "--modes" in args else []
+    samples = ["--samples", "4"] if "reference" in modes or "--metrics" in args else []
+    assert main(["video", BASIC, *SMALL, *samples, "--out", str(tmp_path / out), *args]) == 0
     return tmp_path / out
 
 
@@ -242,7 +245,7 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys):
         "sidecar path is a folder": (["--out", str(tmp_path / "side" / "clip.mp4")], "clip.json"),
         "unknown mode": (["--modes", "off,fancy", "--out", str(tmp_path / "v.mp4")], "'fancy'"),
         "mode twice": (["--modes", "off,off", "--out", str(tmp_path / "v.mp4")], "twice"),
-        "bad start": (["--start", "soon", "--out", str(tmp_path / "v.mp4")], "--start"),
+        "bad start": (["--start", "soon", "--out", str(tmp_path / "v.mp4")], "--time 'soon'"),
         "metrics of the reference alone": (["--modes", "reference", "--metrics", "--out",
                                             str(tmp_path / "v.mp4")], "--metrics"),
     }

@@ -117,9 +117,12 @@ def _round(x: float) -> float:
     return float(f"{float(x):.8g}")
 
 
-def load_asset_scene(path: Path, loader_class):
-    """(Scene, document) of a bare asset path. `loader_class` is world.loader._Loader."""
+def load_asset_scene(path: Path, loader_class, choose=None):
+    """(Scene, document) of a bare asset path. `loader_class` is world.loader._Loader;
+    `choose(doc)`, if given, returns the document with the entry's animation chosen."""
     doc = base_document(path)
+    if choose is not None:
+        doc = choose(doc)
     loader = loader_class(path, document=doc)
     scene = loader.load()
     frame(doc, scene)

@@ -66,8 +66,11 @@ def builtin_scene_path(name: str) -> Path:
     return path
 
 
-def load_scene(source) -> Scene:
-    """A scene from a TOML path, or from a built-in name (no ".toml", not an existing path)."""
+def load_scene(source, animations: dict | None = None) -> Scene:
+    """A scene from a TOML path, or from a built-in name (no ".toml", not an existing path).
+    `animations`: {gltf entry name: "all", "none", an animation's name or index}, each
+    replacing the `animation` key of the entries of that name (the viewer's choice, kept
+    in sidecars)."""
     path = Path(source)
     if not _is_file(path):
         if isinstance(source, str) and not source.endswith(".toml") and not _exists(path):
@@ -77,14 +80,45 @@ def load_scene(source) -> Scene:
         else:
             raise SceneError(path, "", "file not found")
     if asset_scene.is_asset(path):      # a bare glTF asset: a scene made around it
-        return load_asset(path)[0]
-    return _Loader(path).load()
+        return load_asset(path, animations)[0]
+    if not animations:
+        return _Loader(path).load()
+    loader = _Loader(path)
+    return _Loader(path, document=choose_animations(loader.parse(), animations, path)).load()
 
 
-def load_asset(path) -> tuple[Scene, dict]:
+def load_asset(path, animations: dict | None = None) -> tuple[Scene, dict]:
     """(Scene, the scene document it was loaded from) of a bare .gltf/.glb file
-    (world.asset_scene; docs/scene-format.md, "A glTF file as a scene")."""
-    return asset_scene.load_asset_scene(Path(path), _Loader)
+    (world.asset_scene; docs/scene-format.md, "A glTF file as a scene"); `animations` as
+    for load_scene (the framing follows the animations chosen)."""
+    path = Path(path)
+    choose = (lambda doc: choose_animations(doc, animations, path)) if animations else None
+    return asset_scene.load_asset_scene(path, _Loader, choose)
+
+
+def choose_animations(doc: dict, animations: dict, path) -> dict:
+    """`doc` with the `animation` of each gltf entry named in `animations` replaced (the
+    values are checked as the file's are, when the entry loads); a name that is no gltf
+    entry's is a SceneError."""
+    if not isinstance(animations, dict) or len(animations) > limits.MAX_OBJECTS:
+        raise SceneError(path, "animations", "expected a table of at most "
+                         f"{limits.MAX_OBJECTS} gltf entry names")
+    entries = doc.get("objects") if isinstance(doc, dict) else None
+    if not isinstance(entries, list):
+        entries = []
+    found = set()
+    chosen = []
+    for number, t in enumerate(entries, 1):
+        if isinstance(t, dict) and "gltf" in t:
+            name = t.get("name", f"object{number}")
+            if isinstance(name, str) and name in animations:
+                t = {**t, "animation": animations[name]}
+                found.add(name)
+        chosen.append(t)
+    missing = [n for n in animations if n not in found]
+    if missing:
+        raise SceneError(path, "animations", f"no gltf entry named {str(missing[0])[:80]!r}")
+    return {**doc, "objects": chosen}
 
 
 def _is_file(p: Path) -> bool:
