@@ -512,6 +512,24 @@ def test_shared_flags_act_or_are_refused(tmp_path, capsys):
     assert not any(p.name in ("o.png", "o", "v") for p in tmp_path.iterdir())
 
 
+def test_a_closed_stdout_ends_quietly(tmp_path):
+    # `hmblur graph | head`: the reader gone, no message and no traceback, the status a
+    # SIGPIPE's (141), whichever command was writing; outputs to files are still whole.
+    for args in (["graph", "hybrid"], ["params"], ["scene", str(ROOT / "scenes" / "assets" /
+                                                             "rover.glb")],
+                 ["shot", BASIC, "--size", "16x9", "--mode", "off", "--out",
+                  str(tmp_path / "p.png")]):
+        r, w = os.pipe()
+        os.close(r)
+        try:
+            p = subprocess.run([sys.executable, "-m", "viewer", *args], cwd=ROOT, stdout=w,
+                               stderr=subprocess.PIPE, text=True, timeout=240)
+        finally:
+            os.close(w)
+        assert (p.returncode, p.stderr) == (141, ""), (args, p.stderr)
+    assert (tmp_path / "p.png").is_file() and (tmp_path / "p.json").is_file()
+
+
 def test_params_lists_every_parameter_from_the_dataclasses(capsys):
     from viewer.render.graph.params import GROUPS
     from viewer.render.modes import MODE_GROUPS

@@ -315,3 +315,23 @@ def test_the_viewer_records_what_it_animates_and_video_reproduces_it(tmp_path):
         assert np.abs(a - b).mean() < 0.5, name
     first, last = (np.asarray(Image.open(rec / n)).astype(int) for n in (pngs(rec)[0], pngs(rec)[-1]))
     assert np.abs(first - last).mean() > 0.5          # the animation moved
+
+
+def test_the_printed_size_is_the_files(tmp_path, capsys):
+    # An odd-sided frame: the MP4 holds it rounded up to even sides, and says so; a GIF
+    # and PNG frames hold it as it is.
+    import re
+    for out in ("odd.mp4", "odd.gif", "odd"):
+        assert main(["video", BASIC, "--size", "65x37", "--frames", "2", "--modes", "off",
+                     "--out", str(tmp_path / out)]) == 0
+        printed = re.search(r" (\d+)x(\d+) \(off\)", capsys.readouterr().out).groups()
+        if out.endswith(".mp4"):
+            with av.open(str(tmp_path / out)) as c:
+                held = next(c.decode(video=0)).to_ndarray(format="rgb24").shape
+        elif out.endswith(".gif"):
+            with Image.open(tmp_path / out) as g:
+                held = g.size[::-1]
+        else:
+            held = np.asarray(Image.open(tmp_path / out / "frame_0000.png")).shape
+        assert (int(printed[1]), int(printed[0])) == tuple(held[:2]), out
+    assert printed == ("65", "37")

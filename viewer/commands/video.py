@@ -152,7 +152,7 @@ def run(args) -> int:
             writer.commit(files)
     finally:
         r.release()
-    w, h = writer.size
+    w, h = writer.file_size
     print(f"{out.video}: {frames} frames {w}x{h} ({', '.join(modes)}) at {fps:g} fps, "
           f"{out.kind}, in {seconds:.1f} s ({1e3 * seconds / frames:.0f} ms/frame)")
     if metrics is not None:
