@@ -396,3 +396,147 @@ def test_the_viewer_chooses_an_animation_above_the_fold(tmp_path):
     assert runs[1].returncode == 2
     (line,) = runs[1].stderr.strip().splitlines()
     assert "animation rover fly" in line and "no animation named 'fly'" in line
+
+
+# ---------------------------------------------------------------- the quick look's choices
+
+def set_pieces(statics, movers, path):
+    """A glTF asset of still boxes `statics` [(name, extents, centre)] and moving parts
+    `movers` [(name, mesh (trimesh), translation, animation {path: (times, values)})],
+    written to `path` (.gltf, buffer embedded)."""
+    import trimesh
+    from tests.gltf_builder import Builder
+    b = Builder()
+    roots = []
+    for name, extents, centre in statics:
+        box = trimesh.creation.box(extents=extents)
+        m = b.triangle_mesh(box.vertices.astype(np.float32), box.faces.astype(np.uint16))
+        roots.append(b.add("nodes", {"name": name, "mesh": m, "translation": list(centre)}))
+    samplers, channels = [], []
+    for name, mesh, translation, channels_of in movers:
+        m = b.triangle_mesh(mesh.vertices.astype(np.float32), mesh.faces.astype(np.uint16))
+        node = b.add("nodes", {"name": name, "mesh": m, "translation": list(translation)})
+        roots.append(node)
+        for target, (times, values) in channels_of.items():
+            samplers.append({"input": b.accessor(np.float32(times)),
+                             "output": b.accessor(np.float32(values))})
+            channels.append({"sampler": len(samplers) - 1,
+                             "target": {"node": node, "path": target}})
+    b.doc["scenes"] = [{"nodes": roots}]
+    if samplers:
+        b.add("animations", {"name": "move", "samplers": samplers, "channels": channels})
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return b.write(path.parent, path.name)
+
+
+def fan_mesh():
+    import trimesh
+    return trimesh.util.concatenate([trimesh.creation.box(extents=[1.2, 0.04, 0.2]),
+                                     trimesh.creation.box(extents=[0.2, 0.04, 1.2])])
+
+
+def turning(seconds=2.0, steps=4):
+    """A turn about +Y, keyed every quarter turn."""
+    times = np.linspace(0.0, seconds, steps + 1)
+    half = np.linspace(0.0, math.pi, steps + 1)
+    return {"rotation": (times, [[0.0, math.sin(h), 0.0, math.cos(h)] for h in half])}
+
+
+def id_share(ctx, scene, names, size=(160, 90)):
+    """The share of the frame the objects `names` cover at the scene's time, and the
+    width and height of the box around those pixels as shares of the frame's."""
+    from viewer.render.renderer import Renderer
+    r = Renderer(ctx, scene, size)
+    try:
+        r.render("off", scene.render.time)
+        ids = r.buffers()["id"].reshape(size[1], size[0])
+    finally:
+        r.release()
+    want = [o.id for o in scene.objects if o.name.split("/")[-1] in names]
+    mask = np.isin(ids, want)
+    if not mask.any():
+        return 0.0, 0.0, 0.0
+    ys, xs = np.nonzero(mask)
+    return float(mask.mean()), (np.ptp(xs) + 1) / size[0], (np.ptp(ys) + 1) / size[1]
+
+
+def test_a_fan_under_a_ceiling_slab_is_seen_from_below(tmp_path, ctx):
+    from world.loader import load_asset
+    path = set_pieces([("ceiling", [6.0, 0.2, 6.0], [0.0, 2.2, 0.0])],
+                      [("fan", fan_mesh(), [0.0, 1.8, 0.0], turning())],
+                      tmp_path / "fan.gltf")
+    scene, doc = load_asset(path)
+    cover, width, _ = id_share(ctx, scene, {"fan"})
+    assert cover > 0.02 and width > 0.3, (cover, width)
+    eye = scene.camera.position - scene.camera.look_at
+    assert eye[1] < 0 and doc["lights"][0]["direction"][1] > 0     # from below, lit so
+    np.testing.assert_allclose(scene.camera.look_at, [0.0, 1.8, 0.0], atol=1e-6)
+
+
+def test_a_mover_beside_big_still_parts_fills_the_frame(tmp_path, ctx):
+    import trimesh
+    from world.loader import load_asset
+    path = set_pieces([("floor", [20.0, 0.2, 20.0], [0.0, -0.1, 0.0]),
+                       ("wall", [20.0, 5.0, 0.2], [0.0, 2.5, -6.0]),
+                       ("pillar", [0.5, 4.0, 0.5], [6.0, 2.0, 3.0])],
+                      [("cart", trimesh.creation.box(extents=[0.4, 0.4, 0.4]), [0.0, 0.2, 0.0],
+                        {"translation": ([0.0, 2.0], [[-0.5, 0.2, 0.0], [0.5, 0.2, 0.0]])})],
+                      tmp_path / "cart.gltf")
+    scene, doc = load_asset(path)
+    cover, width, height = id_share(ctx, scene, {"cart"})
+    # the cart's path over the animation, 1.4 m, spans the middle 60% of the frame: the
+    # cart itself a fifth of it
+    assert cover > 0.02 and width > 0.12 and height > 0.15, (cover, width, height)
+    assert scene.camera.far > 4 * np.linalg.norm(scene.camera.position - [0.0, 2.5, -6.0])
+    # the whole stage framed would leave the cart a speck (the frame of an asset that
+    # does not move)
+    still = set_pieces([("floor", [20.0, 0.2, 20.0], [0.0, -0.1, 0.0]),
+                        ("wall", [20.0, 5.0, 0.2], [0.0, 2.5, -6.0]),
+                        ("pillar", [0.5, 4.0, 0.5], [6.0, 2.0, 3.0])],
+                       [("cart", trimesh.creation.box(extents=[0.4, 0.4, 0.4]),
+                         [0.0, 0.2, 0.0], {})], tmp_path / "still.gltf")
+    still_scene, still_doc = load_asset(still)
+    assert still_doc["render"]["time"] == 0.0
+    assert id_share(ctx, still_scene, {"cart"})[0] < 0.005
+
+
+def test_the_time_chosen_is_one_where_the_parts_move(tmp_path, ctx):
+    import trimesh
+    from viewer.render.modes.reference import REGIONS
+    from viewer.render.modes.regions import INNER
+    from viewer.render.graph.params import ParamSet
+    from viewer.render.renderer import Renderer
+    from world.asset_scene import SHUTTER
+    from world.loader import load_asset
+    # still from 0.8 s to 1.2 s: the middle of the animation, 1 s, is a still pose
+    keys = ([0.0, 0.8, 1.2, 2.0], [[0.0, 0.2, 0.0], [1.0, 0.2, 0.0], [1.0, 0.2, 0.0],
+                                   [2.0, 0.2, 0.0]])
+    path = set_pieces([("floor", [6.0, 0.2, 6.0], [1.0, -0.1, 0.0])],
+                      [("cart", trimesh.creation.box(extents=[0.4, 0.4, 0.4]), [0.0, 0.2, 0.0],
+                        {"translation": keys})], tmp_path / "pause.gltf")
+    scene, doc = load_asset(path)
+    t = scene.render.time
+    assert t in (0.75, 1.25), t                     # the moving samples nearest the middle
+    cart = next(o for o in scene.objects if o.name.endswith("cart"))
+    assert not np.allclose(cart.matrix(t - SHUTTER / 2), cart.matrix(t + SHUTTER / 2))
+    # and the reference finds inner blur there (none at the still middle)
+    r = Renderer(ctx, scene, (96, 54))
+    params = ParamSet()
+    params.set("reference.samples", 8)
+    try:
+        inner = [int((r.render("reference", when, params, record_visibility=True).host[REGIONS]
+                      == INNER).sum()) for when in (t, 1.0)]
+    finally:
+        r.release()
+    assert inner[0] > 0 and inner[1] == 0, inner
+
+
+def test_key_times_print_as_written(tmp_path):
+    import trimesh
+    from world.loader import load_asset
+    path = set_pieces([], [("cart", trimesh.creation.box(extents=[0.4, 0.4, 0.4]),
+                            [0.0, 0.0, 0.0],
+                            {"translation": ([0.0, 1.2], [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])})],
+                      tmp_path / "short.gltf")
+    _, doc = load_asset(path)
+    assert doc["render"]["time"] == 0.6 and repr(doc["render"]["time"]) == "0.6"

@@ -16,8 +16,9 @@ from viewer.io.imageio import OutputSet
 HEADER = """\
 Written by `hmblur scene {asset}`:
 the scene this asset stands for in shot, view, compare, bench and video (docs/scene-format.md,
-"A glTF file as a scene"): the asset as one gltf entry, a camera framing it over its
-animation, two lights, a 1/60 s shutter, the middle of its animation as the frame time.
+"A glTF file as a scene"): the asset as one gltf entry, a camera framing its moving
+parts over the animation from a side that sees them, two lights, a 1/60 s shutter, and
+a time at which they move as the frame time.
 Edit freely: the file loads as it is."""
 
 
