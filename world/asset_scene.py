@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from world import quick_look
+from world import limits, quick_look
 from world.errors import SceneError
 
 SUFFIXES = (".gltf", ".glb")
@@ -22,6 +22,7 @@ FILL = 0.6                     # the asset's box: within the middle 60% of the f
 VIEW = quick_look.DIRECTIONS[0]      # centre -> eye: in front (+Z), right (+X), above (+Y)
 FRAME_TIMES = 9                # times over the animation range that the bounds cover
 SHUTTER = 1.0 / 60.0
+FAR_RATIO = 1e4               # far / near at most, for what stands around the moving parts
 MIN_DISTANCE = 1e-3            # m: an asset with no extent is still looked at from somewhere
 BACKGROUND = [0.3, 0.31, 0.33]
 AMBIENT = [0.18, 0.18, 0.2]
@@ -98,7 +99,7 @@ def frame(doc: dict, scene) -> None:
     if not scene.objects:
         raise SceneError(scene.path, "", "the asset has no mesh to show")
     whole_lo, whole_hi = bounds(scene, times)
-    moving = quick_look.motion(scene, times, whole_lo, whole_hi) if span is not None else None
+    moving = quick_look.motion(scene, times) if span is not None else None
     lo, hi = (whole_lo, whole_hi) if moving is None else (moving.lo, moving.hi)
     centre = 0.5 * (lo + hi)
     aspect = doc["render"]["width"] / doc["render"]["height"]
@@ -117,8 +118,11 @@ def frame(doc: dict, scene) -> None:
     # (and the whole asset before far, so that what stands around the moving parts shows)
     depth = distance - toward
     whole = _corners(whole_lo, whole_hi) - centre
-    cam["near"] = _round(max(0.1 * float(depth.min()), 1e-4 * distance))
-    cam["far"] = _round(4.0 * max(float(depth.max()), float((distance - whole @ back).max())))
+    near = max(0.1 * float(depth.min()), 1e-4 * distance)
+    around = min(4.0 * float((distance - whole @ back).max()), FAR_RATIO * near,
+                 limits.MAX_SCENE_NUMBER)
+    cam["near"] = _round(near)
+    cam["far"] = _round(max(4.0 * float(depth.max()), around))
     if back[1] < 0:          # seen from below: the key light comes from below too
         key = doc["lights"][0]["direction"]
         doc["lights"][0]["direction"] = [key[0], -key[1], key[2]]

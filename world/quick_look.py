@@ -24,7 +24,7 @@ DIRECTIONS = np.array([
 ])
 SEEN_SLACK = 0.05      # a later direction wins only when it sees more than this more
 PROBES = 512           # probe points on the moving parts (spread over their vertices)
-MOVED = 1e-5           # of the asset's box diagonal: a vertex that moves less is still
+MOVED = 1e-5           # of a part's box diagonal: a part whose vertices move less is still
 MIDDLE_SHARE = 0.5     # of the most screen motion: a time that moves less is passed over
 
 
@@ -51,9 +51,8 @@ def _world(o, t: float, idx=None) -> np.ndarray:
     return v @ m[:3, :3].T + m[:3, 3]
 
 
-def motion(scene, times, whole_lo, whole_hi) -> Motion | None:
+def motion(scene, times) -> Motion | None:
     """The parts of `scene` that move over `times` (None where nothing moves)."""
-    tol = MOVED * max(float(np.linalg.norm(whole_hi - whole_lo)), 1e-12)
     moving, static = [], []
     lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
     for o in scene.objects:
@@ -66,7 +65,7 @@ def motion(scene, times, whole_lo, whole_hi) -> Motion | None:
             w = _world(o, t)
             moved = max(moved, float(np.abs(w - first).max()))
             olo, ohi = np.minimum(olo, w.min(axis=0)), np.maximum(ohi, w.max(axis=0))
-        if moved > tol:
+        if moved > MOVED * float(np.linalg.norm(ohi - olo)):
             moving.append(o)
             lo, hi = np.minimum(lo, olo), np.maximum(hi, ohi)
         else:
