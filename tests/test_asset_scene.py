@@ -355,6 +355,23 @@ def test_an_entrys_animation_can_be_chosen(asset):
             load_scene(str(GLB), bad)
 
 
+def test_a_sidecars_animations_are_checked(tmp_path):
+    out = tmp_path / "a.png"
+    assert main(["shot", str(GLB), "--mode", "off", "--size", "32x18", "--out", str(out)]) == 0
+    side = json.loads(out.with_suffix(".json").read_text())
+    assert "animations" not in side                   # (none chosen: the file's own)
+    for bad, words in (({"rover": "fly"}, "no animation named 'fly'"),
+                       ({"truck": "all"}, "no gltf entry named 'truck'"),
+                       ({"rover": True}, "expected a table of gltf entry names"),
+                       (["rover"], "expected a table of gltf entry names")):
+        side["animations"] = bad
+        (tmp_path / "bad.json").write_text(json.dumps(side))
+        one_line_error(["shot", "--params", str(tmp_path / "bad.json"), "--out",
+                        str(tmp_path / "b.png")], f"--params {tmp_path / 'bad.json'}: animations: ",
+                       words)
+    assert not (tmp_path / "b.png").exists()
+
+
 def test_the_viewer_chooses_an_animation_above_the_fold(tmp_path):
     # 1280x720 with the hybrid's long parameter list: the animation section is drawn
     # within the window; the choice made there reaches the screenshot's sidecar, from

@@ -302,7 +302,13 @@ def setup(args) -> Setup:
     animations = None
     if side is not None and "animations" in side:
         animations = sidecar_animations(side["animations"], f"--params {args.params}")
-    scene = load(args.scene, animations)
+    try:
+        scene = load(args.scene, animations)
+    except SceneError as exc:
+        if animations is None:
+            raise
+        load(args.scene)                   # (the scene's own mistake, named as such)
+        raise UserError(f"--params {args.params}: animations: {exc}") from None
     size = (scene.render.width, scene.render.height)
     t = scene.render.time
     seed = 0
