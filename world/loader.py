@@ -65,8 +65,11 @@ def builtin_scene_path(name: str) -> Path:
     return path
 
 
-def load_scene(source) -> Scene:
-    """A scene from a TOML path, or from a built-in name (no ".toml", not an existing path)."""
+def load_scene(source, animations: dict | None = None) -> Scene:
+    """A scene from a TOML path, or from a built-in name (no ".toml", not an existing path).
+    `animations`: {gltf entry name: "all", "none", an animation's name or index}, each
+    replacing the `animation` key of the entries of that name (the viewer's choice, kept
+    in sidecars)."""
     path = Path(source)
     if not _is_file(path):
         if isinstance(source, str) and not source.endswith(".toml") and not _exists(path):
@@ -76,14 +79,22 @@ def load_scene(source) -> Scene:
         else:
             raise SceneError(path, "", "file not found")
     if asset_scene.is_asset(path):      # a bare glTF asset: a scene made around it
-        return load_asset(path)[0]
-    return _out_of_memory_said(path, _Loader(path).load)
+        return load_asset(path, animations)[0]
+    if not animations:
+        return _out_of_memory_said(path, _Loader(path).load)
+    loader = _Loader(path)
+    return _out_of_memory_said(path, lambda: _Loader(
+        path, document=choose_animations(loader.parse(), animations, path)).load())
 
 
-def load_asset(path) -> tuple[Scene, dict]:
+def load_asset(path, animations: dict | None = None) -> tuple[Scene, dict]:
     """(Scene, the scene document it was loaded from) of a bare .gltf/.glb file
-    (world.asset_scene; docs/scene-format.md, "A glTF file as a scene")."""
-    return _out_of_memory_said(path, lambda: asset_scene.load_asset_scene(Path(path), _Loader))
+    (world.asset_scene; docs/scene-format.md, "A glTF file as a scene"); `animations` as
+    for load_scene (the framing follows the animations chosen)."""
+    path = Path(path)
+    choose = (lambda doc: choose_animations(doc, animations, path)) if animations else None
+    return _out_of_memory_said(path, lambda: asset_scene.load_asset_scene(path, _Loader,
+                                                                         choose))
 
 
 def _out_of_memory_said(path, load):

@@ -40,9 +40,9 @@ def run(args) -> int:
     if mode not in MODES:
         raise cliargs.UserError(f"--mode {mode}: expected one of {', '.join(MODES)}")
     cliargs.check_set_groups(args.set, [mode], MODE_GROUPS)
-    if args.samples is not None and mode != "reference":
-        raise cliargs.UserError(f"--samples {args.samples}: only the reference mode takes "
-                                f"sub-frames, not {mode}")
+    cliargs.check_samples_read(args.samples, [mode])
+    if args.buffers is None:          # (the buffers hold the exposure's velocities)
+        cliargs.check_shutter_read(args.shutter, [mode], " (only --buffers would show its velocities)")
     out = cliargs.check_output_file(args.out, suffix=".png")
     side = out.with_suffix(".json")
     cliargs.check_output_file(str(side), "--out's sidecar")

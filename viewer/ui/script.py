@@ -49,6 +49,8 @@ ACTIONS = {
     "shutter": (1, "seconds"),
     "seed": (1, "an integer"),
     "open": (1, "a scene path or built-in name"),
+    "animation": (2, "a gltf entry's name and what it plays: all, none, an animation's name "
+                     "or index"),
     "reset": (0, "nothing"),
     "fly": (1, "on or off"),
     "panel": (1, "on or off"),

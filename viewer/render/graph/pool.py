@@ -7,7 +7,7 @@ framebuffers that used it are dropped. Nothing else holds a GL texture across fr
 While a pipeline runs a pass (`opened_to`), the pool checks each access against the pass's
 declarations, as Frame.host does for host resources: a texture bound or read must be
 one of its `inputs` or `produces`, a texture drawn into, cleared, written or allocated
-one of its `produces`, and a read-back to the host (`read_back`, the one way a pass reads
+one of its `produces` and none of its `inputs`, and a read-back to the host (`read_back`, the one way a pass reads
 GPU data) one of its `reads_back`. Outside a pipeline (a pass run on its own, as unit
 tests do, the sub-exposure accumulation, the caller reading results) nothing is checked.
 """
@@ -73,6 +73,12 @@ class ResourcePool:
         p = self._pass
         if p is None:
             return
+        if write:
+            sampled = [n for n in names if n in p.inputs]
+            if sampled:
+                raise RuntimeError(f"pass {p.name} writes texture {', '.join(sampled)}, which "
+                                   "it declares as an input (a texture drawn into while it is "
+                                   "sampled is undefined in GL)")
         allowed = p.produces if write else (*p.inputs, *p.produces)
         bad = [n for n in names if n not in allowed]
         if bad:
@@ -179,6 +185,7 @@ class ResourcePool:
         """Clear textures `names` (one framebuffer) to `value`, only inside the box written
         since their last clear: a memset of a few thousand pixels instead of megabytes
         where a pass writes little (the revealed layers, the ray mask)."""
+        self._check(names, write=True)     # (also where nothing is left to clear)
         box = None
         for n in names:
             w, h = self._tex[n][1]
