@@ -97,6 +97,31 @@ def load_asset(path, animations: dict | None = None) -> tuple[Scene, dict]:
                                                                          choose))
 
 
+def choose_animations(doc: dict, animations: dict, path) -> dict:
+    """`doc` with the `animation` of each gltf entry named in `animations` replaced (the
+    values are checked as the file's are, when the entry loads); a name that is no gltf
+    entry's is a SceneError."""
+    if not isinstance(animations, dict) or len(animations) > limits.MAX_OBJECTS:
+        raise SceneError(path, "animations", "expected a table of at most "
+                         f"{limits.MAX_OBJECTS} gltf entry names")
+    entries = doc.get("objects") if isinstance(doc, dict) else None
+    if not isinstance(entries, list):
+        entries = []
+    found = set()
+    chosen = []
+    for number, t in enumerate(entries, 1):
+        if isinstance(t, dict) and "gltf" in t:
+            name = t.get("name", f"object{number}")
+            if isinstance(name, str) and name in animations:
+                t = {**t, "animation": animations[name]}
+                found.add(name)
+        chosen.append(t)
+    missing = [n for n in animations if n not in found]
+    if missing:
+        raise SceneError(path, "animations", f"no gltf entry named {str(missing[0])[:80]!r}")
+    return {**doc, "objects": chosen}
+
+
 def _out_of_memory_said(path, load):
     """load(), with a MemoryError a SceneError naming the scene file (the files a scene
     names say so themselves, with their key, where they are read)."""
