@@ -81,10 +81,6 @@ class Hits:
     # surface along the pixel's primary ray, what a raster of the static objects shows there.
     from_view: np.ndarray | None = None
 
-    @property
-    def hit(self) -> np.ndarray:
-        return self.object_id != 0
-
 
 def transform_points(m: np.ndarray, p: np.ndarray, w: float = 1.0) -> np.ndarray:
     """Rows of p (n, 3) through the 4x4 m (column vectors), in p's dtype, column by

@@ -260,8 +260,3 @@ def composite_tile_passes(config: HybridConfig = HybridConfig()) -> list:
     return [*tile_passes("hybrid_front", "hybrid", select_x=moving_strips, segments=config.segments,
                          paths=config.paths, select_reads=(TILE_LISTS,)),
             *((ReadNeighborMax(),) if config.reads_neighbormax else ())]
-
-
-def composite_passes(config: HybridConfig = HybridConfig()) -> list:
-    """The displacement tiles and the composite (the composite after the reveal)."""
-    return [*composite_tile_passes(config), Composite(config)]

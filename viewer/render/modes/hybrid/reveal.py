@@ -337,23 +337,18 @@ BLOCKS_PER_ROW = 256     # record blocks (SHADE_TILE x SHADE_TILE) per row; both
 
 def layer_hits(pixels: np.ndarray, layer, height: int, static_key: int | None = None
                ) -> LayerHits | None:
-    """The traced rows of a layer as hit records (face row, u, v, key), key = 1 + object
-    id, or static_key where given for the hits the static layer holds (layer.static_view),
-    one SHADE_TILE x SHADE_TILE block per (key, screen tile) holding its pixels, blocks in
+    """The revealed layer as hit records (face row, u, v, key), key = 1 + object id, or
+    static_key where given for the hits the static layer holds (layer.static_view), one
+    SHADE_TILE x SHADE_TILE block per (key, screen tile) holding its pixels, blocks in
     rows of BLOCKS_PER_ROW, sorted by key: each key's draw covers only its own run of
     tiles (reveal_kernels.pack_blocks); None when nothing was traced."""
-    every = bool(layer.traced.all())          # layer 1: no gather needed
-    rows = None if every else np.flatnonzero(layer.traced)
-    if not len(pixels) or rows is not None and not len(rows):
+    if not len(pixels):
         return None
-
-    def pick(a):
-        return a if every else np.take(a, rows, axis=0)
     gx, gy, key, face = kernels.record_inputs(
-        pick(pixels), height, pick(layer.object_id), pick(layer.prim_id),
-        layer.table.face_offset, pick(layer.static_view), -1 if static_key is None else static_key)
+        pixels, height, layer.object_id, layer.prim_id, layer.table.face_offset,
+        layer.static_view, -1 if static_key is None else static_key)
     records, _, tiles, runs = kernels.pack_blocks(
-        gx, gy, key, face, pick(layer.barycentrics), SHADE_TILE.bit_length() - 1,
+        gx, gy, key, face, layer.barycentrics, SHADE_TILE.bit_length() - 1,
         BLOCKS_PER_ROW.bit_length() - 1)
     return LayerHits(records, [tuple(r) for r in runs.tolist()], tiles)
 
@@ -375,11 +370,11 @@ class RevealTrace(Pass):
         result = None
         skin0 = st.rays.skin_ms
         if len(pixels) and p.trace:
-            result = reveal(st.rays, frame.camera, frame.time, pixels, own, layers=1,
+            result = reveal(st.rays, frame.camera, frame.time, pixels, own,
                             max_depth=p.max_depth, threads=p.threads or None,
                             matrices=frame_models(frame, st.rays.moving))
         t2 = time.perf_counter()
-        hits = (layer_hits(pixels, result.layers[0], frame.size[1], st.static_key)
+        hits = (layer_hits(pixels, result.layer, frame.size[1], st.static_key)
                 if result else None)
         t3 = time.perf_counter()
         s = frame.stats
@@ -387,7 +382,7 @@ class RevealTrace(Pass):
         s["rays"] = int(result.rays) if result else 0
         s["revealed_pixels"] = int(result.pixels_hit) if result else 0
         # Revealed surfaces copied from the static objects' raster (RevealState.static_layer).
-        s["static_layer_hits"] = np.count_nonzero(result.layers[0].static_view) if result else 0
+        s["static_layer_hits"] = np.count_nonzero(result.layer.static_view) if result else 0
         s["restarts"] = int(result.restarts) if result else 0
         s["unresolved"] = int(result.unresolved) if result else 0
         s["reveal_readback_ms"] = (t1 - t0) * 1e3
