@@ -44,8 +44,7 @@ from .workers import run_all
 EXCLUSION_BUDGET = 1_000_000
 # Rays in one Embree call (or in the exclusion scenes' calls of one intersect() together)
 # from which they are split over the worker threads: below, handing work to a thread costs
-# more than it saves (2 cores: `pan`'s 39 k rays in ten exclusion calls 4.8 -> 4.1 ms;
-# `vase_pan`'s 5 k rays in three calls 1.07 -> 1.24 ms with the threshold at 1 k).
+# more than it saves (on 2 cores, tens of thousands of rays gain, a few thousand lose).
 PARALLEL_RAYS = 8192
 
 
@@ -335,8 +334,8 @@ class RayScene:
         row order (as the reveal reads its mask): each moving object's box test then takes
         only the rows its box covers on screen (RowIndex), not every ray.
         matrices: M(t) of each object of self.moving, in order, as SceneObject.matrix(t)
-        gives it, where the caller has them already (a frame's G-buffer made them: asked
-        again, 32 movers' kept matrices cost ~0.2 ms in the frame); None: asked here.
+        gives it, where the caller has them already (a frame's G-buffer made them: asking
+        each object again costs host time in every frame); None: asked here.
         """
         o = np.asarray(origins, dtype=np.float64).reshape(-1, 3)
         d = np.asarray(dirs, dtype=np.float64).reshape(-1, 3)

@@ -25,11 +25,11 @@ from .embree_scene import RayScene
 from .workers import worker_pool
 
 CPUS = os.cpu_count() or 1    # read once: os.cpu_count() costs ~60 us a call here
-# Threads pay only for large batches (2 cores, the reveal's own Python between Embree
-# calls holds the GIL): 39 k rays took 1.0 ms on one thread and 1.4 ms in two chunks on
-# two (`basic` 1280x720), 156 k rays 14.2 ms on one and 10.0 in three chunks (`pan`
-# 1280x720). Chunks of at most this many rays, and threads from two chunks.
-MIN_CHUNK = 65536    # below this, a thread costs more than it saves (measured on 2 cores)
+# Threads pay only for large batches (on 2 cores, and the reveal's own Python between
+# Embree calls holds the GIL): tens of thousands of rays run faster on one thread, a
+# hundred thousand and more in chunks on several. Chunks of at most this many rays, and
+# threads from two chunks.
+MIN_CHUNK = 65536    # below this, a thread costs more than it saves
 MAX_CHUNK = 65536    # above this, the per-ray temporaries fall out of the caches
 
 

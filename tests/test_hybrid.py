@@ -220,7 +220,7 @@ def test_many_revealed_objects_are_shaded_by_few_draws_like_the_raster(ctx, monk
 
 def test_the_reveal_takes_the_movers_matrices_from_the_frame(ctx, monkeypatch):
     """The G-buffer made every object's M(t): the reveal's poses take them from the frame
-    (asking 32 objects again cost ~0.2 ms in the frame), equal to SceneObject.matrix(t);
+    (asking each object again costs host time in every frame), equal to SceneObject.matrix(t);
     its hits are those of asking each object."""
     from raytrace import reveal
     from viewer.render.modes.hybrid.reveal import frame_models, reveal_state

@@ -416,7 +416,7 @@ void main() {
     // The neighbourhood's line: what passes over the pixel; where merged, only its ends
     // beyond the own line, about as densely as the whole line's taps (rounded to the
     // nearest count, at least one a side: under a pan the ends are a few pixels long, and
-    // a second tap each cost 0.6 ms of pan's 16 for no measured gain), and the own
+    // a second tap each costs time for no gain in quality), and the own
     // object's fragments there count. (llvmpipe pays for a branch in a loop whether taken or not:
     // each tap fetches its colour once, unconditionally, and every bucket takes it with a
     // weight of 0 or w.)

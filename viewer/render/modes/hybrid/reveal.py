@@ -20,7 +20,7 @@ shade what they reveal on the GPU exactly as the raster layer is shaded.
       primary ray (RayScene.intersect's view) reveals what a raster of the static objects
       alone shows at its pixel: that layer, the G-buffer's kept static raster
       (viewer/render/passes/static_raster.py), is blitted in once per view (static_layer) and
-      copied there, not shaded again (spinner: 429 of 461 tiles).
+      copied there, not shaded again (under a still camera, most of the revealed tiles).
 """
 from __future__ import annotations
 
@@ -62,9 +62,8 @@ FACE_UNIT = 5
 RECORD_UNIT = 6
 # Tile side for reveal_shade's draws: finer than the tile lists' FINE, so fewer fragments
 # outside the revealed pixels run the shader. llvmpipe shades 4 x 4 blocks, twice where a
-# quad's diagonal crosses one; still 4 beats 8, whose blocks hold ~15% revealed pixels
-# under a moving camera (reveal_shade crowd_pan 640x360 1.80 -> 1.42 ms, pan 0.94 ->
-# 0.79, crowd 1.23 -> 1.05, the others 0.04-0.05 less).
+# quad's diagonal crosses one; still 4 beats 8, whose blocks hold few revealed pixels
+# under a moving camera.
 SHADE_TILE = 4
 
 
@@ -134,9 +133,9 @@ class ObjectTable:
 def shade_draws(keys, has_row) -> list[tuple[list[int], int, int]]:
     """reveal_shade's draws for a layer's keys [(key, first, count)], in order: (keys,
     first, count) per draw, a run of keys side by side with table rows in one draw (the
-    object table: llvmpipe charges ~0.1 ms a draw however small, crowd_pan's 15 draws are
-    1, and reading 18 texels a fragment costs no more than uniforms on pan's 39 k), any
-    other key (an image-textured object, the static layer) alone."""
+    object table: llvmpipe charges ~0.1 ms a draw however small, and reading 18 texels a
+    fragment costs no more than uniforms), any other key (an image-textured object, the
+    static layer) alone."""
     draws = []                  # [table?, keys, first, count]
     for key, first, count in keys:
         row = has_row(key)
