@@ -33,7 +33,10 @@ class TileList:
         self.count = 0                 # tiles in the current list
         self.quads = 0                 # quads drawn: one per tile, or merged rectangles
         self.tiles = np.zeros((0, 2), np.int64)
+        self.tile = self.tile_h = FINE  # tile width and height in px
+        self.size = (0, 0)             # the target's size
         self.box = None                # (x0, y0, x1, y1) GL pixels around the tiles
+        self.quad_first = None         # block-mapped lists: each tile's first quad
         self.vertex_shader = "passes/tiles.vert"
         self.blocks_per_row = None
 

@@ -157,6 +157,7 @@ class RevealState:
         self._faces: moderngl.Texture | None = None
         self._faces_motion: moderngl.Texture | None = None
         self._faces_data: np.ndarray | None = None
+        self._motion_data: np.ndarray | None = None
         self._faces_posed = None
         # The skinned movers: their rows of the face texture are posed per frame.
         self.skinned = [o for o, _ in self.rays.moving if o.skin is not None]

@@ -44,7 +44,8 @@ MARGIN = 1.0
 
 
 class TileLists:
-    """Per-renderer host state: the two lists, reused frame after frame."""
+    """Per-renderer host state: the tile lists and this frame's tile maps, reused frame
+    after frame."""
 
     def __init__(self, ctx: moderngl.Context):
         self.ctx = ctx
@@ -52,7 +53,12 @@ class TileLists:
         self.active = TileList(ctx)
         self.surface = TileList(ctx)   # moving, and an id boundary within the probes' reach
         self.shape = (0, 0)            # (rows, columns) of FINE tiles this frame
-        self.boundary = np.zeros((0, 0), bool)   # tiles that may hold an id boundary
+        # This frame's FINE tile maps (GL rows): the longest displacement (px), the moving
+        # tiles, those of `surface`, and the tiles that may hold an id boundary.
+        self.longest = np.zeros((0, 0), np.float32)
+        self.moving_tiles = np.zeros((0, 0), bool)
+        self.surface_tiles = np.zeros((0, 0), bool)
+        self.boundary = np.zeros((0, 0), bool)
         self._extra: dict[str, TileList] = {}
 
     def extra(self, name: str) -> TileList:
