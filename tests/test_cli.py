@@ -516,7 +516,7 @@ def test_buffers_readme_describes_every_file(tmp_path):
         readme = (d / mode / "README.txt").read_text()
         for npy in sorted((d / mode).glob("*.npy")):
             a = np.load(npy)
-            assert describe(npy.stem), f"{npy.stem} is not in viewer/buffer_docs.BUFFERS"
+            assert describe(npy.stem), f"{npy.stem} is not in viewer.io.buffer_docs.BUFFERS"
             entry = readme.split(f"\n{npy.name}  ", 1)[1].split("\n", 3)
             assert entry[0] == f"{a.dtype}  {'x'.join(map(str, a.shape))}"
             assert entry[1].strip() == describe(npy.stem)

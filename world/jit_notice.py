@@ -1,6 +1,6 @@
 """One line on stderr before numba compiles the project's kernels, with the expected wait.
 
-The kernels (`raytrace/kernels.py`, `viewer/render/modes/hybrid/tile_kernels.py`, `hybrid/reveal_kernels.py`,
+The kernels (`raytrace/kernels.py`, `viewer/render/passes/tile_kernels.py`, `viewer/render/modes/hybrid/reveal_kernels.py`,
 the camera's rays in `world/camera.py`) are compiled on the first hybrid frame and cached
 on disk beside their modules (`__pycache__`), so a later process loads them in well under
 a second; `scripts/setup.sh` compiles them ahead

@@ -32,7 +32,7 @@
 // (|D| < 1e-3: no own line, no time pairing): llvmpipe would still pay for them (a branch
 // in a loop costs even where no pixel takes it; both sides run where an 8-wide group
 // disagrees). SIMPLE 1 compiles the one for tiles with no other object within the lines'
-// reach (viewer/render/hybrid/composite.py near_outlines, which also covers the merged
+// reach (viewer/render/modes/hybrid/composite.py near_outlines, which also covers the merged
 // own lines' spread off the neighbourhood's direction): every tap lands on the own object,
 // so the buckets of other objects stay empty and the unmerged neighbourhood's line adds
 // nothing. All four give the image the full variant gives.
