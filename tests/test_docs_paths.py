@@ -2,7 +2,7 @@
 docs/*.md (and in the comments of the code and shaders) is a file or folder of this
 checkout, and docs/architecture.md's map of folders lists the groups of
 tests/test_imports.py's LAYERS in their order. A moved file fails here until the text that
-names it moves with it."""
+names it moves with it. The README and docs/performance.md stay short enough to read."""
 from __future__ import annotations
 
 import re
@@ -67,3 +67,14 @@ def test_the_architecture_map_lists_the_import_layers_in_order():
     rows = [line.split(" | ")[0].lstrip("| ") for line in table[2:]]
     groups = [tuple(folder_group(c) for c in re.findall(r"`[^`]+`", row)) for row in rows]
     assert groups == [tuple(row) for row in LAYERS]
+
+
+def test_the_readme_and_the_performance_page_stay_short():
+    # Details go to docs/*.md (docs/commands.md for what each command writes); the format
+    # and algorithm references may be as long as they need.
+    readme = (ROOT / "README.md").read_text()
+    assert len(readme.splitlines()) <= 200
+    assert len((ROOT / "docs" / "performance.md").read_text().splitlines()) <= 250
+    setup = readme.split("## Set-up on a fresh machine", 1)[1].split("\n## ", 1)[0]
+    assert [line.strip() for line in setup.splitlines() if line.startswith("    ")] == [
+        "bash scripts/demo.sh", "bash scripts/test.sh"]

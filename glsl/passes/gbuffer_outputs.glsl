@@ -3,7 +3,7 @@
 // VISIBILITY = colour, depth and id (reference sub-frames that record visibility), COLOR =
 // colour only (plain reference sub-frames), HYBRID = the hybrid mode's: colour, normal and
 // the packed front layer (D, depth, id) that every hybrid pass reads, one fetch for all
-// three (every target written costs per fragment on llvmpipe: docs/performance.md);
+// three (every target written costs per fragment on llvmpipe: docs/architecture.md);
 // FRONT = colour and the packed front layer (the hybrid mode's without the poster's edge
 // test, which alone reads the normal target; and the static objects' layer that the
 // hybrid reveal copies where a ray's first hit is static: viewer/render/modes/hybrid/reveal.py);

@@ -69,7 +69,7 @@ def path_times(t_open: float, t_close: float, segments: int) -> list[float]:
 
 
 # Target sets by GBUFFER_LAYOUT (glsl/passes/gbuffer_outputs.glsl), in attachment order. Each
-# mode writes only what it reads (every target costs per fragment: docs/performance.md).
+# mode writes only what it reads (every target costs per fragment: docs/architecture.md).
 LAYOUTS = {
     "full": (0, ("color", "depth", "normal", "id", "velocity")),
     "visibility": (1, ("color", "depth", "id")),
