@@ -145,11 +145,8 @@ def _box(tiles: np.ndarray, tile: int, size) -> tuple[int, int, int, int]:
 def kept_tile_list(frame: Frame, name: str) -> TileList:
     """A TileList kept across frames under `name` (its vertex buffer reused), made the
     first time (e.g. clear_outside's "zero_tiles")."""
-    slot = KeptSlot(name, TileList)
-    tl = frame.kept.get(slot)
-    if tl is None or tl.ctx is not frame.ctx:
-        tl = frame.kept.put(slot, TileList(frame.ctx))
-    return tl
+    return frame.kept.get_or_make(KeptSlot(name, TileList), lambda: TileList(frame.ctx),
+                                  lambda tl: tl.ctx is frame.ctx)
 
 
 def within_reach(sources: np.ndarray, reach, tile: int) -> np.ndarray:

@@ -302,10 +302,8 @@ REVEAL_BATCH = HostResource("reveal_batch", dict, "the primary rays, for hmblur 
 
 
 def reveal_state(frame: Frame) -> RevealState:
-    rs = frame.kept.get(KEPT_REVEAL)
-    if rs is None or rs.scene is not frame.scene or rs.ctx is not frame.ctx:
-        rs = frame.kept.put(KEPT_REVEAL, RevealState(frame.ctx, frame.scene))
-    return rs
+    return frame.kept.get_or_make(KEPT_REVEAL, lambda: RevealState(frame.ctx, frame.scene),
+                                  lambda rs: rs.scene is frame.scene and rs.ctx is frame.ctx)
 
 
 def read_masked_pixels(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
