@@ -171,6 +171,17 @@ def test_an_error_after_a_progress_bar_starts_on_its_own_line():
     Progress("reference", done)(0, 1)           # finished: its line is closed
     end_line()
     assert done.getvalue().count("\n") == 1
+    # The sweep's line follows the same rule: open while cells are left, closed at the end.
+    from viewer.sweep.run import Bar
+    sweep = Tty()
+    cells = Bar(2, 0, sweep)
+    cells.update(False)
+    assert sweep.getvalue().startswith("\rsweep: 1/2 cells done") and "\n" not in sweep.getvalue()
+    end_line()
+    assert sweep.getvalue().endswith("\n")
+    cells.update(True)
+    end_line()
+    assert sweep.getvalue().count("\n") == 2 and "1 failed, 0 left" in sweep.getvalue()
 
 
 def test_unwritable_output_folder(tmp_path, capsys, monkeypatch):
@@ -606,7 +617,7 @@ def test_buffers_readme_describes_every_file(tmp_path):
         readme = (d / mode / "README.txt").read_text()
         for npy in sorted((d / mode).glob("*.npy")):
             a = np.load(npy)
-            assert describe(npy.stem), f"{npy.stem} is not in viewer/buffer_docs.BUFFERS"
+            assert describe(npy.stem), f"{npy.stem} is not in viewer.io.buffer_docs.BUFFERS"
             entry = readme.split(f"\n{npy.name}  ", 1)[1].split("\n", 3)
             assert entry[0] == f"{a.dtype}  {'x'.join(map(str, a.shape))}"
             assert entry[1].strip() == describe(npy.stem)

@@ -573,7 +573,7 @@ class _Loader:
     # -- files
 
     def file(self, rel: str, key: str, what: str) -> Path:
-        """world/assets.asset_file's rule: inside the scene's folder, a regular file,
+        """world.assets.asset_file's rule: inside the scene's folder, a regular file,
         within the size limit of its kind."""
         cap = limits.MAX_IMAGE_BYTES if what == "image" else limits.MAX_MESH_BYTES
         return asset_file(self.path, rel, key, what, cap)

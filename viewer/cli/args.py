@@ -356,10 +356,20 @@ def sidecar_animations(value, source: str) -> dict:
 DEFAULT_MODE = "hybrid"
 
 
-def pick_mode(flag: str | None, sidecar: dict | None) -> str:
-    """--mode, else the --params file's mode, else DEFAULT_MODE (checked by the caller)."""
+def add_mode_arg(p, modes):
+    """--mode, for a command that renders one of `modes` (shot, view)."""
+    p.add_argument("--mode", default=None,
+                   help=f"one of: {', '.join(modes)} (default: {DEFAULT_MODE}, or the "
+                        "--params file's)")
+
+
+def pick_mode(flag: str | None, sidecar: dict | None, modes) -> str:
+    """--mode, else the --params file's mode, else DEFAULT_MODE: one of `modes`."""
     mode = flag if flag is not None else (sidecar or {}).get("mode")
-    return str(mode) if mode is not None else DEFAULT_MODE
+    mode = str(mode) if mode is not None else DEFAULT_MODE
+    if mode not in modes:
+        raise UserError(f"--mode {mode}: expected one of {', '.join(modes)}")
+    return mode
 
 
 def parse_modes(flag: str, text: str, available: list[str]) -> list[str]:

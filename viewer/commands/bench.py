@@ -120,7 +120,7 @@ def time_modes(r: Renderer, modes: list[str], s, frames: int, warmup: int, progr
                 batch = res.host.get(REVEAL_BATCH)
                 res.stats["embree_rays_per_s"] = bare_embree_rays_per_s(batch, repeats=1)
                 # The static part into the whole static scene: rays of a static own
-                # object stop at it (the ceiling as measured up to session 10).
+                # object stop at it (a cheaper query than the reveal's own).
                 res.stats["embree_front_rays_per_s"] = bare_embree_rays_per_s(
                     batch, repeats=1, front=True)
             stats[mode].append(res.stats)

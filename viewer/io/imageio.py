@@ -228,9 +228,3 @@ def write_json_atomic(path, obj: Any) -> Path:
     """Write `obj` as JSON (sorted keys, indent 2, trailing newline) via `json_safe`."""
     data = _json_bytes(obj)      # encoded first: a serialisation error must not touch disk
     return _atomic_write(path, lambda f: f.write(data))
-
-
-def write_npy_atomic(path, array) -> Path:
-    """Write one array in .npy format (no pickles), atomically."""
-    a = np.asarray(array)
-    return _atomic_write(path, lambda f: np.save(f, a, allow_pickle=False))

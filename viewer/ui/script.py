@@ -244,7 +244,3 @@ class Timeline:
 
     def due(self, frame: int) -> list:
         return self._due.pop(frame, [])
-
-    @property
-    def last_frame(self) -> int:
-        return max(self._due, default=-1)
