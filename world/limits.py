@@ -46,6 +46,8 @@ MAX_GLTF_JSON_DEPTH = 64
 # `--params FILE.json`: a sidecar is a few kB; JSON nesting and integers beyond these are
 # not a sidecar's.
 MAX_PARAMS_BYTES = 4 << 20
+# A user's blur pass (a GLSL or Python file, viewer/render/modes/user/): one source file.
+MAX_METHOD_BYTES = 1 << 20
 # Frames of a video, a bench or a viewer run, and a video's rate.
 MAX_FRAMES = 100_000
 MIN_FPS, MAX_FPS = 1e-3, 1e3

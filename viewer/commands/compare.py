@@ -37,7 +37,9 @@ def register(sub):
                    help=f"comma-separated real-time modes (default: every one of {', '.join(REALTIME)} that exists)")
     p.add_argument("--variant", action="append", default=[], metavar="NAME=MODE[:G.F=V,...]",
                    help="a mode under a name with its own parameters, e.g. "
-                        "fast=hybrid:hybrid.curve_steps=1 (repeatable; shown beside --modes, "
+                        "fast=hybrid:hybrid.curve_steps=1, or a blur pass of your own: "
+                        "NAME=glsl:PATH.frag, NAME=py:PATH.py:FUNCTION (docs/api.md; a "
+                        "method file is code that runs) (repeatable; shown beside --modes, "
                         "which then defaults to none; the same mode may appear many times)")
     p.add_argument("--inset", type=str, default=None, metavar="WxH",
                    help="inset size in pixels (default: a quarter of the image height, square)")
@@ -68,13 +70,14 @@ def choose_variants(args) -> list[Variant]:
 
 def label(v: Variant) -> str:
     """A column's label: the mode's own words when the variant is the bare mode."""
-    return LABELS[v.mode] if v.name == v.mode and not v.sets else v.name
+    return LABELS[v.mode] if v.name == v.mode and not v.sets and v.method is None else v.name
 
 
 def run(args) -> int:
     s = cliargs.setup(args)
     variants = choose_variants(args)
-    cliargs.check_set_groups(args.set, [v.mode for v in variants] + ["reference"], MODE_GROUPS)
+    cliargs.check_set_groups(args.set, [v.runs_as for v in variants] + ["reference"],
+                             {**MODE_GROUPS, **{v.runs_as: v.groups for v in variants}})
     out = cliargs.check_output_dir(args.out, "--out")
     w, h = s.size
     inset = cliargs.parse_size(args.inset, "--inset") if args.inset else (max(8, h // 4),) * 2
@@ -103,9 +106,9 @@ def run(args) -> int:
     for v in variants:                   # each image with the sidecar that remakes it
         vs = replace(s, params=c.params[v.name])
         side = sidecar(vs, v.mode, c.results[v.name], ctx, args.scene, first_frame=True,
-                       ms=c.ms[v.name])
-        if v.name != v.mode or v.sets:
-            side["variant"] = {"name": v.name, "set": v.sets}
+                       ms=c.ms[v.name], groups=v.groups)
+        if v.name != v.mode or v.sets or v.method is not None:
+            side["variant"] = {"name": v.name, **variant_doc(v)}
         files.png(out / f"{v.name}.png", linear_to_srgb8(c.results[v.name].image))
         files.json(out / f"{v.name}.json", side)
     files.png(out / "reference.png", linear_to_srgb8(ref.image))
@@ -120,10 +123,8 @@ def run(args) -> int:
     header = (f"# {s.scene.name}: {w}x{h}, t = {s.time:g} s, shutter {s.scene.camera.shutter:g} s, "
               + (f"motion.steps={steps} (the blurring modes), " if steps > 1 else "")
               + f"reference {s.params['reference'].samples} sub-frames\n\nSpace: {SPACE}.\n\n"
-              + "".join(f"- {v.name}: {v.mode}"
-                        + (", " + ", ".join(f"{k}={val}" for k, val in v.sets.items()) if v.sets else "")
-                        + "\n" for v in variants if v.name != v.mode or v.sets)
-              + ("\n" if any(v.name != v.mode or v.sets for v in variants) else "")
+              + "".join(f"- {v.name}: {v.describe()}\n" for v in variants if named(v))
+              + ("\n" if any(named(v) for v in variants) else "")
               + "Regions (regions.png), from the reference's own visibility at each of its "
               "sub-frames:\n\n" + "".join(f"- {d}\n" for d in DEFINITIONS.values()) + "\n")
     text = (header + md).encode("utf-8")
@@ -132,7 +133,7 @@ def run(args) -> int:
         **cliargs.scene_source(args.scene), "scene_name": s.scene.name, "size": [w, h],
         "time": s.time, "shutter": s.scene.camera.shutter,
         "seed": s.seed, "device": device_name(ctx), "params": s.params.to_dict(),
-        "variants": {v.name: {"mode": v.mode, "set": v.sets} for v in variants},
+        "variants": {v.name: variant_doc(v) for v in variants},
         "regions": region_counts(c.region), "region_definitions": DEFINITIONS,
         "inset": list(box), "metrics": table, "space": SPACE,
         "ms": c.ms, "ms_note": FIRST_FRAME_NOTE, "stats": {**{n: c.results[n].stats for n in names},
@@ -144,6 +145,22 @@ def run(args) -> int:
           f"{len(variants) + 1} images (first-frame times include shader compiles and set-up; "
           "'hmblur bench' times warm frames)")
     return 0
+
+
+def named(v: Variant) -> bool:
+    """Whether the variant is more than a bare mode under its own name."""
+    return v.name != v.mode or bool(v.sets) or v.method is not None
+
+
+def variant_doc(v: Variant) -> dict:
+    """A variant in metrics.json and its image's sidecar: its mode (a user pass: its kind,
+    file, function and the sha256 of what ran) and assignments."""
+    doc = {"mode": v.mode, "set": v.sets}
+    if v.method is not None:
+        m = v.method
+        doc["method"] = {"spec": m.spec, "path": str(m.path) if m.path else None,
+                         "function": m.function or None, "sha256": m.digest}
+    return doc
 
 
 def fmt(v) -> str:

@@ -15,6 +15,8 @@ from .metrics import metric_maps, region_metrics
 from viewer.render.graph.params import ParamSet
 from viewer.render.modes import MODE_GROUPS
 from viewer.render.modes.reference import REGIONS
+from viewer.render.modes.user import USER_GROUPS, UserPass, parse_method
+from viewer.render.modes.user.method import KINDS
 from viewer.render.renderer import Renderer, RenderResult
 
 REALTIME = ("off", "mcguire", "ue4", "guertin", "hybrid")
@@ -25,11 +27,28 @@ NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.+-]*")
 
 @dataclass
 class Variant:
-    """A real-time mode under a name, with parameter assignments on top of the common ones
-    ("group.field" -> value as text or a value)."""
+    """A real-time mode or a user's blur pass under a name, with parameter assignments on
+    top of the common ones ("group.field" -> value as text or a value). For a user pass,
+    `mode` is its kind ("glsl", "py") and `method` the pass (viewer/render/modes/user/)."""
     name: str
     mode: str
     sets: dict = field(default_factory=dict)
+    method: UserPass | None = None
+
+    @property
+    def groups(self) -> tuple[str, ...]:
+        """The parameter groups the variant reads."""
+        return USER_GROUPS if self.method is not None else MODE_GROUPS.get(self.mode, ())
+
+    @property
+    def runs_as(self) -> str:
+        """What the renderer renders: the mode, or the name the user pass is registered as."""
+        return self.name if self.method is not None else self.mode
+
+    def describe(self) -> str:
+        """`mode` or the user pass's spec, and the assignments (tables' notes)."""
+        what = self.method.spec if self.method is not None else self.mode
+        return what + "".join(f", {k}={val}" for k, val in self.sets.items())
 
     def params(self, base: ParamSet, label: str) -> ParamSet:
         """`base` with this variant's assignments applied (a copy; `base` is untouched)."""
@@ -49,26 +68,37 @@ def check_variant(v: Variant, label: str, available=REALTIME, values: bool = Tru
     if v.name in RESERVED:
         raise UserError(f"{label}: variant name {v.name!r} is taken by compare's own "
                         f"outputs ({', '.join(RESERVED)})")
-    if v.mode not in available:
-        raise UserError(f"{label}: mode {v.mode!r} is not one of {', '.join(available)}")
+    if v.method is not None and v.name in MODE_GROUPS:
+        raise UserError(f"{label}: variant name {v.name!r} is a built-in mode's; a user "
+                        "pass takes a name of its own")
+    if v.method is None and v.mode not in available:
+        raise UserError(f"{label}: mode {v.mode!r} is not one of {', '.join(available)} "
+                        "(or a user pass: glsl:PATH, py:PATH:FUNCTION)")
     for key in v.sets:
         group = key.partition(".")[0]
-        if group not in MODE_GROUPS.get(v.mode, ()):
+        if group not in v.groups:
             readers = [m for m, gs in MODE_GROUPS.items() if group in gs]
-            raise UserError(f"{label}: {key}: mode {v.mode} does not use the {group} "
+            what = f"user pass {v.mode}" if v.method is not None else f"mode {v.mode}"
+            raise UserError(f"{label}: {key}: {what} does not use the {group} "
                             f"parameters (used by {', '.join(readers) or 'no mode'})")
     if values:                           # every value's type and range, before any render
         v.params(ParamSet(), label)
 
 
 def parse_variant(text: str, available=REALTIME) -> Variant:
-    """`NAME=MODE[:group.field=value,...]` (the --variant flag)."""
+    """`NAME=MODE[:group.field=value,...]`, `NAME=glsl:PATH` or `NAME=py:PATH:FUNCTION`
+    (the --variant flag; a user pass's file is read and checked now)."""
     label = f"--variant {text}"
     name, eq, rest = text.partition("=")
     mode, _, sets_text = rest.partition(":")
     if not eq or not name.strip() or not mode.strip():
         raise UserError(f"{label}: expected NAME=MODE[:group.field=value,...], e.g. "
-                        "fast=hybrid:hybrid.curve_steps=1")
+                        "fast=hybrid:hybrid.curve_steps=1, or NAME=glsl:PATH, "
+                        "NAME=py:PATH:FUNCTION (a user pass)")
+    if mode.strip() in KINDS:
+        v = Variant(name.strip(), mode.strip(), {}, parse_method(rest.strip(), label=label))
+        check_variant(v, label, available)
+        return v
     sets = {}
     for item in filter(None, (s.strip() for s in sets_text.split(","))):
         key, eq, value = item.partition("=")
@@ -97,7 +127,11 @@ def compare_frame(r: Renderer, t: float, base: ParamSet, variants: list[Variant]
                   progress=None, log=None) -> Comparison:
     """The reference at `t` with `base` parameters, then every variant on the same
     renderer, each measured against the reference per region. `log(variant, line)` is
-    told each variant's headline numbers."""
+    told each variant's headline numbers. User passes are registered with the renderer
+    first (a shader that does not compile stops here, before the reference)."""
+    for v in variants:
+        if v.method is not None:
+            r.add_method(v.name, v.method)
     t0 = time.perf_counter()
     ref = r.render("reference", t, base, seed=seed, record_visibility=True, progress=progress)
     ms = {"reference": (time.perf_counter() - t0) * 1e3}
@@ -106,7 +140,7 @@ def compare_frame(r: Renderer, t: float, base: ParamSet, variants: list[Variant]
     for v in variants:
         params = v.params(base, f"variant {v.name}")
         t0 = time.perf_counter()
-        res = r.render(v.mode, t, params, seed=seed)
+        res = r.render(v.runs_as, t, params, seed=seed)
         ms[v.name] = (time.perf_counter() - t0) * 1e3
         maps = metric_maps(res.image, ref.image)
         out.params[v.name], out.results[v.name] = params, res

@@ -42,9 +42,11 @@ def scene_for_sidecar(arg: str) -> str:
 
 
 def sidecar(s: cliargs.Setup, mode: str, result, ctx, scene_arg: str,
-            first_frame: bool = False, ms: float | None = None) -> dict:
+            first_frame: bool = False, ms: float | None = None,
+            groups: tuple[str, ...] | None = None) -> dict:
     """The JSON beside an image. `first_frame`: the stats are a fresh renderer's first
-    frame (set-up costs included), said so in "timing"; `ms`: the render's wall time."""
+    frame (set-up costs included), said so in "timing"; `ms`: the render's wall time;
+    `groups`: the parameter groups written (default: the mode's; a user pass's own)."""
     timing = {"first_frame": first_frame}
     if first_frame:
         timing["note"] = FIRST_FRAME_NOTE
@@ -58,7 +60,7 @@ def sidecar(s: cliargs.Setup, mode: str, result, ctx, scene_arg: str,
         "time": s.time,
         "size": list(s.size),
         "seed": s.seed,
-        "params": s.params.to_dict(MODE_GROUPS.get(mode, ())),
+        "params": s.params.to_dict(MODE_GROUPS.get(mode, ()) if groups is None else groups),
         "camera": camera_dict(s.scene.camera),
         "device": device_name(ctx),
         "stats": result.stats,

@@ -20,7 +20,9 @@ from viewer.render.graph.frame import Frame, PassTimer
 from viewer.render.graph.gpu_scene import GpuScene
 from viewer.render.graph.host import HostResources
 from viewer.render.graph.kept import KeptState
-from .modes import MODES
+from .modes import MODE_GROUPS, MODES
+from .modes.user import USER_GROUPS, UserPass, user_pipeline
+from .modes.user.pipeline import compile_glsl
 from viewer.render.graph.registry import mode_config
 from viewer.render.graph.pool import ResourcePool
 from viewer.render.steps import SUM, MakeFrame, Measure, run_steps, step_count, sub_exposures
@@ -46,6 +48,7 @@ class Renderer:
         self.pool.resize((w, h))
         self.camera = Camera(scene.camera, w, h)     # resize() makes it again
         self._pipelines: dict = {}
+        self.methods: dict[str, UserPass] = {}   # user blur passes, by the name they run as
         self.kept = KeptState()          # state kept across frames (e.g. the ray tracer)
         self.made: list[str] = []        # the textures the last frame made, in order
 
@@ -65,11 +68,33 @@ class Renderer:
     def size(self) -> tuple[int, int]:
         return self.pool.size
 
+    def add_method(self, name: str, method: UserPass):
+        """Register a user's blur pass to render as `name` (viewer/render/modes/user/),
+        beside the modes; a shader is compiled now, so that a mistake in it stops the
+        caller before any frame. A name may be registered again (the latest method runs)."""
+        if name in MODES:
+            raise UserError(f"method {name} ({method.spec}): {name} is a built-in mode; "
+                            "give the method another name")
+        if method.kind == "glsl":
+            compile_glsl(self.programs, method, name)
+        self.methods[name] = method
+
+    def groups(self, mode: str) -> tuple[str, ...]:
+        """The parameter groups `mode` (or a user pass registered under that name) reads."""
+        return USER_GROUPS if mode in self.methods else MODE_GROUPS.get(mode, ())
+
     def pipeline(self, mode: str, params: ParamSet | None = None):
         """`mode`'s pipeline for its configuration under `params` (None: the defaults),
-        built once per (mode, configuration) (viewer/render/graph/registry.py)."""
+        built once per (mode, configuration) (viewer/render/graph/registry.py); a user
+        pass's once per (name, method)."""
+        if mode in self.methods:
+            key = (mode, self.methods[mode])
+            if key not in self._pipelines:
+                self._pipelines[key] = user_pipeline(mode, self.methods[mode])
+            return self._pipelines[key]
         if mode not in MODES:
-            raise UserError(f"--mode {mode}: expected one of {', '.join(MODES)}")
+            known = [*MODES, *self.methods]
+            raise UserError(f"--mode {mode}: expected one of {', '.join(known)}")
         key = (mode, mode_config(mode, params))
         if key not in self._pipelines:
             self._pipelines[key] = MODES[mode](key[1])
@@ -98,7 +123,7 @@ class Renderer:
             bend["ms"] = (time.perf_counter() - t0) * 1e3
             bend["cpu_ms"] = (time.thread_time() - c0) * 1e3
             return bend["px"]
-        n = step_count(mode, params, shutter, measure_bend)
+        n = step_count(mode, params, shutter, measure_bend, self.groups(mode))
         pose = self._pose(float(t), shutter, n) if self.scene.assets else None
         pipeline = self.pipeline(mode, params)
         self.pool.begin()

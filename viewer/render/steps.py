@@ -80,14 +80,18 @@ def curve_steps(bend_px: float, curve_px: float, most: int) -> int:
 
 
 def step_count(mode: str, params: ParamSet, shutter: float,
-               bend: Callable[[], float] = lambda: 0.0) -> int:
+               bend: Callable[[], float] = lambda: 0.0,
+               groups: tuple[str, ...] | None = None) -> int:
     """How many sub-frames `mode` renders under `params` for an exposure of `shutter`:
     motion.steps, or the mode's curve_steps where the motion bends, whichever is more.
-    `bend()` is the frame's screen_bend (px), asked for only where it can matter."""
-    if GROUP not in MODE_GROUPS.get(mode, ()) or shutter == 0:
+    `bend()` is the frame's screen_bend (px), asked for only where it can matter;
+    `groups`: the mode's parameter groups (default: the registry's; a user pass's are the
+    renderer's)."""
+    groups = MODE_GROUPS.get(mode, ()) if groups is None else groups
+    if GROUP not in groups or shutter == 0:
         return 1
     n = int(params[GROUP].steps)
-    most = int(getattr(params[mode], "curve_steps", 1)) if mode in MODE_GROUPS[mode] else 1
+    most = int(getattr(params[mode], "curve_steps", 1)) if mode in groups else 1
     if most > n:
         n = max(n, curve_steps(bend(), float(params[GROUP].curve_px), most))
     return n

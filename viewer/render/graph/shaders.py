@@ -1,6 +1,9 @@
 """A small GLSL preprocessor and program cache.
 
 - `#include "file.glsl"` pastes a file from glsl/ once per program (include-once).
+- A program's fragment may also come as text of the caller's (a user's blur pass, read from
+  a file outside glsl/: viewer/render/modes/user/): its errors then name that file, and its
+  `#include`s still read the library files of glsl/ (e.g. graph/noise.glsl).
 - Defines are inserted right after `#version`, from Python values (never written twice).
 - `#line` markers give every file its own line range: file k's line n is reported as
   k * LINE_BASE + n. Mesa prints source-string 0 whatever `#line` says, so the line number
@@ -46,7 +49,10 @@ def _format_define(value) -> str:
     return str(value)
 
 
-def preprocess(name: str, defines: dict | None = None, root: Path = GLSL_DIR) -> Source:
+def preprocess(name: str, defines: dict | None = None, root: Path = GLSL_DIR,
+               text: str | None = None) -> Source:
+    """`name` from `root` with its includes; `text`: the top file's own text instead of
+    root/name (`name` then only labels it, e.g. a user's path)."""
     src = Source("")
     out: list[str] = []
     seen: set[str] = set()
@@ -56,11 +62,14 @@ def preprocess(name: str, defines: dict | None = None, root: Path = GLSL_DIR) ->
             return
         seen.add(fname)
         path = root / fname
-        if not path.is_file():
+        if top and text is not None:
+            lines = text.splitlines()
+        elif path.is_file():
+            lines = path.read_text().splitlines()
+        else:
             raise ShaderError(f"{fname}: no such shader file in {root}")
         src.files.append(fname)
         k = len(src.files)
-        lines = path.read_text().splitlines()
         if not top:
             out.append(f"#line {k * LINE_BASE + 1} {k}")
         for n, line in enumerate(lines, start=1):
@@ -95,9 +104,12 @@ def _rewrite_errors(message: str, sources: list[Source]) -> str:
 
 
 def build_program(ctx: moderngl.Context, vertex: str, fragment: str,
-                  defines: dict | None = None, root: Path = GLSL_DIR) -> moderngl.Program:
-    """Compile vertex + fragment files from glsl/ with the defines; errors name file:line."""
-    vs, fs = preprocess(vertex, defines, root), preprocess(fragment, defines, root)
+                  defines: dict | None = None, root: Path = GLSL_DIR,
+                  fragment_text: str | None = None) -> moderngl.Program:
+    """Compile vertex + fragment files from glsl/ with the defines; errors name file:line.
+    `fragment_text`: the fragment's own text, labelled `fragment` (preprocess)."""
+    vs = preprocess(vertex, defines, root)
+    fs = preprocess(fragment, defines, root, fragment_text)
     try:
         return ctx.program(vertex_shader=vs.text, fragment_shader=fs.text)
     except moderngl.Error as exc:
@@ -114,10 +126,13 @@ class ProgramCache:
         self._programs: dict = {}
         self._empty: dict = {}
 
-    def get(self, vertex: str, fragment: str, defines: dict | None = None) -> moderngl.Program:
-        key = (vertex, fragment, tuple(sorted((defines or {}).items())))
+    def get(self, vertex: str, fragment: str, defines: dict | None = None,
+            fragment_text: str | None = None) -> moderngl.Program:
+        """`fragment_text`: the fragment's text, labelled `fragment` (build_program)."""
+        key = (vertex, fragment, tuple(sorted((defines or {}).items())), fragment_text)
         if key not in self._programs:
-            self._programs[key] = build_program(self.ctx, vertex, fragment, defines)
+            self._programs[key] = build_program(self.ctx, vertex, fragment, defines,
+                                                fragment_text=fragment_text)
         return self._programs[key]
 
     def empty_vao(self, prog: moderngl.Program) -> moderngl.VertexArray:
