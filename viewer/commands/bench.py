@@ -13,6 +13,7 @@ import numpy as np
 
 from world import limits
 from viewer.cli import args as cliargs
+from viewer.eval.comparison import parse_variant
 from viewer.glcontext import create_headless, device_name
 from viewer.io.imageio import write_json_atomic
 from viewer.io.progress import Progress
@@ -40,6 +41,10 @@ def register(sub):
     p.add_argument("--modes", default=None, metavar="M1,M2",
                    help=f"comma-separated subset of the real-time modes (default: all of "
                         f"{', '.join(REALTIME)})")
+    p.add_argument("--variant", action="append", default=[], metavar="NAME=MODE[:G.F=V,...]",
+                   help="also time a mode under a name with its own parameters, or a blur "
+                        "pass of your own: NAME=glsl:PATH.frag, NAME=py:PATH.py:FUNCTION "
+                        "(as compare's --variant; repeatable; --modes then defaults to none)")
     p.add_argument("--json", default=None, metavar="PATH", help="write the results as JSON")
     p.add_argument("--animate", default=None, metavar="FPS",
                    help="time an animation: frame k at the scene time + k / FPS (each after "
@@ -74,7 +79,8 @@ def summary(values) -> dict:
 
 
 def time_modes(r: Renderer, modes: list[str], s, frames: int, warmup: int, progress,
-               fps: float | None = None, clock: PassClock | None = None) -> dict:
+               fps: float | None = None, clock: PassClock | None = None,
+               variants: dict | None = None) -> dict:
     """Every mode timed round-robin, frame by frame, so that a slow spell of a shared
     machine falls on all of them alike and the ratios compare like with like. Each timed
     frame follows an untimed frame of the same mode, as in a real-time loop: the caches
@@ -82,13 +88,17 @@ def time_modes(r: Renderer, modes: list[str], s, frames: int, warmup: int, progr
     bare-Embree timing) left behind, which favoured whichever mode followed a light one.
     With `fps`, frame k is at the scene time + k / fps and follows the frame before it,
     (k - 1) / fps; otherwise every frame is at the scene time. `clock` times the passes
-    (default: the CPU clock with ctx.finish() around each)."""
+    (default: the CPU clock with ctx.finish() around each). `modes`: the names timed;
+    `variants`: name -> (what the renderer renders: a mode or a user pass registered by
+    name, its parameters) for a variant, else the mode itself under s.params."""
     ctx = r.ctx
+    plan = {m: (variants or {}).get(m, (m, s.params)) for m in modes}
     clock = clock or PassClock(ctx, "cpu")
     dt = 1.0 / fps if fps else 0.0
     for mode in modes:
+        what, params = plan[mode]
         for _ in range(warmup):
-            r.render(mode, s.time, s.params, seed=s.seed, read_image=False)
+            r.render(what, s.time, params, seed=s.seed, read_image=False)
     frame_ms = {m: [] for m in modes}
     frame_cpu = {m: [] for m in modes}
     passes = {m: {} for m in modes}
@@ -97,18 +107,19 @@ def time_modes(r: Renderer, modes: list[str], s, frames: int, warmup: int, progr
     for k in range(frames):
         t = s.time + (k + 1) * dt
         for mode in modes:
-            r.render(mode, t - dt, s.params, seed=s.seed, read_image=False)
+            what, params = plan[mode]
+            r.render(what, t - dt, params, seed=s.seed, read_image=False)
             # Frame time: one finish() at the end only, so passes overlap as they would.
             ctx.finish()
             t0, c0 = time.perf_counter(), time.thread_time()
-            r.render(mode, t, s.params, seed=s.seed, read_image=False)
+            r.render(what, t, params, seed=s.seed, read_image=False)
             c1 = time.thread_time()
             ctx.finish()
             frame_ms[mode].append((time.perf_counter() - t0) * 1e3)
             # The main thread's CPU time in the frame (host work, not the waits for GL).
             frame_cpu[mode].append((c1 - c0) * 1e3)
             # Pass times: the next frame, each pass timed by `clock`.
-            res = clock.render(r, mode, t + dt, s.params, s.seed)
+            res = clock.render(r, what, t + dt, params, s.seed)
             for name, ms in res.pass_ms.items():
                 passes[mode].setdefault(name, []).append(ms)
             for name, ms in res.pass_cpu_ms.items():
@@ -221,9 +232,19 @@ def run(args) -> int:
     frames = cliargs.parse_int("--frames", args.frames, 1, limits.MAX_FRAMES)
     warmup = cliargs.parse_int("--warmup", args.warmup, 0, limits.MAX_FRAMES)
     available = [m for m in REALTIME if m in MODES]
-    modes = available if args.modes is None else cliargs.parse_modes("--modes", args.modes,
-                                                                     available)
-    cliargs.check_set_groups(args.set, modes, MODE_GROUPS)
+    if args.modes is None:
+        modes = [] if args.variant else available
+    else:
+        modes = cliargs.parse_modes("--modes", args.modes, available)
+    variants = []
+    for text in args.variant:
+        v = parse_variant(text, available)
+        if v.name in modes or any(v.name == u.name for u in variants):
+            raise cliargs.UserError(f"--variant {text}: the name {v.name!r} is already timed "
+                                    "(by --modes or an earlier --variant); give it another")
+        variants.append(v)
+    groups = {**MODE_GROUPS, **{v.name: v.groups for v in variants}}
+    cliargs.check_set_groups(args.set, modes + [v.name for v in variants], groups)
     speeds = None
     if args.speeds:
         if "hybrid" not in available:
@@ -251,8 +272,13 @@ def run(args) -> int:
         method = "gpu" if gpu_timers_truthful(ctx) else "cpu"
     r = Renderer(ctx, s.scene, s.size)
     try:
-        results = time_modes(r, modes, s, frames, warmup, Progress(f"bench {'/'.join(modes)}"),
-                             fps, PassClock(ctx, method))
+        for v in variants:
+            if v.method is not None:
+                r.add_method(v.name, v.method)
+        names = modes + [v.name for v in variants]
+        own = {v.name: (v.runs_as, v.params(s.params, f"variant {v.name}")) for v in variants}
+        results = time_modes(r, names, s, frames, warmup, Progress(f"bench {'/'.join(names)}"),
+                             fps, PassClock(ctx, method), own)
         reveal = reveal_summary(results)
         table = speed_table(r, s, speeds, max(3, frames // 3)) if speeds else None
     finally:

@@ -9,6 +9,8 @@ from viewer.cli.args import check_set_groups, read_sidecar
 from viewer.render.graph.params import ParamSet
 from viewer.render.modes import MODE_GROUPS, MODES
 from viewer.render.graph.registry import build
+from viewer.render.modes.user import user_pipeline
+from viewer.eval.comparison import parse_variant
 
 
 def register(sub):
@@ -24,6 +26,11 @@ def register(sub):
                         f"else every mode)")
     p.add_argument("--set", action="append", default=[], metavar="GROUP.FIELD=VALUE",
                    help="set a parameter (repeatable; 'hmblur params' lists them)")
+    p.add_argument("--variant", action="append", default=[], metavar="NAME=MODE[:G.F=V,...]",
+                   help="also (without MODE: only) the pipeline of a mode under a name with "
+                        "its own parameters, or of a blur pass of your own: "
+                        "NAME=glsl:PATH.frag, NAME=py:PATH.py:FUNCTION (as compare's "
+                        "--variant; repeatable)")
     p.add_argument("--params", type=str, default=None, metavar="FILE.json",
                    help="JSON sidecar of an earlier output: its parameters (and its mode "
                         "where MODE is left out); --set given beside it wins")
@@ -40,8 +47,14 @@ def run(args) -> int:
             mode = str(side["mode"])
     if mode is not None and mode not in MODES:
         raise UserError(f"graph {mode}: expected one of {', '.join(MODES)}")
-    modes = [mode] if mode else list(MODES)
-    check_set_groups(args.set, modes, MODE_GROUPS)
+    variants = [parse_variant(text, list(MODES)) for text in args.variant]
+    modes = [mode] if mode else ([] if variants else list(MODES))
+    check_set_groups(args.set, modes + [v.name for v in variants],
+                     {**MODE_GROUPS, **{v.name: v.groups for v in variants}})
     params.apply(args.set)
-    print("\n\n".join(build(m, params).describe() for m in modes))
+    graphs = [build(m, params) for m in modes]
+    for v in variants:
+        graphs.append(user_pipeline(v.name, v.method) if v.method is not None
+                      else build(v.mode, v.params(params, f"variant {v.name}")))
+    print("\n\n".join(g.describe() for g in graphs))
     return 0

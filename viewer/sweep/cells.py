@@ -63,13 +63,15 @@ def base_params(task: CellTask) -> ParamSet:
 
 def cell_key(task: CellTask) -> str:
     """sha256 of all a cell's numbers depend on: the scene's files, the cell's values, every
-    variant's resolved parameters (defaults included), the project's version."""
+    variant's resolved parameters (defaults included) and a user pass's file (its
+    digest: the method's bytes travel with the task), the project's version."""
     base = base_params(task)
     doc = {"format": FORMAT, "version": task.version, "scene": task.bundle.digest,
            "time": task.time, "shutter": task.shutter,
            "size": list(task.size) if task.size else None, "seed": task.seed,
            "reference": base.to_dict(MODE_GROUPS["reference"]),
-           "variants": [[v.name, v.mode, v.params(base, v.name).to_dict(MODE_GROUPS[v.mode])]
+           "variants": [[v.name, v.mode, v.params(base, v.name).to_dict(v.groups)]
+                        + ([v.method.digest] if v.method is not None else [])
                         for v in task.variants]}
     text = json.dumps(json_safe(doc), sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:32]

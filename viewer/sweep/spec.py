@@ -19,8 +19,9 @@ from world.errors import UserError
 from world.loader import builtin_scene_names, builtin_scene_path, describe_value
 from viewer.cli.args import MAX_TIME, other_scene, parse_size
 from viewer.eval.comparison import REALTIME, Variant, check_variant
+from viewer.render.modes.user import parse_method
+from viewer.render.modes.user.method import KINDS
 from viewer.render.graph.params import ParamSet
-from ..render.modes import MODE_GROUPS
 
 KEYS = ("scenes", "times", "shutters", "size", "samples", "seed", "set", "variants")
 VARIANT_KEYS = ("mode", "set")
@@ -228,11 +229,16 @@ def load_sweep(path) -> Sweep:
         for key in vt:
             if key not in VARIANT_KEYS:
                 c.fail(f"{k}.{key}", f"unknown key (expected {', '.join(VARIANT_KEYS)})")
+        modes = f"one of {', '.join(REALTIME)}, or a user pass glsl:PATH, py:PATH:FUNCTION"
         if "mode" not in vt:
-            c.fail(f"{k}.mode", f"required: one of {', '.join(REALTIME)}")
+            c.fail(f"{k}.mode", f"required: {modes}")
         mode = vt["mode"]
         if not isinstance(mode, str):
-            c.fail(f"{k}.mode", f"expected one of {', '.join(REALTIME)}, got {describe_value(mode)}")
+            c.fail(f"{k}.mode", f"expected {modes}, got {describe_value(mode)}")
+        method = None
+        if mode.partition(":")[0] in KINDS:     # a user pass, its file beside the sweep file
+            method = parse_method(mode, path.parent, f"{path}: {k}.mode {mode}")
+            mode = method.kind
         sets = vt.get("set", {})
         if not isinstance(sets, dict):
             c.fail(f"{k}.set", f"expected a table {{ \"group.field\" = value or [values] }}, "
@@ -243,18 +249,18 @@ def load_sweep(path) -> Sweep:
                 grid[key] = c.list_of(value, f"{k}.set.{key}", lambda x, _k: x, False)
             else:
                 fixed[key] = value
-        check_variant(Variant(family, mode, dict(sets)), f"{path}: {k}", values=False)
+        check_variant(Variant(family, mode, dict(sets), method), f"{path}: {k}", values=False)
         for values in itertools.product(*grid.values()):
             point = dict(zip(grid, values))
             v = SweepVariant(grid_name(family, point), mode, {**fixed, **point},
-                             family=family, grid=point)
+                             method=method, family=family, grid=point)
             v.params(probe, f"{path}: {k}.set")   # every value checked: type and range
             variants.append(v)
     names = [v.name for v in variants]
     for v in variants:
         if names.count(v.name) > 1:
             c.fail(f"variants.{v.family}", f"makes the name {v.name!r} twice")
-    used = {g for v in variants for g in MODE_GROUPS.get(v.mode, ())} | {"reference"}
+    used = {g for v in variants for g in v.groups} | {"reference"}
     for key in common:
         group = key.partition(".")[0]
         if group not in used:
