@@ -11,7 +11,8 @@ from pathlib import Path
 from test_imports import LAYERS
 
 ROOT = Path(__file__).resolve().parents[1]
-TOP = ("viewer", "world", "raytrace", "glsl", "scenes", "scripts", "tests")
+TOP = ("hybrid_mblur", "viewer", "world", "raytrace", "glsl", "scenes", "scripts", "tests",
+       "docs/examples")
 PATH = re.compile(r"(?<![\w./-])((?:" + "|".join(TOP) + r")/[\w./*-]*)")
 SOURCES = ("*.py", "*.frag", "*.vert", "*.glsl", "*.sh")
 
@@ -44,7 +45,7 @@ def test_every_path_the_docs_name_exists():
 
 def test_every_path_the_code_comments_name_exists():
     found = {}
-    for top in ("viewer", "world", "raytrace", "glsl", "scripts"):
+    for top in ("hybrid_mblur", "viewer", "world", "raytrace", "glsl", "scripts", "docs/examples"):
         for pattern in SOURCES:
             for f in sorted((ROOT / top).rglob(pattern)):
                 for p in missing(paths_in(f.read_text())):

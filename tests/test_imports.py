@@ -6,7 +6,7 @@ import ast
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("world", "raytrace", "viewer", "glsl", "scenes")
+PACKAGES = ("hybrid_mblur", "world", "raytrace", "viewer", "glsl", "scenes")
 
 
 def modules() -> dict[str, Path]:
@@ -117,7 +117,8 @@ def test_every_package_is_scanned():
     names = set(graph())
     for pkg in PACKAGES:
         assert pkg in names, pkg
-    assert {"world.loader", "raytrace.kernels", "viewer.render.modes", "viewer.ui.panel"} <= names
+    assert {"world.loader", "raytrace.kernels", "viewer.render.modes", "viewer.ui.panel",
+            "hybrid_mblur.renderer", "viewer.render.modes.user.method"} <= names
 
 
 def test_no_import_cycles():
@@ -131,6 +132,7 @@ def test_no_import_cycles():
 LAYERS = (
     ("viewer.__main__",),
     ("viewer.commands",),                 # one module per subcommand
+    ("hybrid_mblur",),                    # the Python API, which the commands run on
     ("viewer.sweep",),                    # hmblur sweep on Dask
     ("viewer.eval", "viewer.ui"),         # metrics, strips, plots | the window
     ("viewer.io",),                       # files out: images, sidecars, video, signals
@@ -171,6 +173,9 @@ def test_layer_rule_on_hand_made_pairs():
     assert _upward("world.loader", "raytrace.kernels")
     assert not _upward("viewer.render.modes.mcguire", "viewer.render.passes.tiles")
     assert not _upward("viewer.commands.shot", "world.loader")
+    assert not _upward("viewer.commands.shot", "hybrid_mblur.renderer")
+    assert not _upward("hybrid_mblur.tables", "viewer.sweep.run")
+    assert _upward("viewer.sweep.cells", "hybrid_mblur.methods")
     assert not _upward("viewer.render.modes.hybrid.mask", "viewer.render.modes.hybrid.tile_select")
 
 

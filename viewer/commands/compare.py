@@ -9,12 +9,12 @@ from viewer.cli import args as cliargs
 from viewer.io.sidecar import FIRST_FRAME_NOTE, sidecar
 from viewer.glcontext import create_headless, device_name
 from viewer.io.imageio import OutputSet, linear_to_srgb8
-from viewer.eval.comparison import REALTIME, Variant, compare_frame, parse_variant
+import hybrid_mblur as hm
+from viewer.eval.comparison import REALTIME, Variant, parse_variant
 from viewer.eval.metrics import SPACE
 from viewer.io.progress import Progress
 from viewer.render.modes.regions import DEFINITIONS, region_counts
 from viewer.render.modes import MODE_GROUPS, MODES
-from viewer.render.renderer import Renderer
 from viewer.eval.strip import choose_inset, error_strip, make_strip, metrics_markdown, region_picture
 
 LABELS = {"off": "off (sharp)", "mcguire": "McGuire 2012", "ue4": "UE4-style",
@@ -82,13 +82,11 @@ def run(args) -> int:
     w, h = s.size
     inset = cliargs.parse_size(args.inset, "--inset") if args.inset else (max(8, h // 4),) * 2
     ctx = create_headless()
-    r = Renderer(ctx, s.scene, s.size)
-    try:
-        c = compare_frame(r, s.time, s.params, variants, s.seed,
-                          progress=Progress(f"reference ({s.params['reference'].samples} sub-frames)"),
-                          log=lambda v, line: print(line))
-    finally:
-        r.release()
+    with hm.Renderer(s.size, context=ctx) as r:     # (the context outlives it: sidecars)
+        c = r.compare_frame(s.scene, variants, s.time, s.params, s.seed,
+                            progress=Progress(f"reference ({s.params['reference'].samples} "
+                                              "sub-frames)"),
+                            log=lambda v, line: print(line))
     names = [v.name for v in variants]
     table, ref = c.table, c.reference
 

@@ -6,10 +6,10 @@ from pathlib import Path
 
 from viewer.cli import args as cliargs
 from viewer.glcontext import create_headless
-from viewer.io.imageio import OutputSet, linear_to_srgb8
+import hybrid_mblur as hm
+from viewer.io.imageio import OutputSet
 from viewer.io.sidecar import sidecar
 from viewer.render.modes import MODE_GROUPS, MODES
-from viewer.render.renderer import Renderer
 from viewer.io.buffer_docs import buffers_readme
 from viewer.io.visualize import visualise
 
@@ -44,26 +44,23 @@ def run(args) -> int:
     cliargs.check_output_file(str(side), "--out's sidecar")
     bufdir = cliargs.check_output_dir(args.buffers, "--buffers") if args.buffers is not None else None
     ctx = create_headless()
-    r = Renderer(ctx, s.scene, s.size)
     files = OutputSet()
-    try:
+    with hm.Renderer(s.size, context=ctx) as r:     # (the context outlives it: the sidecar)
         t0 = time.perf_counter()
-        res = r.render(mode, s.time, s.params, seed=s.seed)
+        res = r.render(s.scene, mode, s.time, s.params, s.seed, buffers=bufdir is not None)
         ms = (time.perf_counter() - t0) * 1e3
-        if bufdir is not None:
-            add_buffers(files, r, bufdir, mode)
-        files.png(out, linear_to_srgb8(res.image))
-        files.json(side, sidecar(s, mode, res, ctx, args.scene, first_frame=True, ms=ms))
-    finally:
-        r.release()
+    if bufdir is not None:
+        add_buffers(files, res.buffers, bufdir, mode)
+    files.png(out, res.srgb)
+    files.json(side, sidecar(s, mode, res, ctx, args.scene, first_frame=True, ms=ms))
     files.commit()
     print(f"{out}: {mode} {s.size[0]}x{s.size[1]} t={s.time:g} in {ms:.0f} ms "
           "(first frame: set-up included; 'hmblur bench' times warm frames)")
     return 0
 
 
-def add_buffers(files: OutputSet, r: Renderer, folder: Path, mode: str):
-    bufs = r.buffers()
+def add_buffers(files: OutputSet, bufs: dict, folder: Path, mode: str):
+    """Every texture the frame made (name -> array), as .npy and .png, with README.txt."""
     for name, a in bufs.items():
         files.npy(folder / f"{name}.npy", a)
         files.png(folder / f"{name}.png", visualise(name, a))
