@@ -22,10 +22,10 @@ from .methods import BlurInputs, UserPass, glsl_pass, py_pass
 from .renderer import Renderer, param_set
 from .results import Reference, Render
 from .scenes import Scene, builtin_scenes, load_scene
-from .scores import scores
+from .scores import SPACE, scores
 from .tables import compare, comparison_table, sweep, variants_of
 
-__all__ = ["BlurInputs", "MethodError", "Reference", "Render", "Renderer", "Scene",
+__all__ = ["BlurInputs", "MethodError", "Reference", "Render", "Renderer", "SPACE", "Scene",
            "UserError", "UserPass", "builtin_scenes", "compare", "comparison_table",
            "glsl_pass", "load_scene", "param_set", "py_pass", "scores", "sweep",
            "variants_of"]

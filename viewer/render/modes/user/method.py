@@ -77,13 +77,14 @@ class UserPass:
             return f"{self.kind}:{self.function}"
         return f"{self.kind}:{self.path.name}" + (f":{self.function}" if self.function else "")
 
-    def callable(self) -> Callable:
-        """The Python function (the file run once per process and content)."""
+    def callable(self, where: str = "") -> Callable:
+        """The Python function (the file run once per process and content); `where`
+        names the method in messages (default: its spec)."""
         if self.fn is not None:
             return self.fn
         key = (self.digest, str(self.path))
         if key not in _LOADED:
-            _LOADED[key] = _load_function(self)
+            _LOADED[key] = _load_function(self, where or self.spec)
         return _LOADED[key]
 
 
@@ -160,12 +161,11 @@ def check(m: UserPass, where: str):
             raise UserError(f"{where}: {m.path}:1: expected '{GLSL_VERSION}' as the first "
                             "line (the inputs are GLSL 3.30 samplers: docs/api.md)")
     else:
-        m.callable()
+        m.callable(where)
 
 
-def _load_function(m: UserPass) -> Callable:
+def _load_function(m: UserPass, where: str) -> Callable:
     """Run the file's top level in a module of its own, then find the function."""
-    where = m.spec
     name = str(m.path)
     text = m.text
     try:
