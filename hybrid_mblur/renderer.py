@@ -59,6 +59,7 @@ class Renderer:
         self.methods: dict[str, UserPass] = {}
         self._core: CoreRenderer | None = None
         self._scene: Scene | None = None
+        self._source: str | None = None      # what the kept scene was loaded from, if named
 
     def __enter__(self) -> "Renderer":
         return self
@@ -89,15 +90,19 @@ class Renderer:
     def core(self, scene: Scene | str | PathLike, size: tuple[int, int] | None = None
              ) -> CoreRenderer:
         """The render core for `scene` at `size` (else the renderer's, else the scene's):
-        kept while the same scene object is rendered, made anew for another."""
+        kept while the same scene (object, or file or name) is rendered, made anew for
+        another."""
+        source = None
         if not isinstance(scene, Scene):
-            scene = load_scene(scene)
+            source = str(scene)
+            scene = self._scene if source == self._source else load_scene(source)
         want = size or self.size or (scene.render.width, scene.render.height)
         want = (int(want[0]), int(want[1]))
         if self._core is None or self._scene is not scene:
             self._release_core()
             self.context.__enter__()          # (current again, if another one was made)
             self._core, self._scene = CoreRenderer(self.context, scene, want), scene
+            self._source = source
             for name, m in self.methods.items():
                 self._core.add_method(name, m)
         elif self._core.size != want:
@@ -143,7 +148,7 @@ class Renderer:
     def _release_core(self):
         if self._core is not None:
             self._core.release()
-        self._core = self._scene = None
+        self._core = self._scene = self._source = None
 
     def release(self) -> None:
         """Free the GL resources (and the context, if the renderer made it)."""

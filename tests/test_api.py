@@ -47,6 +47,8 @@ def test_a_renderer_owns_its_context_and_serves_several_scenes():
         again = r.render(a, "mcguire")
         off = r.render(a, "off", buffers=True)
         resized = r.render(a, "off", size=(20, 12))
+        kept = r.core(BASIC)                    # a scene named by its file: loaded once
+        assert r.core(BASIC) is kept and r.core(a) is not kept
     assert r.context is None                    # released with the `with`
     assert np.array_equal(first.image, again.image)
     assert not np.array_equal(first.image, other.image)

@@ -1,4 +1,4 @@
-"""Every attribute an object of viewer/ or raytrace/ holds is made in its class's __init__
+"""Every attribute an object of hybrid_mblur/, viewer/ or raytrace/ holds is made in its class's __init__
 (or declared on the class, or made by a base class's __init__): a reader finds all of an
 object's state in one place, and no method reads an attribute that a call it depends on
 may not have made yet."""
@@ -77,7 +77,8 @@ def late_attributes(classes: list) -> list[str]:
 
 
 def test_attributes_are_made_in_init():
-    paths = [p for d in ("viewer", "raytrace") for p in sorted((ROOT / d).rglob("*.py"))]
+    paths = [p for d in ("hybrid_mblur", "viewer", "raytrace")
+             for p in sorted((ROOT / d).rglob("*.py"))]
     classes = classes_of(paths)
     assert len(classes) > 50                      # the scan found the project's classes
     assert late_attributes(classes) == []

@@ -16,7 +16,9 @@ def test_wheel_contains_code_shaders_and_scenes(tmp_path):
             "raytrace/embree_scene.py", "world/loader.py", "world/scene.py",
             "world/camera.py", "viewer/render/modes/hybrid/pipeline.py", "glsl/passes/gbuffer.frag",
             "glsl/passes/shading.glsl",
-            "glsl/graph/fullscreen.vert", "scenes/living_room.toml", "scenes/assets/painting.png",
+            "glsl/graph/fullscreen.vert", "scenes/living_room.toml",
+            "hybrid_mblur/__init__.py", "hybrid_mblur/renderer.py",
+            "viewer/render/modes/user/pipeline.py", "scenes/assets/painting.png",
             "scenes/assets/quad_uv.obj", "scenes/rover.toml", "scenes/assets/rover.glb"}
     assert need <= names, need - names
     for folder in ("glsl", "scenes"):
