@@ -82,12 +82,16 @@ def curve_steps(bend_px: float, curve_px: float, most: int) -> int:
 def step_count(mode: str, params: ParamSet, shutter: float,
                bend: Callable[[], float] = lambda: 0.0) -> int:
     """How many sub-frames `mode` renders under `params` for an exposure of `shutter`:
-    motion.steps, or the mode's curve_steps where the motion bends, whichever is more.
+    motion.steps, or the mode's curve_steps where the motion bends (unless it follows
+    curves within the frame), whichever is more.
     `bend()` is the frame's screen_bend (px), asked for only where it can matter."""
     if GROUP not in MODE_GROUPS.get(mode, ()) or shutter == 0:
         return 1
     n = int(params[GROUP].steps)
-    most = int(getattr(params[mode], "curve_steps", 1)) if mode in MODE_GROUPS[mode] else 1
+    own = params[mode] if mode in MODE_GROUPS[mode] else None
+    # (a mode that follows curves within the frame, hybrid.curve = inverse, takes none)
+    most = (int(getattr(own, "curve_steps", 1))
+            if own is not None and getattr(own, "curve", "steps") == "steps" else 1)
     if most > n:
         n = max(n, curve_steps(bend(), float(params[GROUP].curve_px), most))
     return n

@@ -1,0 +1,225 @@
+"""Inverse motion: what passes over a pixel at each time of the exposure, along every
+point's true curve, in one frame (docs/algorithms.md 7.1).
+
+For a rigid object O (world matrix M(t)) seen by a camera with view V(t), the point of O
+that covers pixel p at time t_k lies on p's ray at t_k; mapped to the frame time it is
+seen at q = proj(A_k X), A_k = V(t) M(t) M(t_k)^-1 V(t_k)^-1, X the ray's point at O's
+depth. The composite (glsl/modes/hybrid/hybrid_inverse.frag) reads the G-buffer at q and
+accepts O there when the surface it holds maps back onto p (A_k^-1), so a turning body's
+streaks follow arcs. This host pass makes what the shader reads:
+
+  hybrid_motion_table: per object id (a row; row 0 the background), per time of the
+      exposure t_k = t_open + k (t_close - t_open) / K (k = 0..K, K = motion.curve_samples,
+      read with linear interpolation between them): L_k = (V(t_k) M(t_k))^-1, from view
+      space at t_k to the object's own, and its inverse (4 texels each, a column a texel);
+      then, once per object: V(t) M(t) and its inverse, its local bounding box (lo, hi:
+      a ray that misses it at t_k is no candidate, and where it enters is the first depth
+      guess) and its kind: 0 still (every static object shares the camera's map, its box
+      unbounded), 1 rigid mover, 2 skinned mover (no rigid map: the shader walks its
+      displacement instead);
+  hybrid_candidates: per FINE tile, up to MAX_CANDIDATES movers whose screen bounds over
+      the exposure reach it, nearest first (0: none);
+  host inverse_tiles: the tiles where the composite follows motion exactly: in a frame
+      where some mover's (or the camera's) screen paths bend more than motion.curve_px,
+      every tile a mover reaches (every tile where the camera's own motion bends); the
+      others, and every tile of a frame whose motion is straight, keep the linear
+      composite.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from world.path_bend import object_bends, object_points
+from viewer.render.graph.frame import Frame
+from viewer.render.graph.host import HostResource
+from viewer.render.graph.passes import Pass
+from viewer.render.graph.pool import TexSpec
+from viewer.render.passes.tile_runs import FINE
+
+MOTION_TABLE = "hybrid_motion_table"
+CANDIDATES = "hybrid_candidates"
+INVERSE_TILES = HostResource("inverse_tiles", np.ndarray,
+                             "FINE tiles (GL rows) where the composite follows curves")
+MAX_CANDIDATES = 4
+COLS = 8                  # texels per time: L_k (4), L_k^-1 (4)
+TAIL = 11                 # texels per object: V(t) M(t) (4), its inverse (4), lo, hi, kind
+UNBOUNDED = 3.0e38
+KIND_STILL, KIND_RIGID, KIND_SKINNED = 0, 1, 2
+
+
+@dataclass(frozen=True)
+class TableSpec(TexSpec):
+    """A texture of a fixed size, whatever the frame's."""
+    width: int = 1
+    height: int = 1
+
+    def size(self, full: tuple[int, int]) -> tuple[int, int]:
+        return (self.width, self.height)
+
+
+def table_times(t_open: float, t_close: float, intervals: int) -> np.ndarray:
+    """t_k = t_open + k (t_close - t_open) / K, k = 0..K."""
+    return t_open + (t_close - t_open) * np.arange(intervals + 1) / intervals
+
+
+def columns(m: np.ndarray) -> np.ndarray:
+    """Matrices (..., 4, 4) as texels, a column each (GLSL's mat4 from four vec4)."""
+    return np.swapaxes(m, -1, -2)
+
+
+def object_row(view_t: np.ndarray, views: np.ndarray, model_t: np.ndarray,
+               models: np.ndarray, lo, hi, kind: int) -> np.ndarray:
+    """One object's table row: (K + 1) * COLS + TAIL texels (module doc), float64."""
+    vm = views @ models                                       # V(t_k) M(t_k)
+    now = view_t @ model_t                                    # V(t) M(t)
+    times = np.zeros((len(views), COLS, 4))
+    times[:, 0:4] = columns(np.linalg.inv(vm))
+    times[:, 4:8] = columns(vm)
+    tail = np.zeros((TAIL, 4))
+    tail[0:4] = columns(now)
+    tail[4:8] = columns(np.linalg.inv(now))
+    tail[8, :3], tail[9, :3], tail[10, 0] = lo, hi, kind
+    return np.concatenate([times.reshape(-1, 4), tail])
+
+
+def screen_box(clip: np.ndarray, size, near: float):
+    """(x0, y0, x1, y1) window pixels around points' clip positions (n, 4), or None where
+    one lies behind the near plane (its projection is no position: every tile)."""
+    w = clip[:, 3]
+    if (w <= near).any():
+        return None
+    win = (clip[:, :2] / w[:, None] * 0.5 + 0.5) * np.asarray(size, np.float64)
+    return (*win.min(axis=0), *win.max(axis=0))
+
+
+def lookup_uniforms(frame: Frame) -> dict:
+    """What glsl/modes/hybrid/inverse_common.glsl reads besides its textures."""
+    p = frame.params["hybrid"]
+    cam = frame.camera
+    proj = cam.projection()
+    return {"u_focal": (float(proj[0, 0]), float(proj[1, 1])),
+            "u_viewport": tuple(float(x) for x in frame.size),
+            "u_near": float(cam.spec.near),
+            "u_intervals": int(frame.params["motion"].curve_samples),
+            "u_tolerance": float(p.tolerance), "u_depth_tolerance": float(p.depth_tolerance)}
+
+
+LOOKUP_DEFINES = {"TABLE_COLS": COLS}
+# Times of the exposure at which the ray mask asks whether a pixel's own mover still
+# covers it (evenly spaced): where one does not, the pixel is traced.
+MASK_CHECKS = 8
+
+
+class MotionTable(Pass):
+    """Host: the motion table, the tiles' candidate movers and the tiles that bend
+    (module doc), where the frame's motion bends; nothing drawn elsewhere."""
+    name = "motion_table"
+    runs_on = "cpu"
+    produces = (MOTION_TABLE, CANDIDATES)
+    host_outputs = (INVERSE_TILES,)
+
+    def outputs(self, frame: Frame):
+        k = int(frame.params["motion"].curve_samples)
+        rows = len(frame.scene.objects) + 1
+        return {MOTION_TABLE: TableSpec(4, "f4", width=(k + 1) * COLS + TAIL, height=rows),
+                CANDIDATES: TexSpec(4, "u4", tile=FINE)}
+
+    def execute(self, frame: Frame):
+        scene, cam = frame.scene, frame.camera
+        w, h = frame.size
+        shape = (-(-h // FINE), -(-w // FINE))
+        t = frame.time
+        t_open, t_close = frame.exposure
+        camera_moves = scene.camera.moving
+        movers = [o for o in scene.objects if o.moving]
+        bend_px = float(frame.params["motion"].curve_px)
+        bends = object_bends(scene, cam, t, frame.shutter, movers)
+        camera_bends = camera_moves and bool(
+            (object_bends(scene, cam, t, frame.shutter,
+                          [o for o in scene.objects if not o.moving]) > bend_px).any())
+        inverse = np.zeros(shape, bool)
+        if frame.shutter <= 0.0 or not (camera_bends or (bends > bend_px).any()):
+            frame.host.put(INVERSE_TILES, inverse)
+            frame.stats["inverse_tiles"] = 0
+            return
+        k = int(frame.params["motion"].curve_samples)
+        times = table_times(t_open, t_close, k)
+        view_t = cam.view(t)
+        views = np.stack([cam.view(float(tk)) for tk in times])
+        eye = np.eye(4)
+        still = object_row(view_t, views, eye, np.broadcast_to(eye, views.shape),
+                           np.full(3, -UNBOUNDED), np.full(3, UNBOUNDED), KIND_STILL)
+        table = np.repeat(still[None], len(scene.objects) + 1, axis=0)
+        candidates = np.zeros(shape + (MAX_CANDIDATES,), np.uint32)
+        count = np.zeros(shape, np.int64)
+        order = []
+        for o, bend in zip(movers, bends):
+            box, near = self._reach(frame, o, times, views)
+            order.append((near, o.id, o, box, bend))
+        dropped = 0
+        for _, _, o, box, bend in sorted(order, key=lambda x: (x[0], x[1])):
+            table[o.id, -1, 0] = KIND_SKINNED
+            if o.skin is None:
+                lo, hi = frame.gpu.bounds[o.id]
+                models = np.stack([o.matrix(float(tk)) for tk in times])
+                try:
+                    table[o.id] = object_row(view_t, views, o.matrix(t), models, lo, hi,
+                                             KIND_RIGID)
+                except np.linalg.LinAlgError:     # (scaled to nothing at some time: walked)
+                    pass
+            sel = self._tiles(box, shape, w, h)
+            room = sel & (count < MAX_CANDIDATES)
+            dropped += int((sel & ~room).sum())
+            candidates[room, count[room]] = o.id
+            count[room] += 1
+            inverse |= sel
+        if camera_bends:
+            inverse[:] = True
+        self._upload(frame, MOTION_TABLE, table.astype(np.float32))
+        self._upload(frame, CANDIDATES, candidates)
+        frame.host.put(INVERSE_TILES, inverse)
+        frame.stats["inverse_tiles"] = int(inverse.sum())
+        frame.stats["inverse_dropped_candidates"] = dropped
+
+    @staticmethod
+    def _reach(frame: Frame, o, times, views):
+        """(window box over the exposure or None: every tile, the nearest view depth) of
+        an object: its bounding box's corners (a skinned mesh's sampled points) at the
+        table's times."""
+        cam = frame.camera
+        proj = cam.projection()
+        if o.skin is None:
+            lo, hi = frame.gpu.bounds[o.id]
+            corners = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                                for z in (lo[2], hi[2])]).T
+            clip = np.concatenate([(proj @ v @ o.matrix(float(tk)) @ corners).T
+                                   for v, tk in zip(views, times)])
+        else:
+            clip = np.concatenate([(proj @ v @ o.matrix(float(tk))
+                                    @ object_points(o, float(tk))).T
+                                   for v, tk in zip(views, times)])
+        return screen_box(clip, frame.size, frame.scene.camera.near), float(clip[:, 3].min())
+
+    @staticmethod
+    def _tiles(box, shape, w: int, h: int) -> np.ndarray:
+        """The FINE tiles (GL rows) a window box overlaps (all of them for None)."""
+        sel = np.zeros(shape, bool)
+        if box is None:
+            sel[:] = True
+            return sel
+        x0, y0, x1, y1 = box
+        if x1 < 0 or y1 < 0 or x0 >= w or y0 >= h:
+            return sel
+        c0, r0 = max(int(x0 // FINE), 0), max(int(y0 // FINE), 0)
+        c1, r1 = min(int(x1 // FINE), shape[1] - 1), min(int(y1 // FINE), shape[0] - 1)
+        sel[r0:r1 + 1, c0:c1 + 1] = True
+        return sel
+
+    @staticmethod
+    def _upload(frame: Frame, name: str, array: np.ndarray):
+        """A GL-orientation array into its pool texture (allocated by the pipeline)."""
+        frame.pool.check_write((name,))
+        frame.pool.get(name).write(np.ascontiguousarray(array).tobytes())
+        frame.pool.mark_written((name,))
