@@ -1,10 +1,12 @@
 #version 330 core
 // The hybrid's inverse-motion composite (docs/algorithms.md 7.1): for u_samples times of
-// the exposure (stratified, one jitter per pixel), what covers this pixel then, found by
-// mapping the pixel back to the frame time along each candidate's own motion:
+// the exposure (stratified over the table's K times, one interleaved-gradient jitter per
+// pixel), what covers this pixel then, found by mapping the pixel back to the frame time
+// along each candidate's own motion:
 // - a rigid object (a mover, or every still object under the camera's own motion): the
 //   pixel's ray at time t_k, in the object's own space (L_k = (V(t_k) M(t_k))^-1), must
-//   meet the object's box; its point at a depth guess (where it enters the box, or the
+//   meet the object's box (and the pixel lie in its screen box then); its point at a depth
+//   guess (where it enters the box, or the
 //   pixel's own depth for its own object) is seen at the frame time at q = proj(V(t)
 //   M(t) x); accepted when the G-buffer there holds that object with the point's depth
 //   (within u_depth_tolerance) or a surface point that maps back within u_tolerance px,
@@ -24,52 +26,81 @@ uniform int u_samples;
 uniform bool u_camera_moves;
 out vec4 out_color;
 
+// What the pixel's own mover hid, at time k: the revealed layer's surface. It is still
+// (a mover behind a mover is its own candidate); under the camera's own motion it moves
+// with the camera: mapped by the still map to q, read from the revealed layer there, or
+// from the raster where q shows a still surface at the frame time.
+vec3 behind(vec4 bx, int k, vec3 fallback) {
+    if (!u_camera_moves) return fallback;
+    vec4 y = own_mat(0, 0) * (time_mat(0, k, 0) * vec4(g_ray * bx.z, 1.0));
+    if (-y.z < u_near) return fallback;
+    vec2 q = to_window(y);
+    if (!on_screen(q)) return fallback;
+    ivec2 qi = ivec2(q);
+    vec4 b = texelFetch(u_back, qi, 0);
+    if (b.w > 0.5) return texelFetch(u_back_color, qi, 0).rgb;
+    vec4 f = texelFetch(u_front, qi, 0);
+    return kind_of(int(f.w + 0.5)) == 0 ? front_colour(qi) : fallback;
+}
+
 void main() {
     ivec2 x = ivec2(gl_FragCoord.xy);
-    g_centre = vec2(x) + 0.5;
-    g_ray = ray_at(g_centre);
+    begin_pixel(x);
     vec4 fx = texelFetch(u_front, x, 0);
-    int own = int(fx.w + 0.5);
-    int own_kind = kind_of(own);
     vec3 own_colour = front_colour(x);
+    Candidate own = candidate(int(fx.w + 0.5));
+    // The pixel's own surface is there at every time where neither it nor the camera
+    // moves; the sky under a moving camera is looked up by direction.
+    bool own_stays = own.kind == 0 && !u_camera_moves;
     vec4 bx = texelFetch(u_back, x, 0);
     bool revealed = bx.w > 0.5;
     vec3 hidden = revealed ? back_colour(x) : own_colour;
     float hidden_depth = revealed ? bx.z : 3.0e38;
-    uvec4 cand = texelFetch(u_candidates, x / FINE_TILE, 0);
+    uvec4 ids = texelFetch(u_candidates, x / FINE_TILE, 0);
+    Candidate cands[MAX_CANDIDATES];
+    bool loaded[MAX_CANDIDATES];
+    int n = 0;
+    for (int i = 0; i < MAX_CANDIDATES; ++i) {
+        int id = int(ids[i]);
+        if (id == 0) break;
+        if (id == own.id) continue;
+        cands[n].id = id;
+        loaded[n] = false;
+        ++n;
+    }
     float j = ign(vec2(x), float(JITTER_STREAM));
     vec3 sum = vec3(0.0);
     for (int s = 0; s < u_samples; ++s) {
-        float f = (float(s) + j) / float(u_samples);
-        locate(f);
+        int k = part_of(s, u_samples, j);
         float best = 3.0e38;
         vec3 colour = own_colour;
         float d;
         ivec2 at;
-        bool found = false;
-        if (own_kind == 0 && !u_camera_moves) {
+        bool found = own_stays;
+        if (own_stays) {
             best = fx.z;
-            found = true;
-        } else if (own == 0) {
-            found = sky(at);
+        } else if (own.id == 0) {
+            found = sky(k, at);
             if (found) colour = front_colour(at);
-        } else if (covers(own, own_kind, f, fx.z, d, at)) {
+        } else if (covers(own, k, fx.z, d, at)) {
             best = d;
             colour = front_colour(at);
             found = true;
         }
-        for (int i = 0; i < MAX_CANDIDATES; ++i) {
-            int id = int(cand[i]);
-            if (id == 0) break;
-            if (id == own) continue;
-            if (covers(id, kind_of(id), f, -1.0, d, at) && d < best) {
+        for (int i = 0; i < n; ++i) {
+            if (!in_box(cands[i].id, k)) continue;
+            if (!loaded[i]) {
+                cands[i] = candidate(cands[i].id);
+                loaded[i] = true;
+            }
+            if (covers(cands[i], k, -1.0, d, at) && d < best) {
                 best = d;
                 colour = front_colour(at);
                 found = true;
             }
         }
-        if (own_kind != 0 && hidden_depth < best) colour = hidden;
-        else if (!found) colour = hidden;
+        if ((own.kind != 0 && hidden_depth < best) || !found)
+            colour = revealed ? behind(bx, k, hidden) : hidden;
         sum += colour;
     }
     out_color = vec4(sum / float(u_samples), 1.0);

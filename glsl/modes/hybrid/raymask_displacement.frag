@@ -175,17 +175,13 @@ uniform float u_max_disp;
 
 // Whether the pixel's own mover covers it at every checked time.
 bool stays(ivec2 x) {
-    int id = int(own_id + 0.5);
-    int kind = kind_of(id);
-    if (kind == 0) return true;
-    g_centre = vec2(x) + 0.5;
-    g_ray = ray_at(g_centre);
+    begin_pixel(x);
+    Candidate c = candidate(int(own_id + 0.5));
+    if (c.kind == 0) return true;
     float d;
     ivec2 at;
-    for (int j = 0; j < INVERSE_CHECKS; ++j) {
-        float f = (float(j) + 0.5) / float(INVERSE_CHECKS);
-        locate(f);
-        if (!covers(id, kind, f, own_depth, d, at)) return false;
+    for (int i = 0; i < INVERSE_CHECKS; ++i) {
+        if (!covers(c, part_of(i, INVERSE_CHECKS, 0.5), own_depth, d, at)) return false;
     }
     return true;
 }

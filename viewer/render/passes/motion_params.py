@@ -23,7 +23,7 @@ class MotionParams:
                                  "point's screen path strays more than this from uniform "
                                  "motion along its chord (rotation, approach, "
                                  "acceleration, a bounce; world/path_bend.py)")
-    curve_samples: int = param(16, unit="intervals", lo=1, hi=MAX_CURVE_SAMPLES,
+    curve_samples: int = param(32, unit="times", lo=1, hi=MAX_CURVE_SAMPLES,
                                help="where motion is followed along its curve (hybrid.curve "
                                     "= inverse): the exposure's times at which every "
                                     "object's and the camera's pose is taken, this many "

@@ -9,14 +9,15 @@ accepts O there when the surface it holds maps back onto p (A_k^-1), so a turnin
 streaks follow arcs. This host pass makes what the shader reads:
 
   hybrid_motion_table: per object id (a row; row 0 the background), per time of the
-      exposure t_k = t_open + k (t_close - t_open) / K (k = 0..K, K = motion.curve_samples,
-      read with linear interpolation between them): L_k = (V(t_k) M(t_k))^-1, from view
-      space at t_k to the object's own, and its inverse (4 texels each, a column a texel);
-      then, once per object: V(t) M(t) and its inverse, its local bounding box (lo, hi:
-      a ray that misses it at t_k is no candidate, and where it enters is the first depth
-      guess) and its kind: 0 still (every static object shares the camera's map, its box
-      unbounded), 1 rigid mover, 2 skinned mover (no rigid map: the shader walks its
-      displacement instead);
+      exposure t_k = t_open + (k + 1/2) (t_close - t_open) / K (k < K = motion.curve_samples,
+      the centres of K equal parts; a pixel's time samples are stratified over them):
+      L_k = (V(t_k) M(t_k))^-1, from view space at t_k to the object's own, and its
+      inverse (4 texels each, a column a texel), and the object's screen box at t_k (a
+      pixel outside it is not covered then); then, once per object: V(t) M(t) and its
+      inverse, its local bounding box (lo, hi: a ray that misses it at t_k is no
+      candidate, and where it enters is the first depth guess) and its kind: 0 still
+      (every static object shares the camera's map, its boxes unbounded), 1 rigid mover,
+      2 skinned mover (no rigid map: the shader walks its displacement instead);
   hybrid_candidates: per FINE tile, up to MAX_CANDIDATES movers whose screen bounds over
       the exposure reach it, nearest first (0: none);
   host inverse_tiles: the tiles where the composite follows motion exactly: in a frame
@@ -43,7 +44,7 @@ CANDIDATES = "hybrid_candidates"
 INVERSE_TILES = HostResource("inverse_tiles", np.ndarray,
                              "FINE tiles (GL rows) where the composite follows curves")
 MAX_CANDIDATES = 4
-COLS = 8                  # texels per time: L_k (4), L_k^-1 (4)
+COLS = 9                  # texels per time: L_k (4), L_k^-1 (4), screen box
 TAIL = 11                 # texels per object: V(t) M(t) (4), its inverse (4), lo, hi, kind
 UNBOUNDED = 3.0e38
 KIND_STILL, KIND_RIGID, KIND_SKINNED = 0, 1, 2
@@ -59,9 +60,9 @@ class TableSpec(TexSpec):
         return (self.width, self.height)
 
 
-def table_times(t_open: float, t_close: float, intervals: int) -> np.ndarray:
-    """t_k = t_open + k (t_close - t_open) / K, k = 0..K."""
-    return t_open + (t_close - t_open) * np.arange(intervals + 1) / intervals
+def table_times(t_open: float, t_close: float, parts: int) -> np.ndarray:
+    """t_k = t_open + (k + 1/2) (t_close - t_open) / K, k < K: the centres of K parts."""
+    return t_open + (t_close - t_open) * (np.arange(parts) + 0.5) / parts
 
 
 def columns(m: np.ndarray) -> np.ndarray:
@@ -70,13 +71,15 @@ def columns(m: np.ndarray) -> np.ndarray:
 
 
 def object_row(view_t: np.ndarray, views: np.ndarray, model_t: np.ndarray,
-               models: np.ndarray, lo, hi, kind: int) -> np.ndarray:
-    """One object's table row: (K + 1) * COLS + TAIL texels (module doc), float64."""
+               models: np.ndarray, lo, hi, kind: int, boxes: np.ndarray) -> np.ndarray:
+    """One object's table row: K * COLS + TAIL texels (module doc), float64; `boxes` its
+    screen box at each time (K, 4)."""
     vm = views @ models                                       # V(t_k) M(t_k)
     now = view_t @ model_t                                    # V(t) M(t)
     times = np.zeros((len(views), COLS, 4))
     times[:, 0:4] = columns(np.linalg.inv(vm))
     times[:, 4:8] = columns(vm)
+    times[:, 8] = boxes
     tail = np.zeros((TAIL, 4))
     tail[0:4] = columns(now)
     tail[4:8] = columns(np.linalg.inv(now))
@@ -102,7 +105,7 @@ def lookup_uniforms(frame: Frame) -> dict:
     return {"u_focal": (float(proj[0, 0]), float(proj[1, 1])),
             "u_viewport": tuple(float(x) for x in frame.size),
             "u_near": float(cam.spec.near),
-            "u_intervals": int(frame.params["motion"].curve_samples),
+            "u_parts": int(frame.params["motion"].curve_samples),
             "u_tolerance": float(p.tolerance), "u_depth_tolerance": float(p.depth_tolerance)}
 
 
@@ -123,7 +126,7 @@ class MotionTable(Pass):
     def outputs(self, frame: Frame):
         k = int(frame.params["motion"].curve_samples)
         rows = len(frame.scene.objects) + 1
-        return {MOTION_TABLE: TableSpec(4, "f4", width=(k + 1) * COLS + TAIL, height=rows),
+        return {MOTION_TABLE: TableSpec(4, "f4", width=k * COLS + TAIL, height=rows),
                 CANDIDATES: TexSpec(4, "u4", tile=FINE)}
 
     def execute(self, frame: Frame):
@@ -149,33 +152,35 @@ class MotionTable(Pass):
         view_t = cam.view(t)
         views = np.stack([cam.view(float(tk)) for tk in times])
         eye = np.eye(4)
+        unbounded = np.tile([-UNBOUNDED, -UNBOUNDED, UNBOUNDED, UNBOUNDED], (k, 1))
         still = object_row(view_t, views, eye, np.broadcast_to(eye, views.shape),
-                           np.full(3, -UNBOUNDED), np.full(3, UNBOUNDED), KIND_STILL)
+                           np.full(3, -UNBOUNDED), np.full(3, UNBOUNDED), KIND_STILL,
+                           unbounded)
         table = np.repeat(still[None], len(scene.objects) + 1, axis=0)
         candidates = np.zeros(shape + (MAX_CANDIDATES,), np.uint32)
         count = np.zeros(shape, np.int64)
         order = []
         for o, bend in zip(movers, bends):
-            box, near = self._reach(frame, o, times, views)
-            order.append((near, o.id, o, box, bend))
+            boxes, near = self._reach(frame, o, times, views)
+            order.append((near, o.id, o, boxes, bend))
         dropped = 0
-        for _, _, o, box, bend in sorted(order, key=lambda x: (x[0], x[1])):
+        for _, _, o, boxes, bend in sorted(order, key=lambda x: (x[0], x[1])):
             table[o.id, -1, 0] = KIND_SKINNED
             if o.skin is None:
                 lo, hi = frame.gpu.bounds[o.id]
                 models = np.stack([o.matrix(float(tk)) for tk in times])
                 try:
                     table[o.id] = object_row(view_t, views, o.matrix(t), models, lo, hi,
-                                             KIND_RIGID)
+                                             KIND_RIGID, boxes)
                 except np.linalg.LinAlgError:     # (scaled to nothing at some time: walked)
                     pass
-            sel = self._tiles(box, shape, w, h)
+            sel = self._tiles(self._union(boxes), shape, w, h)
             room = sel & (count < MAX_CANDIDATES)
             dropped += int((sel & ~room).sum())
             candidates[room, count[room]] = o.id
             count[room] += 1
             inverse |= sel
-        if camera_bends:
+        if camera_bends or (camera_moves and __import__("os").environ.get("CAMALL")):
             inverse[:] = True
         self._upload(frame, MOTION_TABLE, table.astype(np.float32))
         self._upload(frame, CANDIDATES, candidates)
@@ -185,22 +190,34 @@ class MotionTable(Pass):
 
     @staticmethod
     def _reach(frame: Frame, o, times, views):
-        """(window box over the exposure or None: every tile, the nearest view depth) of
-        an object: its bounding box's corners (a skinned mesh's sampled points) at the
-        table's times."""
+        """(the object's screen box (x0, y0, x1, y1, window px, a pixel wider) at each
+        table time, unbounded where it crosses the near plane; its nearest view depth
+        then): its bounding box's corners (a skinned mesh's sampled points)."""
         cam = frame.camera
         proj = cam.projection()
+        near = frame.scene.camera.near
+        boxes = np.tile([-UNBOUNDED, -UNBOUNDED, UNBOUNDED, UNBOUNDED], (len(times), 1))
+        nearest = np.inf
         if o.skin is None:
             lo, hi = frame.gpu.bounds[o.id]
-            corners = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                                for z in (lo[2], hi[2])]).T
-            clip = np.concatenate([(proj @ v @ o.matrix(float(tk)) @ corners).T
-                                   for v, tk in zip(views, times)])
-        else:
-            clip = np.concatenate([(proj @ v @ o.matrix(float(tk))
-                                    @ object_points(o, float(tk))).T
-                                   for v, tk in zip(views, times)])
-        return screen_box(clip, frame.size, frame.scene.camera.near), float(clip[:, 3].min())
+            local = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                              for z in (lo[2], hi[2])]).T
+        for k, (v, tk) in enumerate(zip(views, times)):
+            if o.skin is not None:
+                local = object_points(o, float(tk))
+            clip = (proj @ v @ o.matrix(float(tk)) @ local).T
+            nearest = min(nearest, float(clip[:, 3].min()))
+            box = screen_box(clip, frame.size, near)
+            if box is not None:
+                boxes[k] = (box[0] - 1.0, box[1] - 1.0, box[2] + 1.0, box[3] + 1.0)
+        return boxes, nearest
+
+    @staticmethod
+    def _union(boxes: np.ndarray):
+        """The box holding every one of `boxes`, or None where one is unbounded."""
+        if (np.abs(boxes) >= UNBOUNDED).any():
+            return None
+        return (*boxes[:, :2].min(axis=0), *boxes[:, 2:].max(axis=0))
 
     @staticmethod
     def _tiles(box, shape, w: int, h: int) -> np.ndarray:
