@@ -20,9 +20,8 @@ def ceiling_jobs(batch: dict, front: bool = False) -> list[tuple]:
     reveal answers it from; the whole static scene where the own object moves or has no
     exclusion scene) and into every moving object's scene but those of its own's rigid body.
     front: the static part into the whole static scene for every ray, where a ray of a
-    static own object stops at that object (a cheaper query than the reveal's: the static
-    part of the ceiling up to session 10, which also traced every ray into its own moving
-    object's scene)."""
+    static own object stops at that object (a cheaper query than the reveal's, which must
+    pass it)."""
     rs: RayScene = batch["rayscene"]
     t = float(batch["t"])
     px = np.asarray(batch["pixels"])

@@ -44,8 +44,7 @@ from .workers import run_all
 EXCLUSION_BUDGET = 1_000_000
 # Rays in one Embree call (or in the exclusion scenes' calls of one intersect() together)
 # from which they are split over the worker threads: below, handing work to a thread costs
-# more than it saves (2 cores: `pan`'s 39 k rays in ten exclusion calls 4.8 -> 4.1 ms;
-# `vase_pan`'s 5 k rays in three calls 1.07 -> 1.24 ms with the threshold at 1 k).
+# more than it saves (on 2 cores, tens of thousands of rays gain, a few thousand lose).
 PARALLEL_RAYS = 8192
 
 
@@ -81,9 +80,70 @@ class Hits:
     # surface along the pixel's primary ray, what a raster of the static objects shows there.
     from_view: np.ndarray | None = None
 
+
+@dataclass
+class RayBatch:
+    """The rays of one RayScene.intersect call and their nearest hits so far: what each of
+    its stages (the moving objects, the exclusion scenes, the view's kept static hits, the
+    static scene) reads and narrows. Every hit array is (n,) and updated in place."""
+    o: np.ndarray              # (n, 3) float64 origins
+    d: np.ndarray              # (n, 3) float64 directions
+    excl: np.ndarray           # (n,) uint32: the object each ray must pass (0: none)
+    start: np.ndarray          # (n,) float64: tnear, from o along d
+    limit: np.ndarray          # (n,) float64: tfar
+    from_eye: bool             # every ray starts at o[0] (primary rays)
+    shared: bool               # ... and at tnear 0: one point to carry into a mover's space
+    o32: np.ndarray            # Embree's rays: origins moved to tnear, float32
+    d32: np.ndarray
+    inv_d: np.ndarray          # 1 / d, for the box tests
+    object_id: np.ndarray      # (n,) uint32, 0 = no hit yet
+    prim_id: np.ndarray        # (n,) int32
+    u: np.ndarray              # (n,) float32
+    v: np.ndarray              # (n,) float32
+    best: np.ndarray           # (n,) float64: the nearest hit so far bounds every later query
+    from_view: np.ndarray      # (n,) bool: the hit is the view's kept static hit
+    queries: int = 0
+    restarts: int = 0
+    unresolved: int = 0
+
+    @classmethod
+    def of(cls, origins, dirs, exclude_ids=None, tnear=None, tfar=None) -> "RayBatch":
+        o = np.asarray(origins, dtype=np.float64).reshape(-1, 3)
+        d = np.asarray(dirs, dtype=np.float64).reshape(-1, 3)
+        n = len(o)
+        excl = (np.zeros(n, dtype=np.uint32) if exclude_ids is None
+                else np.asarray(exclude_ids, dtype=np.uint32).reshape(n))
+        start = np.zeros(n) if tnear is None else np.asarray(tnear, dtype=np.float64).reshape(n)
+        limit = np.full(n, np.inf) if tfar is None else np.asarray(tfar, dtype=np.float64).reshape(n)
+        # The box test takes [start, best] along the rays from their own origins, not
+        # from o32 (Embree's origins, moved to tnear). Primary rays share the eye
+        # (Camera.rays broadcasts it: stride 0): box-test from one point, and without a
+        # tnear carry one point into each object's space, not n.
+        from_eye = n > 1 and (o.strides[0] == 0 or bool((o == o[0]).all()))
+        o32, d32, inv_d = kernels.ray_arrays(o, d, start, from_eye)
+        return cls(o, d, excl, start, limit, from_eye, from_eye and tnear is None, o32, d32,
+                   inv_d, object_id=np.zeros(n, dtype=np.uint32),
+                   prim_id=np.full(n, -1, dtype=np.int32), u=np.zeros(n, dtype=np.float32),
+                   v=np.zeros(n, dtype=np.float32), best=limit.copy(),
+                   from_view=np.zeros(n, dtype=bool))
+
     @property
-    def hit(self) -> np.ndarray:
-        return self.object_id != 0
+    def n(self) -> int:
+        return len(self.o)
+
+    def merge(self, rows, r: dict, ids: np.ndarray, start=None, object_id: int = -1):
+        """Take Embree's hits `r` of `rows` (None: all rays) nearer than the best so far;
+        ids: geomID + 1 -> object id, or object_id >= 0 for every hit (a mover's scene).
+        start: where the rays of `r` began (default: tnear)."""
+        kernels.merge_hits(np.arange(self.n) if rows is None else rows, r["geomID"],
+                           r["primID"], r["u"], r["v"], r["tfar"],
+                           self.start if start is None else start, self.best, self.object_id,
+                           self.prim_id, self.u, self.v, ids, object_id)
+
+    def hits(self) -> Hits:
+        distance = np.where(self.object_id != 0, self.best, np.inf)
+        return Hits(self.object_id, self.prim_id, self.u, self.v, distance, self.restarts,
+                    self.unresolved, self.queries, self.from_view)
 
 
 def transform_points(m: np.ndarray, p: np.ndarray, w: float = 1.0) -> np.ndarray:
@@ -111,6 +171,8 @@ class Poses:
     inv: np.ndarray       # (m, 4, 4) float32: M(t)^-1
     rotate: np.ndarray    # (m,) bool: M(t)^-1 turns or scales (else directions stay)
 
+
+_NO_IDS = np.zeros(1, np.uint32)     # (merge_hits' table where a mover names every hit)
 
 # Moving objects from which the box tests take their rays from a RowIndex: building it
 # (~0.1 ms for 30 k rays) costs what ~10 box tests over every ray cost.
@@ -339,150 +401,138 @@ class RayScene:
         row order (as the reveal reads its mask): each moving object's box test then takes
         only the rows its box covers on screen (RowIndex), not every ray.
         matrices: M(t) of each object of self.moving, in order, as SceneObject.matrix(t)
-        gives it, where the caller has them already (a frame's G-buffer made them: asked
-        again, 32 movers' kept matrices cost ~0.2 ms in the frame); None: asked here.
+        gives it, where the caller has them already (a frame's G-buffer made them: asking
+        each object again costs host time in every frame); None: asked here.
         """
-        o = np.asarray(origins, dtype=np.float64).reshape(-1, 3)
-        d = np.asarray(dirs, dtype=np.float64).reshape(-1, 3)
-        n = len(o)
-        excl = (np.zeros(n, dtype=np.uint32) if exclude_ids is None
-                else np.asarray(exclude_ids, dtype=np.uint32).reshape(n))
-        start = np.zeros(n) if tnear is None else np.asarray(tnear, dtype=np.float64).reshape(n)
-        limit = np.full(n, np.inf) if tfar is None else np.asarray(tfar, dtype=np.float64).reshape(n)
+        b = RayBatch.of(origins, dirs, exclude_ids, tnear, tfar)
+        if self.moving:
+            self._trace_movers(b, t, matrices, image_axes, threads)
+        if self._static is None:
+            return b.hits()
+        static_own = kernels.member(b.excl, self._is_static)
+        rows = self._trace_exclusions(b, static_own, threads) if b.excl.any() else None
+        if view is not None:
+            rows = self._trace_view(b, static_own, view, pixels, rows, threads)
+        if rows is None or rows.size:
+            self._trace_static(b, rows, max_restarts, threads)
+        return b.hits()
 
-        object_id = np.zeros(n, dtype=np.uint32)
-        prim_id = np.full(n, -1, dtype=np.int32)
-        u = np.zeros(n, dtype=np.float32)
-        v = np.zeros(n, dtype=np.float32)
-        best = limit.copy()           # the nearest hit so far bounds every later query
-        from_view = np.zeros(n, dtype=bool)
-        queries = 0
-
-        def keep(rows, ids, r, s0=None):
-            """Take the hits of `rows` (None: all rays) nearer than the best so far;
-            ids: geomID + 1 -> object id."""
-            kernels.merge_hits(np.arange(n) if rows is None else rows, r["geomID"],
-                               r["primID"], r["u"], r["v"], r["tfar"],
-                               start if s0 is None else s0, best, object_id, prim_id, u, v,
-                               ids, -1)
-
-        def take(a, rows):
-            return a if rows is None else a[rows]
-
-        # The box test takes [start, best] along the rays from their own origins, not
-        # from o32 (Embree's origins, moved to tnear). Primary rays share the eye
-        # (Camera.rays broadcasts it: stride 0): box-test from one point, and without a
-        # tnear carry one point into each object's space, not n.
-        from_eye = n > 1 and (o.strides[0] == 0 or bool((o == o[0]).all()))
-        shared = from_eye and tnear is None
-        o32, d32, inv_d = kernels.ray_arrays(o, d, start, from_eye)
-        no_ids = np.zeros(1, np.uint32)
-        # Rays that may hit each object's world box within [start, best] (best as it
-        # stands before any of them: one compiled call, not one per object); a moving
-        # excluded object is not traced at all. (Nothing of this without moving objects:
-        # a camera passing static ones pays it in every frame.)
-        poses = self._poses(t, matrices) if self.moving else None
-        bodies = self._body[excl] if self.moving else excl
-        if self.cull and self.moving:
-            o_box = o[:1].astype(np.float32) if from_eye else o.astype(np.float32)
-            index = (RowIndex.of(o[0], d, *image_axes)
-                     if from_eye and image_axes is not None
-                     and len(self.moving) >= ROW_INDEX_MOVERS else None)
-            spans = (np.tile(np.array([0, n], np.int64), (len(self.moving), 1))
-                     if index is None else index.spans(poses.lo, poses.hi))
-            culled, cuts = kernels.boxes_rows(o_box, inv_d, from_eye, poses.lo, poses.hi,
-                                              start, best, bodies, self._moving_bodies,
-                                              spans)
-            cuts = cuts.tolist()
-        movers = zip(self.moving, poses.inv, poses.rotate.tolist()) if self.moving else ()
+    def _trace_movers(self, b: RayBatch, t: float, matrices, image_axes, threads: int):
+        """Each moving object's scene, in the object's own space, for the rays that may
+        hit its world box at t within [start, best] (best as it stands before any of them:
+        one compiled call, not one per object); a ray passes every mover of its own
+        object's rigid body. (Nothing of this without moving objects: a camera passing
+        static ones would pay it in every frame.)"""
+        poses = self._poses(t, matrices)
+        bodies = self._body[b.excl]
+        if self.cull:
+            culled, cuts = self._cull(b, poses, bodies, image_axes)
         body = self._moving_bodies.tolist()
+        movers = zip(self.moving, poses.inv, poses.rotate.tolist())
         for k, ((obj, es), inv, rotate) in enumerate(movers):
             rows = (culled[cuts[k]:cuts[k + 1]] if self.cull
                     else np.flatnonzero(bodies != body[k]))
             if not rows.size:
                 continue
-            lo, ld, tfar = kernels.local_rays(o32, d32, rows, shared, inv, rotate, start, best)
+            lo, ld, tfar = kernels.local_rays(b.o32, b.d32, rows, b.shared, inv, rotate,
+                                              b.start, b.best)
             r = _embree_run(es, lo, ld, tfar, threads)
-            queries += rows.size
-            kernels.merge_hits(rows, r["geomID"], r["primID"], r["u"], r["v"], r["tfar"],
-                               start, best, object_id, prim_id, u, v, no_ids, obj.id)
+            b.queries += rows.size
+            b.merge(rows, r, _NO_IDS, object_id=obj.id)
 
-        restarts = unresolved = 0
-        rows = None                   # the rays left for the static scene; None = all
+    def _cull(self, b: RayBatch, poses: Poses, bodies, image_axes) -> tuple:
+        """(rows, cuts): the rays of mover k that meet its world box are
+        rows[cuts[k]:cuts[k + 1]]; with image_axes and enough movers, each box tests only
+        the rows it covers on screen (RowIndex)."""
+        n, m = b.n, len(self.moving)
+        o_box = b.o[:1].astype(np.float32) if b.from_eye else b.o.astype(np.float32)
+        index = (RowIndex.of(b.o[0], b.d, *image_axes)
+                 if b.from_eye and image_axes is not None and m >= ROW_INDEX_MOVERS else None)
+        spans = (np.tile(np.array([0, n], np.int64), (m, 1)) if index is None
+                 else index.spans(poses.lo, poses.hi))
+        culled, cuts = kernels.boxes_rows(o_box, b.inv_d, b.from_eye, poses.lo, poses.hi,
+                                          b.start, b.best, bodies, self._moving_bodies, spans)
+        return culled, cuts.tolist()
+
+    def _trace_exclusions(self, b: RayBatch, static_own, threads: int):
+        """The rays whose own object is static, each into the static scene without it where
+        one exists (their calls side by side from PARALLEL_RAYS rays); the rays left for
+        the static scene (None: all)."""
+        # The rays of each own object, in ray order (a counting sort, not a scan each).
+        order, starts = kernels.group_rows(b.excl, static_own)
+        passed = np.zeros(b.n, dtype=bool)
+        groups = []
+        for a, e in zip(starts[:-1], starts[1:]):
+            sel = order[a:e]
+            ex = self.exclusion_scene(int(b.excl[sel[0]]))
+            if ex is not None:
+                groups.append((sel, ex))
+                passed[sel] = True
+
+        def call(sel, es):     # reads best[sel] only: the groups are disjoint
+            return lambda: _embree_run(es, *kernels.gather_rays(b.o32, b.d32, b.start, b.best,
+                                                                sel))
+        sizes = [sel.size for sel, _ in groups]
+        results = run_all([call(sel, es) for sel, (es, _) in groups], sizes,
+                          threads if sum(sizes) >= PARALLEL_RAYS else 1, "embree")
+        for (sel, (_, ex_ids)), r in zip(groups, results):
+            b.queries += sel.size
+            b.merge(sel, r, ex_ids)
+        return np.flatnonzero(~passed) if passed.any() else None
+
+    def _trace_view(self, b: RayBatch, static_own, view: tuple, pixels, rows, threads: int):
+        """The view's static hits, looked up (where not yet known, traced, kept and then
+        taken), for the rays that pass no static object of their own; the rays left for
+        the static scene."""
+        hits = self.static_view(view)
+        left = np.arange(b.n) if rows is None else rows
+        r_new, k_new, rows = kernels.view_lookup(
+            left, static_own, np.asarray(pixels, dtype=np.int64).reshape(b.n), hits.known,
+            hits.object_id, hits.prim_id, hits.u, hits.v, hits.distance, b.best, b.object_id,
+            b.prim_id, b.u, b.v, b.from_view)
+        if r_new.size:
+            r = _embree_run(self._static,
+                            *kernels.gather_rays(b.o32, b.d32, b.start, b.limit, r_new), threads)
+            b.queries += r_new.size
+            kernels.view_store(r_new, k_new, r["geomID"], r["primID"], r["u"], r["v"],
+                               r["tfar"], b.start, self._id_of, hits.known, hits.object_id,
+                               hits.prim_id, hits.u, hits.v, hits.distance, b.best,
+                               b.object_id, b.prim_id, b.u, b.v, b.from_view)
+        return rows
+
+    def _trace_static(self, b: RayBatch, rows, max_restarts: int, threads: int):
+        """`rows` (None: all rays) into the shared static scene; a ray that hits its own
+        static object restarts just past it, at most max_restarts times."""
+        def take(a, rows):
+            return a if rows is None else a[rows]
         id_of = self._id_of
-        static_own = kernels.member(excl, self._is_static)
-        if self._static is not None and excl.any():
-            # Rays whose own object is static: into the scene without it, where one exists.
-            # The rays of each own object, in ray order (a counting sort, not a scan each).
-            order, starts = kernels.group_rows(excl, static_own)
-            passed = np.zeros(n, dtype=bool)
-            groups = []
-            for a, b in zip(starts[:-1], starts[1:]):
-                sel = order[a:b]
-                ex = self.exclusion_scene(int(excl[sel[0]]))
-                if ex is not None:
-                    groups.append((sel, ex))
-                    passed[sel] = True
-
-            def call(sel, es):     # reads best[sel] only: the groups are disjoint
-                return lambda: _embree_run(es, *kernels.gather_rays(o32, d32, start, best, sel))
-            sizes = [sel.size for sel, _ in groups]
-            results = run_all([call(sel, es) for sel, (es, _) in groups], sizes,
-                              threads if sum(sizes) >= PARALLEL_RAYS else 1, "embree")
-            for (sel, (_, ex_ids)), r in zip(groups, results):
-                queries += sel.size
-                keep(sel, ex_ids, r)
-            if passed.any():
-                rows = np.flatnonzero(~passed)
-        if self._static is not None and view is not None:
-            # The view's static hits, looked up (where not yet known, traced, kept and then
-            # taken), for the rays that pass no static object of their own.
-            hits = self.static_view(view)
-            left = np.arange(n) if rows is None else rows
-            r_new, k_new, rows = kernels.view_lookup(
-                left, static_own, np.asarray(pixels, dtype=np.int64).reshape(n), hits.known,
-                hits.object_id, hits.prim_id, hits.u, hits.v, hits.distance, best, object_id,
-                prim_id, u, v, from_view)
-            if r_new.size:
-                r = _embree_run(self._static,
-                                *kernels.gather_rays(o32, d32, start, limit, r_new), threads)
-                queries += r_new.size
-                kernels.view_store(r_new, k_new, r["geomID"], r["primID"], r["u"], r["v"],
-                                   r["tfar"], start, id_of, hits.known, hits.object_id,
-                                   hits.prim_id, hits.u, hits.v, hits.distance, best,
-                                   object_id, prim_id, u, v, from_view)
-        if self._static is not None and (rows is None or rows.size):
-            offset, org = start.copy(), None
-            for depth in range(max_restarts + 1):
-                s0 = take(offset, rows)
-                if rows is None:
-                    r = _embree_run(self._static, o32, d32, best - s0, threads)
-                elif org is None:           # from the starts: one compiled gather
-                    r = _embree_run(self._static, *kernels.gather_rays(o32, d32, start, best,
-                                                                       rows), threads)
-                else:                       # restarted past an own static object
-                    r = _embree_run(self._static, org, d32[rows], take(best, rows) - s0,
-                                    threads)
-                queries += len(s0)
-                ids = id_of[r["geomID"] + 1]
-                dist = s0 + r["tfar"]
-                own = (ids == take(excl, rows)) & (ids != 0)
-                if own.any():
-                    r["geomID"][own] = -1
-                keep(rows, id_of, r, offset)
-                if not own.any():
-                    break
-                if depth == max_restarts:
-                    unresolved = int(own.sum())
-                    break
-                rows = np.flatnonzero(own) if rows is None else rows[own]
-                dist = dist[own]
-                p = o[rows] + d[rows] * dist[:, None]
-                scale = np.maximum(np.maximum(np.abs(p[:, 0]), np.abs(p[:, 1])), np.abs(p[:, 2]))
-                offset[rows] = dist + self.restart_eps * (1.0 + scale)
-                org = o[rows] + d[rows] * offset[rows, None]
-                restarts += rows.size
-
-        distance = np.where(object_id != 0, best, np.inf)
-        return Hits(object_id, prim_id, u, v, distance, restarts, unresolved, queries,
-                    from_view)
+        offset, org = b.start.copy(), None
+        for depth in range(max_restarts + 1):
+            s0 = take(offset, rows)
+            if rows is None:
+                r = _embree_run(self._static, b.o32, b.d32, b.best - s0, threads)
+            elif org is None:           # from the starts: one compiled gather
+                r = _embree_run(self._static, *kernels.gather_rays(b.o32, b.d32, b.start,
+                                                                   b.best, rows), threads)
+            else:                       # restarted past an own static object
+                r = _embree_run(self._static, org, b.d32[rows], take(b.best, rows) - s0,
+                                threads)
+            b.queries += len(s0)
+            ids = id_of[r["geomID"] + 1]
+            dist = s0 + r["tfar"]
+            own = (ids == take(b.excl, rows)) & (ids != 0)
+            if own.any():
+                r["geomID"][own] = -1
+            b.merge(rows, r, id_of, offset)
+            if not own.any():
+                return
+            if depth == max_restarts:
+                b.unresolved = int(own.sum())
+                return
+            rows = np.flatnonzero(own) if rows is None else rows[own]
+            dist = dist[own]
+            p = b.o[rows] + b.d[rows] * dist[:, None]
+            scale = np.maximum(np.maximum(np.abs(p[:, 0]), np.abs(p[:, 1])), np.abs(p[:, 2]))
+            offset[rows] = dist + self.restart_eps * (1.0 + scale)
+            org = b.o[rows] + b.d[rows] * offset[rows, None]
+            b.restarts += rows.size

@@ -1,9 +1,9 @@
 """Compiled loops (numba) for the reveal's per-ray bookkeeping around Embree's `run`.
 
-The reveal traces ten to a hundred thousand rays a frame, and Embree itself took about a
-third of the host time: the rest was chains of numpy operations over those rays (box
-culling, gathers, transforms, hit merges), each a full pass over memory
-and a Python call (~5 us each). Each function here does one such chain in a single loop,
+The reveal traces ten to a hundred thousand rays a frame. As chains of numpy operations
+over those rays (box culling, gathers, transforms, hit merges), each a full pass over
+memory and a Python call (~5 us each), the bookkeeping would cost more than Embree's
+tracing. Each function here does one such chain in a single loop,
 operation for operation in the same precision (float32 where the rays are float32), so
 the hits do not change (tests/test_raytrace.py: against tracing without culling, against
 the scene without the own object, by hand). The box test alone differs from its numpy
@@ -17,10 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from world import jit_notice
-
 _JIT = dict(cache=True, nogil=True)
-jit_notice.install()
 
 
 # A direction component of 0 gives an infinite inverse; clamped to this, the slab test

@@ -1,11 +1,9 @@
 """Ray reveal (docs/algorithms.md 4): the surface hidden behind each masked pixel's own object.
 
-One primary ray per pixel through its centre, from the camera at time t (Camera.rays).
-Layer 1 is the first hit on an object other than the pixel's own (object identity, not
-luminance). Layer k+1, where asked for, continues the ray from the layer-k hit only where
-that surface belongs to a moving object, skipping that object: what lies behind a
-revealed moving object. Hits are clipped to the camera's [near, far] view depth, as the
-rasteriser clips, so the reveal sees what a raster pass without the own object would.
+One primary ray per pixel through its centre, from the camera at time t (Camera.rays): the
+first hit on an object other than the pixel's own (object identity, not luminance). Hits
+are clipped to the camera's [near, far] view depth, as the rasteriser clips, so the reveal
+sees what a raster pass without the own object would.
 
 Large batches are split into chunks over a thread pool: Embree's `run` releases the GIL
 and every ray is independent, so the result does not depend on the split. Within a single
@@ -15,7 +13,6 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field, fields
-from functools import cached_property
 
 import numpy as np
 
@@ -23,23 +20,22 @@ from world.camera import Camera
 from world.conventions import BACKGROUND_DEPTH
 
 from . import kernels
-from .attributes import LocalSurface, SurfaceTable
+from .attributes import SurfaceTable
 from .embree_scene import RayScene
 from .workers import worker_pool
 
 CPUS = os.cpu_count() or 1    # read once: os.cpu_count() costs ~60 us a call here
-# Threads pay only for large batches (2 cores, the reveal's own Python between Embree
-# calls holds the GIL): 39 k rays took 1.0 ms on one thread and 1.4 ms in two chunks on
-# two (`basic` 1280x720), 156 k rays 14.2 ms on one and 10.0 in three chunks (`pan`
-# 1280x720). Chunks of at most this many rays, and threads from two chunks.
-MIN_CHUNK = 65536    # below this, a thread costs more than it saves (measured on 2 cores)
+# Threads pay only for large batches (on 2 cores, and the reveal's own Python between
+# Embree calls holds the GIL): tens of thousands of rays run faster on one thread, a
+# hundred thousand and more in chunks on several. Chunks of at most this many rays, and
+# threads from two chunks.
+MIN_CHUNK = 65536    # below this, a thread costs more than it saves
 MAX_CHUNK = 65536    # above this, the per-ray temporaries fall out of the caches
 
 
 @dataclass
 class RevealLayer:
-    """One revealed layer for n pixels; rows not traced at this layer read as misses."""
-    traced: np.ndarray          # (n,) bool: a ray was cast for this pixel at this layer
+    """The revealed surface of n pixels; misses read as object 0."""
     object_id: np.ndarray       # (n,) uint32, 0 = nothing revealed
     prim_id: np.ndarray         # (n,) int32, face index in the object's Mesh.faces; -1 = miss
     barycentrics: np.ndarray    # (n, 2) float32, Embree (u, v): weights of face vertices 1, 2
@@ -50,70 +46,15 @@ class RevealLayer:
                                 # pixel's primary ray (RayScene.intersect's from_view)
     table: SurfaceTable | None = field(default=None, repr=False, compare=False)
 
-    @property
-    def hit(self) -> np.ndarray:
-        return self.object_id != 0
-
-    @property
-    def face_index(self) -> np.ndarray:
-        """(n,) int64 row of each hit's face in the scene's SurfaceTable; -1 = miss (what
-        the GPU shades the revealed layer from, with the barycentrics)."""
-        return self.table.face_index(self.object_id, self.prim_id)
-
-    # Mesh-space attributes, computed on the CPU only when asked for (the hybrid mode
-    # interpolates them on the GPU): local position (for checker/stripes), unit normal
-    # (flat or smooth per object), uv (zeros without uv); zeros on a miss.
-    @cached_property
-    def surface(self) -> LocalSurface:
-        return self.table.lookup(self.object_id, self.prim_id, self.barycentrics[:, 0],
-                                 self.barycentrics[:, 1])
-
-    @property
-    def local_position(self) -> np.ndarray:
-        return self.surface.position
-
-    @property
-    def local_normal(self) -> np.ndarray:
-        return self.surface.normal
-
-    @property
-    def uv(self) -> np.ndarray:
-        return self.surface.uv
-
 
 @dataclass
 class RevealResult:
-    layers: list[RevealLayer]
-    rays: int = 0          # rays cast: one per pixel per layer traced, plus every restart
+    layer: RevealLayer
+    rays: int = 0          # rays cast: one per pixel, plus every restart
     queries: int = 0       # Embree queries (one ray into one Embree scene)
     restarts: int = 0      # restarts past a static own object
     unresolved: int = 0    # rays that ran out of restarts
-    pixels_hit: int = 0    # pixels whose layer 1 found a surface
-
-
-def _layer(rs: RayScene, hits, origin, direction, cos, traced) -> RevealLayer:
-    """The layer of the traced rays (compact: one row per traced ray)."""
-    # The rays are unit length from the eye: view depth = distance * cos(ray, forward).
-    depth, world, bary = kernels.layer_columns(hits.object_id, hits.distance, hits.u, hits.v,
-                                               origin, direction, cos, BACKGROUND_DEPTH)
-    return RevealLayer(traced=traced, object_id=hits.object_id, prim_id=hits.prim_id,
-                       barycentrics=bary, distance=hits.distance, depth=depth,
-                       world_position=world, static_view=hits.from_view, table=rs.surfaces)
-
-
-_MISS = {"object_id": 0, "prim_id": -1, "barycentrics": 0.0, "distance": np.inf,
-         "depth": BACKGROUND_DEPTH, "world_position": 0.0, "static_view": False}
-
-
-def _expand(compact: RevealLayer, traced: np.ndarray) -> RevealLayer:
-    """A compact layer spread over all n pixels; untraced pixels read as misses."""
-    cols = {"traced": traced}
-    for name, miss in _MISS.items():
-        a = getattr(compact, name)
-        full = np.full((len(traced),) + a.shape[1:], miss, dtype=a.dtype)
-        full[traced] = a
-        cols[name] = full
-    return RevealLayer(**cols, table=compact.table)
+    pixels_hit: int = 0    # pixels whose ray found a surface
 
 
 # Views up to this many pixels keep their static hits (~25 bytes a pixel: 105 MB here).
@@ -137,7 +78,7 @@ def primary_view(camera: Camera, t: float) -> tuple | None:
 
 
 def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
-                  own_ids: np.ndarray, layers: int, max_depth: int, view: tuple | None,
+                  own_ids: np.ndarray, max_depth: int, view: tuple | None,
                   call_threads: int = 1, matrices=None) -> RevealResult:
     """view: primary_view(camera, t), asked once by reveal() for every chunk."""
     n = len(pixels_ij)
@@ -146,76 +87,47 @@ def _reveal_chunk(rs: RayScene, camera: Camera, t: float, pixels_ij: np.ndarray,
     # Clip by view depth like the rasteriser: depth = distance * cos(ray, forward).
     cos, near, far = kernels.view_clip(direction, np.asarray(fwd, np.float64),
                                        float(camera.spec.near), float(camera.spec.far))
-    moving_ids = np.array([o.id for o, _ in rs.moving], dtype=np.uint32)
-
-    result = RevealResult(layers=[])
-    rows = None                   # the pixels traced at this layer; None = all
-    exclude = np.asarray(own_ids, dtype=np.uint32).reshape(n)
-    tnear = near
-    for k in range(layers):
-        pick = (lambda a: a) if rows is None else (lambda a: a[rows])
-        # Layer 1's rays are the view's primary rays: their static hits are kept.
-        primary = {} if k or view is None else {
-            "view": view, "pixels": pixels_ij[:, 1] * camera.width + pixels_ij[:, 0]}
-        hits = rs.intersect(pick(origin), pick(direction), t, exclude,
-                            max_restarts=max_depth, tnear=tnear, tfar=pick(far),
-                            threads=call_threads, image_axes=(fwd, up), matrices=matrices,
-                            **primary)
-        if rows is None:
-            layer = _layer(rs, hits, origin, direction, cos, np.ones(n, dtype=bool))
-        else:
-            traced = np.zeros(n, dtype=bool)
-            traced[rows] = True
-            layer = _expand(_layer(rs, hits, origin[rows], direction[rows], cos[rows], traced),
-                            traced)
-        result.layers.append(layer)
-        result.rays += len(hits.object_id) + hits.restarts
-        result.queries += hits.queries
-        result.restarts += hits.restarts
-        result.unresolved += hits.unresolved
-
-        if k + 1 == layers:
-            break
-        # Go deeper only behind revealed moving objects, skipping that object.
-        deeper = np.isin(hits.object_id, moving_ids)       # compact, over this layer's rays
-        rows = np.flatnonzero(deeper) if rows is None else rows[deeper]
-        exclude = hits.object_id[deeper]
-        tnear = hits.distance[deeper]
-    result.pixels_hit = int(np.count_nonzero(result.layers[0].object_id))
-    return result
+    # The rays are the view's primary rays: their static hits are kept.
+    primary = {} if view is None else {
+        "view": view, "pixels": pixels_ij[:, 1] * camera.width + pixels_ij[:, 0]}
+    hits = rs.intersect(origin, direction, t, np.asarray(own_ids, dtype=np.uint32).reshape(n),
+                        max_restarts=max_depth, tnear=near, tfar=far, threads=call_threads,
+                        image_axes=(fwd, up), matrices=matrices, **primary)
+    # The rays are unit length from the eye: view depth = distance * cos(ray, forward).
+    depth, world, bary = kernels.layer_columns(hits.object_id, hits.distance, hits.u, hits.v,
+                                               origin, direction, cos, BACKGROUND_DEPTH)
+    layer = RevealLayer(object_id=hits.object_id, prim_id=hits.prim_id, barycentrics=bary,
+                        distance=hits.distance, depth=depth, world_position=world,
+                        static_view=hits.from_view, table=rs.surfaces)
+    return RevealResult(layer, rays=len(hits.object_id) + hits.restarts, queries=hits.queries,
+                        restarts=hits.restarts, unresolved=hits.unresolved,
+                        pixels_hit=int(np.count_nonzero(hits.object_id)))
 
 
 def _concatenate(parts: list[RevealResult]) -> RevealResult:
     if len(parts) == 1:
         return parts[0]
-    layers = []
-    for k in range(len(parts[0].layers)):
-        cols = {f.name: np.concatenate([getattr(p.layers[k], f.name) for p in parts])
-                for f in fields(RevealLayer) if f.name != "table"}
-        layers.append(RevealLayer(**cols, table=parts[0].layers[k].table))
-    out = RevealResult(layers=layers)
+    cols = {f.name: np.concatenate([getattr(p.layer, f.name) for p in parts])
+            for f in fields(RevealLayer) if f.name != "table"}
+    out = RevealResult(RevealLayer(**cols, table=parts[0].layer.table))
     for name in ("rays", "queries", "restarts", "unresolved", "pixels_hit"):
         setattr(out, name, sum(getattr(p, name) for p in parts))
     return out
 
 
-def reveal(rs: RayScene, camera: Camera, t: float, pixels_ij, own_ids, layers: int = 1,
-           max_depth: int = 8, threads: int | None = None,
-           min_chunk: int = MIN_CHUNK, max_chunk: int = MAX_CHUNK,
+def reveal(rs: RayScene, camera: Camera, t: float, pixels_ij, own_ids, max_depth: int = 8,
+           threads: int | None = None, min_chunk: int = MIN_CHUNK, max_chunk: int = MAX_CHUNK,
            matrices=None) -> RevealResult:
     """Reveal what lies behind each pixel's own object.
 
     pixels_ij: (n, 2) int image coordinates (column i from the left, row j from the top).
     own_ids: (n,) the object id of each pixel (0 for none: plain primary rays).
-    layers: how many surfaces to reveal (layer k+1 only behind a moving layer-k object).
     max_depth: restarts allowed to pass a static own object.
     threads: worker threads for large batches (default: the CPU count; 1 = no pool).
     min_chunk, max_chunk: the fewest pixels worth a thread's chunk, the most in one chunk.
     matrices: M(t) of each of rs.moving's objects, as SceneObject.matrix(t) gives it, where
     the caller has them already (RayScene.intersect's).
     """
-    if layers < 1:
-        raise ValueError(f"layers must be at least 1, got {layers}")
     pixels_ij = np.asarray(pixels_ij, dtype=np.int64).reshape(-1, 2)
     own_ids = np.asarray(own_ids, dtype=np.uint32).reshape(-1)
     if len(own_ids) != len(pixels_ij):
@@ -228,14 +140,14 @@ def reveal(rs: RayScene, camera: Camera, t: float, pixels_ij, own_ids, layers: i
     n_chunks = max(-(-n // max(1, max_chunk)),
                    min(threads * 4, n // max(1, min_chunk)) if threads > 1 else 1)
     if n_chunks <= 1:     # one chunk: its independent Embree calls may share the threads
-        return _reveal_chunk(rs, camera, t, pixels_ij, own_ids, layers, max_depth, view,
-                             threads, matrices)
+        return _reveal_chunk(rs, camera, t, pixels_ij, own_ids, max_depth, view, threads,
+                             matrices)
     bounds = np.linspace(0, n, n_chunks + 1).astype(np.int64)
 
     def run(k):
         a, b = bounds[k], bounds[k + 1]
-        return _reveal_chunk(rs, camera, t, pixels_ij[a:b], own_ids[a:b], layers, max_depth,
-                             view, matrices=matrices)
+        return _reveal_chunk(rs, camera, t, pixels_ij[a:b], own_ids[a:b], max_depth, view,
+                             matrices=matrices)
 
     if threads == 1:
         return _concatenate([run(k) for k in range(n_chunks)])

@@ -52,6 +52,14 @@ def scene_from(tmp_path, text, name="s"):
     return load_scene(p)
 
 
+def srgb8_to_linear(srgb8) -> np.ndarray:
+    """uint8 sRGB -> float32 linear (the sRGB decoding, in float64): the inverse of
+    imageio.linear_to_srgb8, for tests that start from 8-bit pictures."""
+    c = np.asarray(srgb8, dtype=np.float64) / 255.0
+    lin = np.where(c <= 0.04045, c / 12.92, np.power((c + 0.055) / 1.055, 2.4))
+    return lin.astype(np.float32)
+
+
 def empty_scene(shutter: float = 0.04):
     from world.scene import CameraSpec, Scene
     cam = CameraSpec(position=np.array([0.0, 0.0, 5.0]), look_at=np.zeros(3), fov_y=45.0,

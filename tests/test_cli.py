@@ -171,6 +171,17 @@ def test_an_error_after_a_progress_bar_starts_on_its_own_line():
     Progress("reference", done)(0, 1)           # finished: its line is closed
     end_line()
     assert done.getvalue().count("\n") == 1
+    # The sweep's line follows the same rule: open while cells are left, closed at the end.
+    from viewer.sweep.run import Bar
+    sweep = Tty()
+    cells = Bar(2, 0, sweep)
+    cells.update(False)
+    assert sweep.getvalue().startswith("\rsweep: 1/2 cells done") and "\n" not in sweep.getvalue()
+    end_line()
+    assert sweep.getvalue().endswith("\n")
+    cells.update(True)
+    end_line()
+    assert sweep.getvalue().count("\n") == 2 and "1 failed, 0 left" in sweep.getvalue()
 
 
 def test_unwritable_output_folder(tmp_path, capsys, monkeypatch):
@@ -440,6 +451,96 @@ def test_help_is_complete(capsys):
             assert "[--mode MODE]" in text and "(default: hybrid" in text
 
 
+# Every command's flags. The render commands share SCENE_FLAGS (viewer/cli/args.py), bench
+# without --samples (it draws no reference); README's "Commands" says so.
+SHARED = {"--time", "--size", "--samples", "--seed", "--shutter", "--set", "--params"}
+COMMAND_FLAGS = {
+    "shot": SHARED | {"--mode", "--out", "--buffers"},
+    "compare": SHARED | {"--out", "--modes", "--variant", "--inset"},
+    "bench": SHARED - {"--samples"} | {"--frames", "--warmup", "--modes", "--json", "--animate",
+                                       "--pass-timers", "--speeds"},
+    "video": SHARED | {"--start", "--out", "--modes", "--frames", "--fps", "--metrics"},
+    "view": SHARED | {"--mode", "--frames", "--screenshot", "--script", "--stats-json",
+                      "--record", "--record-fps", "--shot-dir"},
+    "params": set(),
+    "graph": {"--set", "--params"},
+    "scene": {"--out"},
+    "sweep": {"--out", "--workers", "--scheduler", "--images", "--timing"},
+}
+
+
+def test_every_commands_flags_against_the_table():
+    from viewer.cli.args import SCENE_FLAGS
+    from viewer.commands.main import COMMANDS, build_parser
+    assert set(SCENE_FLAGS) == SHARED
+    parser = build_parser()
+    (sub,) = [a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction"]
+    assert set(sub.choices) == set(COMMANDS) == set(COMMAND_FLAGS)
+    for name, p in sub.choices.items():
+        flags = {o for a in p._actions for o in a.option_strings} - {"-h", "--help"}
+        assert flags == COMMAND_FLAGS[name], name
+    video = sub.choices["video"]
+    assert video.parse_args(["--start", "0.5", "--out", "v"]).time == "0.5"
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    assert ("`shot`, `compare`, `bench`, `video`, `view` also take `--time T`" in readme
+            and "all but `bench` `--samples N`" in readme)
+    for flag in sorted(SHARED - {"--samples"}):
+        assert f"`{flag} " in readme, flag
+
+
+def test_shared_flags_act_or_are_refused(tmp_path, capsys):
+    out = tmp_path / "a.png"
+    assert main(["shot", BASIC, "--size", "32x18", "--shutter", "0.125", "--out", str(out)]) == 0
+    side = json.loads(out.with_suffix(".json").read_text())
+    assert side["camera"]["shutter"] == 0.125
+    again = tmp_path / "b.png"
+    assert main(["shot", "--params", str(out.with_suffix(".json")), "--out", str(again)]) == 0
+    assert again.read_bytes() == out.read_bytes()
+    plain = tmp_path / "c.png"
+    assert main(["shot", BASIC, "--size", "32x18", "--out", str(plain)]) == 0
+    assert plain.read_bytes() != out.read_bytes()
+    capsys.readouterr()
+    refused = [
+        (["shot", BASIC, "--mode", "off", "--shutter", "0.1"], "--shutter 0.1: mode off"),
+        (["shot", BASIC, "--shutter", "-1"], "--shutter '-1': expected seconds from 0 to 1e+07"),
+        (["shot", BASIC, "--shutter", "1e8"], "--shutter '1e8': expected seconds from 0"),
+        (["compare", BASIC, "--shutter", "inf"], "--shutter 'inf': expected a finite number"),
+        (["video", BASIC, "--modes", "off", "--shutter", "0.1"], "--shutter 0.1: mode off"),
+        (["video", BASIC, "--modes", "off,hybrid", "--samples", "4"],
+         "--samples 4: only the reference mode takes sub-frames, not modes off, hybrid"),
+        (["video", BASIC, "--start", "soon"], "--time 'soon': expected a number"),
+        (["bench", BASIC, "--modes", "off", "--shutter", "0.1"], "--shutter 0.1: mode off"),
+        (["bench", BASIC, "--samples", "4"], "unrecognized arguments: --samples 4"),
+    ]
+    for args, words in refused:
+        target = "v" if args[0] == "video" else "o"
+        extra = ["--out", str(tmp_path / (target + (".png" if args[0] == "shot" else "")))]
+        if args[0] == "bench":
+            extra = []
+        assert main(args + extra) == 2, args
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and words in err, (args, err)
+    assert not any(p.name in ("o.png", "o", "v") for p in tmp_path.iterdir())
+
+
+def test_a_closed_stdout_ends_quietly(tmp_path):
+    # `hmblur graph | head`: the reader gone, no message and no traceback, the status a
+    # SIGPIPE's (141), whichever command was writing; outputs to files are still whole.
+    for args in (["graph", "hybrid"], ["params"], ["scene", str(ROOT / "scenes" / "assets" /
+                                                             "rover.glb")],
+                 ["shot", BASIC, "--size", "16x9", "--mode", "off", "--out",
+                  str(tmp_path / "p.png")]):
+        r, w = os.pipe()
+        os.close(r)
+        try:
+            p = subprocess.run([sys.executable, "-m", "viewer", *args], cwd=ROOT, stdout=w,
+                               stderr=subprocess.PIPE, text=True, timeout=240)
+        finally:
+            os.close(w)
+        assert (p.returncode, p.stderr) == (141, ""), (args, p.stderr)
+    assert (tmp_path / "p.png").is_file() and (tmp_path / "p.json").is_file()
+
+
 def test_params_lists_every_parameter_from_the_dataclasses(capsys):
     from viewer.render.graph.params import GROUPS
     from viewer.render.modes import MODE_GROUPS
@@ -516,7 +617,7 @@ def test_buffers_readme_describes_every_file(tmp_path):
         readme = (d / mode / "README.txt").read_text()
         for npy in sorted((d / mode).glob("*.npy")):
             a = np.load(npy)
-            assert describe(npy.stem), f"{npy.stem} is not in viewer/buffer_docs.BUFFERS"
+            assert describe(npy.stem), f"{npy.stem} is not in viewer.io.buffer_docs.BUFFERS"
             entry = readme.split(f"\n{npy.name}  ", 1)[1].split("\n", 3)
             assert entry[0] == f"{a.dtype}  {'x'.join(map(str, a.shape))}"
             assert entry[1].strip() == describe(npy.stem)

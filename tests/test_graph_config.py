@@ -171,6 +171,21 @@ def test_undeclared_texture_reads_and_writes_raise(synthetic_frame):
     with pytest.raises(RuntimeError, match="pass copy writes texture b, which it does not "
                                            "declare in produces"):
         run(Copy(into="b"))
+    # an input is never written: drawn into, cleared (even when clean), uploaded
+    for write in (lambda f: Copy(into="a").execute(f), lambda f: f.pool.clear(("a",)),
+                  lambda f: f.write("a", np.zeros((4, 8, 4), np.float32)),
+                  lambda f: f.pool.texture("a", OUT)):
+        class Writes(Copy):
+            def execute(self, frame, write=write):
+                write(frame)
+        with pytest.raises(RuntimeError, match="pass copy writes texture a, which it "
+                                               "declares as an input"):
+            run(Writes())
+    # nor declared as both: refused when the pipeline is built
+    both = Copy()
+    both.produces = ("c", "a")
+    with pytest.raises(ValueError, match=r"pass copy both reads and writes \['a'\]"):
+        Pipeline("x", [Source(), both], output="a")
     # Outside a pipeline (a pass run on its own) nothing is checked.
     frame = synthetic_frame((8, 4))
     Source().allocate(frame)

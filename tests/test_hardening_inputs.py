@@ -15,7 +15,7 @@ from PIL import Image
 
 from conftest import CONFORMANCE, ROOT
 from viewer.commands.main import main
-from world import limits
+from world import images, limits
 from world import loader as loader_mod
 from world.errors import SceneError, UserError, printable
 from world.loader import builtin_dir, load_scene
@@ -274,9 +274,9 @@ def test_a_texture_past_the_pixel_limit_is_refused_from_its_header(tmp_path, mon
     Image.fromarray(np.zeros((30, 40, 3), np.uint8)).save(tmp_path / "tex.png")
     monkeypatch.setattr(limits, "MAX_IMAGE_PIXELS", 1000)
     decoded = []
-    monkeypatch.setattr(loader_mod, "image_linear", lambda im: decoded.append(im))
-    with pytest.raises(SceneError, match=r"texture.path: expected an image of at most 1000 "
-                                         r"pixels.*is 40x30"):
+    monkeypatch.setattr(images, "linear_rgb", lambda im: decoded.append(im))
+    with pytest.raises(SceneError, match=r"texture.path: .*tex.png: 40x30 pixels, more than the "
+                                         r"limit of 1000 for one image"):
         load_scene(write_scene(tmp_path, TEXTURE.format(quad=quad, path="tex.png")))
     assert decoded == []
 
@@ -289,8 +289,13 @@ def test_textures_decode_to_the_same_float32_as_the_float64_formula(mode):
         im = Image.fromarray(a).convert(mode) if mode == "F" else Image.fromarray(a)
     else:
         im = Image.fromarray(rng.integers(0, 256, (5, 7, 3)).astype(np.uint8)).convert(mode)
-    got = loader_mod.image_linear(im)
-    want = loader_mod.srgb_to_linear(loader_mod.image_srgb(im)).astype(np.float32)
+    got = images.linear_rgb(im)
+    if mode in ("I;16", "F"):
+        scale = 65535.0 if mode == "I;16" else 1.0
+        srgb = np.repeat(np.clip(np.asarray(im, np.float64) / scale, 0, 1)[..., None], 3, -1)
+    else:
+        srgb = np.asarray(im.convert("RGB"), np.float64) / 255.0
+    want = np.where(srgb <= 0.04045, srgb / 12.92, ((srgb + 0.055) / 1.055) ** 2.4).astype(np.float32)
     assert got.dtype == np.float32 and got.shape == (5, 7, 3)
     np.testing.assert_array_equal(got, want)
 
@@ -300,5 +305,10 @@ def test_the_limits_are_in_the_scene_format_doc():
     for value in (f"+-{limits.MAX_SCENE_NUMBER:.0e}".replace("e+0", "e"),
                   f"+-{limits.MAX_TIME:.0e}".replace("e+0", "e"),
                   f"{limits.MAX_TRIANGLES:,}", f"{limits.MAX_FRAME_PIXELS:,}",
-                  f"{limits.MAX_IMAGE_PIXELS:,}", "asset_file"):
+                  f"{limits.MAX_IMAGE_PIXELS:,}", f"{limits.MAX_SCENE_IMAGE_PIXELS:,}",
+                  f"{limits.MAX_GLTF_VERTICES:,}", f"{limits.MAX_GLTF_COMPONENTS:,}",
+                  f"{limits.MAX_GLTF_FILE_BYTES >> 20} MiB", f"{limits.MAX_GLTF_NODES}",
+                  f"{limits.MAX_GLTF_JOINTS}", f"{limits.MAX_GLTF_ITEMS}",
+                  f"{limits.MAX_GLTF_JSON_DEPTH} levels", f"{limits.MAX_NAME_CHARS} characters",
+                  f"{limits.MAX_OBJECTS}", "asset_file"):
         assert value in doc, value

@@ -20,6 +20,7 @@ from viewer.commands import compare as cmd_compare
 from viewer.commands.main import main
 from viewer.render.modes import MODES
 from viewer.eval.strip import GAP, error_strip, heat, make_strip
+from world.errors import UserError
 from world.loader import builtin_scene_names
 
 BASIC = str(CONFORMANCE / "basic.toml")
@@ -73,9 +74,11 @@ def test_the_warm_up_leaves_no_kernel_of_any_mode_to_compile():
 
 
 def test_shot_and_view_default_to_the_hybrid(tmp_path):
-    assert cliargs.pick_mode(None, None) == "hybrid"
-    assert cliargs.pick_mode(None, {"mode": "ue4"}) == "ue4"        # a sidecar's mode
-    assert cliargs.pick_mode("off", {"mode": "ue4"}) == "off"       # the flag wins
+    assert cliargs.pick_mode(None, None, MODES) == "hybrid"
+    assert cliargs.pick_mode(None, {"mode": "ue4"}, MODES) == "ue4"        # a sidecar's mode
+    assert cliargs.pick_mode("off", {"mode": "ue4"}, MODES) == "off"       # the flag wins
+    with pytest.raises(UserError, match="--mode blur: expected one of off, "):
+        cliargs.pick_mode("blur", None, MODES)
     out = tmp_path / "a.png"
     assert main(["shot", BASIC, "--size", "64x36", "--out", str(out)]) == 0
     side = json.loads(out.with_suffix(".json").read_text())

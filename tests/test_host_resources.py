@@ -147,6 +147,25 @@ def test_kept_state_is_typed_and_released():
     assert b.released == 1 and kept.names() == []
 
 
+def test_kept_state_makes_a_value_once_and_again_where_it_no_longer_fits():
+    class Thing:
+        def __init__(self, owner):
+            self.owner, self.released = owner, 0
+
+        def release(self):
+            self.released += 1
+    slot, kept, made = KeptSlot("thing", Thing), KeptState(), []
+
+    def make(owner):
+        made.append(Thing(owner))
+        return made[-1]
+    a = kept.get_or_make(slot, lambda: make("ctx 1"), lambda t: t.owner == "ctx 1")
+    assert kept.get_or_make(slot, lambda: make("ctx 1"), lambda t: t.owner == "ctx 1") is a
+    b = kept.get_or_make(slot, lambda: make("ctx 2"), lambda t: t.owner == "ctx 2")
+    assert b is not a and kept.get(slot) is b and a.released == 1 and len(made) == 2
+    assert kept.get_or_make(slot, lambda: make("any")) is b         # no fits: any value
+
+
 def test_renderer_owns_the_kept_state_and_frames_carry_only_declared_results(ctx):
     r = Renderer(ctx, load_scene(CONFORMANCE / "basic.toml"), (64, 36))
     try:

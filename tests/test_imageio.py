@@ -7,7 +7,8 @@ import pytest
 from PIL import Image
 
 from viewer.io import imageio
-from viewer.io.imageio import json_safe, linear_to_srgb8, srgb8_to_linear, srgb_float, write_json_atomic, write_npy_atomic, write_png_atomic
+from conftest import srgb8_to_linear
+from viewer.io.imageio import OutputSet, json_safe, linear_to_srgb8, srgb_float, write_json_atomic, write_png_atomic
 
 CONF = Path(__file__).parent / "conformance"
 
@@ -125,7 +126,12 @@ def test_failing_png_write_leaves_no_file(tmp_path, monkeypatch):
 
 def test_failing_overwrite_keeps_previous_file(tmp_path, monkeypatch):
     target = tmp_path / "out.npy"
-    write_npy_atomic(target, np.arange(3))
+
+    def write_npy(array):
+        files = OutputSet()
+        files.npy(target, array)
+        files.commit()
+    write_npy(np.arange(3))
     before = target.read_bytes()
 
     def boom(f, *a, **k):
@@ -133,7 +139,7 @@ def test_failing_overwrite_keeps_previous_file(tmp_path, monkeypatch):
         raise RuntimeError("interrupted")
     monkeypatch.setattr(imageio.np, "save", boom)
     with pytest.raises(RuntimeError):
-        write_npy_atomic(target, np.arange(10))
+        write_npy(np.arange(10))
     assert target.read_bytes() == before
     assert _leftovers(tmp_path) == []
 
@@ -173,14 +179,15 @@ def test_json_safe_leaves_finite_values():
 
 def test_npy_round_trip(tmp_path):
     a = np.arange(12, dtype=np.float32).reshape(3, 4)
-    p = write_npy_atomic(tmp_path / "a.npy", a)
-    b = np.load(p, allow_pickle=False)
+    files = OutputSet()
+    files.npy(tmp_path / "a.npy", a)
+    files.commit()
+    b = np.load(tmp_path / "a.npy", allow_pickle=False)
     assert b.dtype == a.dtype and np.array_equal(a, b)
     assert _leftovers(tmp_path) == []
 
 
 def test_output_set_writes_all_or_nothing(tmp_path):
-    from viewer.io.imageio import OutputSet
     files = OutputSet()
     files.png(tmp_path / "new" / "a.png", np.zeros((2, 3, 3), np.uint8))
     files.json(tmp_path / "new" / "a.json", {"x": 1})

@@ -126,8 +126,8 @@ def test_no_import_cycles():
 
 
 # The layers, top first: a module imports only from its own group and the groups below
-# it (docs/architecture.md draws the same table). Groups on one row are peers that do not
-# import each other.
+# it. Groups on one row are peers that do not import each other. docs/architecture.md's
+# map of folders lists the same groups in this order (tests/test_docs_paths.py).
 LAYERS = (
     ("viewer.__main__",),
     ("viewer.commands",),                 # one module per subcommand

@@ -27,3 +27,21 @@ def test_compile_notice_once_and_only_for_the_projects_kernels():
     assert notice.compiled == 2
     lines = out.getvalue().splitlines()
     assert len(lines) == 1 and "compiling" in lines[0] and " s;" in lines[0]
+
+
+def test_importing_the_camera_or_the_ray_kernels_registers_nothing():
+    """The notice is installed by whoever runs the work (the CLI, the warm-up), never as a
+    side effect of an import."""
+    import subprocess
+    import sys
+    probe = ("import world.camera, raytrace.kernels\n"
+             "from numba.core import event\n"
+             "from world.jit_notice import CompileNotice\n"
+             "print(sum(isinstance(x, CompileNotice) for x in event._registered['numba:compile']))\n"
+             "from world import jit_notice\n"
+             "jit_notice.install(); jit_notice.install()\n"
+             "print(sum(isinstance(x, CompileNotice) for x in event._registered['numba:compile']))\n")
+    from conftest import ROOT
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                         check=True, cwd=ROOT).stdout.split()
+    assert out == ["0", "1"]

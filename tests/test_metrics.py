@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from skimage.metrics import structural_similarity
 
-from viewer.io.imageio import linear_to_srgb8, srgb8_to_linear, write_json_atomic
+from conftest import srgb8_to_linear
+from viewer.io.imageio import linear_to_srgb8, write_json_atomic
 from viewer.eval.metrics import flip_map, image_metrics, metric_maps, to_srgb
 from viewer.render.modes.regions import INNER, OUTER, STATIC
 

@@ -18,9 +18,9 @@ from world.camera import Camera
 from world.conventions import to_image
 from viewer.render.graph.params import ParamSet
 from viewer.render.passes.gbuffer import GBUFFER, path_targets, path_times
-from viewer.render.modes.hybrid.composite import composite_passes
 from viewer.render.modes.hybrid.config import HybridConfig
 from viewer.render.modes.hybrid.mask import raymask_passes
+from viewer.render.modes.hybrid.pipeline import hybrid_pipeline
 from viewer.render.renderer import Renderer
 from viewer.render.modes.hybrid.reveal import BACK, PACKED
 from world.loader import load_scene
@@ -70,7 +70,7 @@ def test_path_points_are_the_projections_of_m_at_t_k(ctx, segments):
     jj, ii = np.nonzero(ids == box.id)
     cam = Camera(scene.camera, *SIZE)
     t = scene.render.time
-    layer = reveal(RayScene(scene), cam, t, np.c_[ii, jj], np.zeros(len(ii)), threads=1).layers[0]
+    layer = reveal(RayScene(scene), cam, t, np.c_[ii, jj], np.zeros(len(ii)), threads=1).layer
     hit = layer.object_id == box.id               # (silhouette pixels may disagree)
     assert hit.sum() > 40
     world = layer.world_position[hit]
@@ -109,6 +109,12 @@ def test_one_segment_writes_no_path_and_a_straight_path_masks_the_same(ctx):
 
 
 # ---- the ray mask and the composite on synthetic paths ------------------------------------------
+
+def composite_stage(config: HybridConfig = HybridConfig()) -> list:
+    """The hybrid pipeline's composite and its displacement tiles (the passes named
+    hybrid_*), run here on a frame whose G-buffer and revealed layer a test uploaded."""
+    return [p for p in hybrid_pipeline(config).passes if p.name.startswith("hybrid_")]
+
 
 def params(segments, **hy):
     p = ParamSet()
@@ -247,7 +253,7 @@ def test_a_reversal_is_blurred_by_the_composite(synthetic_frame):
             upload_front(frame, depth, ids, paths)
         for name in BACK:
             upload(frame, name, np.zeros((H, W, 4)))
-        for p in composite_passes(HybridConfig.of(frame.params)):
+        for p in composite_stage(HybridConfig.of(frame.params)):
             p.allocate(frame)
             p.execute(frame)
         images[segments] = to_image(frame.read("hybrid"))[..., :3]

@@ -18,7 +18,8 @@ from conftest import CONFORMANCE
 from world.conventions import to_image
 from viewer.render.graph.params import ParamSet
 from viewer.render.passes.blur_common import max_radius_px
-from viewer.render.passes.gbuffer import GBUFFER
+from viewer.render.passes.gbuffer import GBUFFER, path_names, path_samplers, path_targets
+from viewer.render.passes.half_velocity import path_bindings
 from viewer.render.modes.mcguire import EARLY_OUT_PX, JITTER_STREAM, Gather, McGuireConfig
 from viewer.render.graph.pool import TexSpec
 from viewer.render.renderer import Renderer
@@ -170,6 +171,17 @@ def render(ctx, scene, mode, settings, size=(64, 36), seed=0):
         return r.render(mode, scene.render.time, p, seed=seed).image[..., :3].astype(np.float64)
     finally:
         r.release()
+
+
+def test_path_target_names_and_their_samplers():
+    # Two path points a target: one segment (the chord) has none, 2 one, 4 two.
+    assert [path_names("t", k) for k in (1, 2, 4)] == [(), ("t_path",), ("t_path", "t_path2")]
+    assert path_targets(4) == ("hybrid_path", "hybrid_path2")
+    assert path_samplers(("a", "b")) == {"u_path0": "a", "u_path1": "b"}
+    assert path_bindings("nm", 1) == {}
+    assert list(path_bindings("nm", 4).items()) == [
+        ("u_path0", "hybrid_path"), ("u_tile_path0", "nm_path"),
+        ("u_path1", "hybrid_path2"), ("u_tile_path1", "nm_path2")]
 
 
 @pytest.mark.parametrize("mode", ["mcguire", "guertin", "ue4"])

@@ -16,7 +16,8 @@ from PIL import Image
 
 from world.errors import SceneError, UserError
 from world.scene import Scene
-from world.loader import image_srgb, load_scene, srgb_to_linear
+from world.images import linear_rgb, srgb_to_linear
+from world.loader import load_scene
 
 CONFORMANCE = Path(__file__).resolve().parent / "conformance"
 
@@ -362,8 +363,8 @@ def test_image_texture_modes_decode_at_their_precision(tmp_path, mode):
         im = Image.fromarray(raw)
         srgb = raw / 65535.0
         # (older Pillows open a 16-bit grey PNG as 32-bit "I", same values)
-        np.testing.assert_array_equal(image_srgb(Image.fromarray(raw.astype(np.int32)))[..., 0],
-                                      srgb)
+        np.testing.assert_array_equal(linear_rgb(Image.fromarray(raw.astype(np.int32)))[..., 0],
+                                      srgb_to_linear(srgb).astype(np.float32))
     else:
         raw = np.array([[0, 10, 128], [255, 200, 7]], np.uint8)
         im = Image.fromarray(raw).convert(mode)

@@ -111,3 +111,25 @@ def test_integer_inputs_are_not_garbage():
     v = tf.look_at(np.array([0, 0, 5]), np.array([0, 0, -1]), np.array([0, 1, 0]))
     assert np.allclose(v @ [0, 0, 5, 1], [0, 0, 0, 1])
     assert np.allclose(tf.perspective(90, 2, 1, 10)[1, 1], 1.0)
+
+
+def test_quaternions_one_order_scalar_and_batched():
+    """(w, x, y, z) throughout: a quarter turn about z is (cos 45, 0, 0, sin 45); batches
+    of quaternions give the single ones' matrices; T R S composes in that order; zero and
+    non-finite quaternions normalise to the identity."""
+    c = np.cos(np.pi / 4)
+    qz = np.array([c, 0.0, 0.0, c])
+    np.testing.assert_allclose(tf.quat_matrix(qz), rodrigues([0, 0, 1], np.pi / 2), atol=1e-15)
+    rng = np.random.default_rng(7)
+    q = tf.quat_normalised(rng.normal(size=(5, 4)))
+    np.testing.assert_allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-15)
+    batch = tf.quat_matrix(q)
+    for k in range(5):
+        np.testing.assert_array_equal(batch[k], tf.quat_matrix(q[k]))
+        np.testing.assert_allclose(batch[k] @ batch[k].T, np.eye(3), atol=1e-14)
+    m = tf.trs([1.0, 2.0, 3.0], qz, [2.0, 3.0, 4.0])
+    want = tf.translate([1, 2, 3]) @ tf.homogeneous(tf.quat_matrix(qz)) @ tf.scale([2, 3, 4])
+    np.testing.assert_allclose(m, want, atol=1e-15)
+    assert tf.trs(np.zeros((4, 3)), q[:4], np.ones((4, 3))).shape == (4, 4, 4)
+    bad = tf.quat_normalised([[0, 0, 0, 0], [np.inf, 0, 0, 0], [np.nan, 1, 0, 0], [0, 0, 0, 2]])
+    np.testing.assert_array_equal(bad, [[1, 0, 0, 0], [1, 0, 0, 0], [1, 0, 0, 0], [0, 0, 0, 1]])

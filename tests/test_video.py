@@ -20,11 +20,14 @@ from viewer.eval.temporal import flicker
 from viewer.io.video_writer import gif_durations
 
 BASIC = str(CONFORMANCE / "basic.toml")
-SMALL = ["--size", "64x36", "--frames", "3", "--samples", "4"]
+SMALL = ["--size", "64x36", "--frames", "3"]
 
 
 def video(tmp_path, out, *args):
-    assert main(["video", BASIC, *SMALL, "--out", str(tmp_path / out), *args]) == 0
+    # --samples only where the reference is drawn (it is refused elsewhere)
+    modes = args[args.index("--modes") + 1].split(",") if "--modes" in args else []
+    samples = ["--samples", "4"] if "reference" in modes or "--metrics" in args else []
+    assert main(["video", BASIC, *SMALL, *samples, "--out", str(tmp_path / out), *args]) == 0
     return tmp_path / out
 
 
@@ -242,7 +245,7 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys):
         "sidecar path is a folder": (["--out", str(tmp_path / "side" / "clip.mp4")], "clip.json"),
         "unknown mode": (["--modes", "off,fancy", "--out", str(tmp_path / "v.mp4")], "'fancy'"),
         "mode twice": (["--modes", "off,off", "--out", str(tmp_path / "v.mp4")], "twice"),
-        "bad start": (["--start", "soon", "--out", str(tmp_path / "v.mp4")], "--start"),
+        "bad start": (["--start", "soon", "--out", str(tmp_path / "v.mp4")], "--time 'soon'"),
         "metrics of the reference alone": (["--modes", "reference", "--metrics", "--out",
                                             str(tmp_path / "v.mp4")], "--metrics"),
     }
@@ -312,3 +315,23 @@ def test_the_viewer_records_what_it_animates_and_video_reproduces_it(tmp_path):
         assert np.abs(a - b).mean() < 0.5, name
     first, last = (np.asarray(Image.open(rec / n)).astype(int) for n in (pngs(rec)[0], pngs(rec)[-1]))
     assert np.abs(first - last).mean() > 0.5          # the animation moved
+
+
+def test_the_printed_size_is_the_files(tmp_path, capsys):
+    # An odd-sided frame: the MP4 holds it rounded up to even sides, and says so; a GIF
+    # and PNG frames hold it as it is.
+    import re
+    for out in ("odd.mp4", "odd.gif", "odd"):
+        assert main(["video", BASIC, "--size", "65x37", "--frames", "2", "--modes", "off",
+                     "--out", str(tmp_path / out)]) == 0
+        printed = re.search(r" (\d+)x(\d+) \(off\)", capsys.readouterr().out).groups()
+        if out.endswith(".mp4"):
+            with av.open(str(tmp_path / out)) as c:
+                held = next(c.decode(video=0)).to_ndarray(format="rgb24").shape
+        elif out.endswith(".gif"):
+            with Image.open(tmp_path / out) as g:
+                held = g.size[::-1]
+        else:
+            held = np.asarray(Image.open(tmp_path / out / "frame_0000.png")).shape
+        assert (int(printed[1]), int(printed[0])) == tuple(held[:2]), out
+    assert printed == ("65", "37")

@@ -17,6 +17,17 @@ def builtin_assets() -> Path:
     return Path(os.path.realpath(Path(scenes.__file__).parent / "assets"))
 
 
+def allowed_roots(scene_path) -> tuple[Path, Path]:
+    """The folders a scene file may name files in (real paths): its own folder and the
+    built-in assets."""
+    return (Path(os.path.realpath(Path(scene_path).parent)), builtin_assets())
+
+
+def within(real: Path, root: Path) -> bool:
+    """Whether the real path `real` is `root` or lies below it."""
+    return real == root or root in real.parents
+
+
 def asset_file(scene_path, rel, key: str, what: str, max_bytes: int, base=None) -> Path:
     """The file `rel` names, as its real path (symlinks resolved): relative to `base` (the
     scene file's folder by default; a glTF file's folder for its buffers and images), or
@@ -32,8 +43,8 @@ def asset_file(scene_path, rel, key: str, what: str, max_bytes: int, base=None) 
         fail(f"expected the path of a {what} file, got {rel!r}")
     folder = Path(base) if base is not None else scene_path.parent
     real = Path(os.path.realpath(folder / rel))
-    roots = (Path(os.path.realpath(scene_path.parent)), builtin_assets())
-    if not any(real == r or r in real.parents for r in roots):
+    roots = allowed_roots(scene_path)
+    if not any(within(real, r) for r in roots):
         fail(f"{what} file {rel} resolves to {real}, outside the scene file's folder "
              f"{roots[0]} and the built-in assets: a scene names files in its own folder "
              "or below it")

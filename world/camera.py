@@ -1,17 +1,14 @@
 """One camera for the rasteriser and the ray tracer: GL matrices and pixel-centre rays."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
 
-from world import jit_notice
 from world import transforms as tf
 from world.conventions import pixel_centres_ndc
 from world.scene import CameraSpec
-
-jit_notice.install()
 
 
 @dataclass
@@ -19,6 +16,11 @@ class Camera:
     spec: CameraSpec
     width: int
     height: int
+    # What is kept between calls: view matrices by pose (the last 8), the projection and
+    # the pixel-centre rows and columns by the values they were made from.
+    _views: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    _projection: tuple | None = field(default=None, init=False, repr=False, compare=False)
+    _lens_cache: tuple | None = field(default=None, init=False, repr=False, compare=False)
 
     @property
     def aspect(self) -> float:
@@ -26,10 +28,10 @@ class Camera:
 
     def view(self, t: float) -> np.ndarray:
         """World-to-view at time t (a read-only array: the same pose gives the same one,
-        kept, because building it costs ~0.1 ms and a frame asks for it several times)."""
+        kept, as a frame asks for it several times)."""
         eye, fwd, up = self.spec.pose(t)
         key = np.concatenate([eye, fwd, up]).tobytes()
-        views = self.__dict__.setdefault("_views", {})
+        views = self._views
         v = views.get(key)
         if v is None:
             if len(views) >= 8:          # the oldest goes (a moving camera's frame asks
@@ -42,12 +44,11 @@ class Camera:
         """The perspective projection (read-only, kept while the lens and size hold)."""
         s = self.spec
         key = (s.fov_y, self.aspect, s.near, s.far)
-        kept = self.__dict__.get("_projection")
-        if kept is None or kept[0] != key:
+        if self._projection is None or self._projection[0] != key:
             p = tf.perspective(*key)
             p.flags.writeable = False
-            kept = self.__dict__["_projection"] = (key, p)
-        return kept[1]
+            self._projection = (key, p)
+        return self._projection[1]
 
     def view_projection(self, t: float) -> np.ndarray:
         return self.projection() @ self.view(t)
@@ -61,13 +62,12 @@ class Camera:
         ray caster sees at once that they are shared)."""
         eye, fwd, up = self.spec.pose(t)
         # Every column's and row's pixel-centre NDC (the convention's one place), then one
-        # compiled pass over the rays, which also makes the camera's basis (numpy's dozen
-        # passes, and its small-vector calls, cost more than the rays).
+        # compiled pass over the rays, which also makes the camera's basis.
         cols, rows, scale_y = self._lens()
         d = _directions(np.asarray(i, np.int64).reshape(-1), np.asarray(j, np.int64).reshape(-1),
                         cols, rows, np.asarray(fwd, np.float64), np.asarray(up, np.float64),
                         scale_y * self.aspect, scale_y)
-        # (np.broadcast_to's result, built directly: ~5x cheaper; read-only like the eye)
+        # (np.broadcast_to's result, built directly; read-only like the eye)
         eye = np.ascontiguousarray(eye, np.float64)
         if eye.flags.writeable:
             eye = eye.copy()
@@ -78,15 +78,13 @@ class Camera:
         """The pixel centres' NDC x of every column and y of every row, and tan(fov_y / 2),
         kept while the size and the field of view hold."""
         key = (self.width, self.height, self.spec.fov_y)
-        kept = self.__dict__.get("_lens_cache")
-        if kept is None or kept[0] != key:
+        if self._lens_cache is None or self._lens_cache[0] != key:
             x, _ = pixel_centres_ndc(np.arange(self.width), np.zeros(self.width),
                                      self.width, self.height)
             _, y = pixel_centres_ndc(np.zeros(self.height), np.arange(self.height),
                                      self.width, self.height)
-            kept = self.__dict__["_lens_cache"] = (
-                key, (x, y, float(np.tan(np.radians(self.spec.fov_y) * 0.5))))
-        return kept[1]
+            self._lens_cache = (key, (x, y, float(np.tan(np.radians(self.spec.fov_y) * 0.5))))
+        return self._lens_cache[1]
 
     def project(self, t: float, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """World points -> (GL window pixel coordinates x right / y up, view depth)."""

@@ -8,13 +8,18 @@ World(node, t)); a skinned one from the entry's root (M(t) = P(t)) and deforms i
 """
 from __future__ import annotations
 
+import os
 import sys
+from pathlib import Path
 
 import numpy as np
 
+from world import limits
 from world.gltf import GltfError, GltfPart, load_gltf
-from world.gltf_scene import AssetInstance, AssetNode, Skin
-from world.scene import Material, Mesh, Placement, SceneObject, Texture
+from world.gltf_scene import AssetInstance, AssetNode
+from world.images import ImageError
+from world.skinning import Skin
+from world.scene import Material, Mesh, Placement, SceneObject
 
 ENTRY_KEYS = ("name", "gltf", "animation", "time_offset", "time_scale", "loop", "position",
               "rotation", "scale", "velocity", "angular_velocity", "interpolation", "keys",
@@ -28,16 +33,17 @@ def load_entry(loader, t: dict, number: int, first_id: int):
     if "mesh" in t:
         loader.fail(f"{k}.mesh", "not allowed together with gltf (the asset brings its meshes)")
     loader.table(t, k, ENTRY_KEYS)
-    name = loader.string(t.get("name", f"object{number}"), f"{k}.name")
+    name = loader.name(t.get("name", f"object{number}"), f"{k}.name")
     if "parent" in t:
         loader.fail(f"{k}.parent", "not allowed on a gltf entry: place the asset with its own "
                     "position, rotation, scale, velocities or keys")
     rel = loader.string(t["gltf"], f"{k}.gltf")
     path = loader.file(rel, f"{k}.gltf", "glTF")
+    errors = _AssetErrors(loader, f"{k}.gltf", path)
     try:
-        asset = load_gltf(path)
+        asset = load_gltf(path, loader.images)
     except GltfError as e:
-        loader.fail(f"{k}.gltf", f"{path}: {e}")
+        errors.fail(str(e))
     animation = t.get("animation", "all")
     if isinstance(animation, bool) or not isinstance(animation, (str, int)):
         loader.fail(f"{k}.animation", "expected an animation's name or index, \"all\" or "
@@ -58,22 +64,55 @@ def load_entry(loader, t: dict, number: int, first_id: int):
     instance = AssetInstance(name, asset, anims, time_offset, time_scale, loop, root)
     instance.nodes = [AssetNode(instance, i, f"{name}/{asset.nodes[i].name}")
                       for i in asset.depth_first()]
-    by_index = {n.index: n for n in instance.nodes}
     if asset.ignored:
         print(f"{loader.path}: {k}.gltf: ignored (scene format v1.2 draws none of these): "
               + ", ".join(asset.ignored), file=sys.stderr)
-    materials = _Materials(asset, specular, shininess)
+    _count(loader, errors, asset, first_id)
+    materials = _Materials(loader, errors, asset, specular, shininess)
+    return instance, _objects(instance, materials, first_id)
+
+
+class _AssetErrors:
+    """Mistakes of the asset itself, named by its file and the glTF item (`nodes[3].scale`),
+    after the entry's key where a scene file names the asset; a bare asset is its own
+    scene file, and its entry no key the user wrote."""
+
+    def __init__(self, loader, key: str, path: Path):
+        self.loader, self.key, self.path = loader, key, path
+        self.bare = Path(os.path.realpath(loader.path)) == path
+
+    def fail(self, what: str):
+        if self.bare:
+            self.loader.fail("", what)
+        self.loader.fail(self.key, f"{self.path}: {what}")
+
+
+def _count(loader, errors: _AssetErrors, asset, first_id: int) -> None:
+    """The entry's objects and the triangles they draw (a mesh drawn by several nodes
+    counts once for each) against the scene's limits, with the scene's earlier objects,
+    before a mesh is built."""
+    drawn = asset.mesh_nodes()
+    if first_id - 1 + len(drawn) > limits.MAX_OBJECTS:
+        errors.fail(f"its {len(drawn)} mesh nodes would bring the scene's objects to "
+                    f"{first_id - 1 + len(drawn)}, more than the limit of {limits.MAX_OBJECTS}")
+    triangles = sum(len(p.faces) for i in drawn for p in asset.meshes[asset.nodes[i].mesh])
+    loader.budget(triangles, errors.key)
+    loader.triangles += triangles
+
+
+def _objects(instance: AssetInstance, materials: "_Materials", first_id: int) -> list[SceneObject]:
+    """One SceneObject per mesh node: a rigid node hanging from its AssetNode (a mesh drawn
+    by several rigid nodes built once), a skinned one from the entry's root."""
+    asset, name = instance.asset, instance.name
+    by_index = {n.index: n for n in instance.nodes}
     objects = []
-    shared: dict[int, dict] = {}       # a glTF mesh drawn by several rigid nodes: one Mesh
+    shared: dict[int, dict] = {}
     for i in asset.mesh_nodes():
         node = asset.nodes[i]
-        key = f"{k}.gltf: nodes[{i}] ({node.name})"
         if node.skin is None and node.mesh in shared:
             arrays = shared[node.mesh]
         else:
-            loader.budget(sum(len(p.faces) for p in asset.meshes[node.mesh]), key)
-            arrays = _mesh(loader, asset.meshes[node.mesh], key)
-            loader.triangles += len(arrays["mesh"].faces)
+            arrays = _mesh(asset.meshes[node.mesh], node.skin is not None)
             if node.skin is None:
                 shared[node.mesh] = arrays
         mesh, ranges = arrays["mesh"], arrays["ranges"]
@@ -82,26 +121,28 @@ def load_entry(loader, t: dict, number: int, first_id: int):
             for first, count, m, has_uv in ranges])
         skin = None
         if node.skin is not None:
-            skin = _skin(loader, instance, node.skin, arrays, key)
+            skin = Skin(instance, node.skin, mesh.vertices, mesh.vertex_normals,
+                        arrays["joints"], arrays["weights"])
             if not skin.moving:        # a still skin: its pose once, drawn as a rigid mesh
                 mesh = _posed(mesh, *skin.deformed(0.0))
                 skin = None
-        obj = SceneObject(name=f"{name}/{node.name}", id=first_id + len(objects), mesh=mesh,
-                          material=parts[0][2], shading="smooth",
-                          parent=root if node.skin is not None else by_index[i],
-                          skin=skin, parts=_parts(parts))
-        objects.append(obj)
-    return instance, objects
+        objects.append(SceneObject(name=f"{name}/{node.name}", id=first_id + len(objects),
+                                   mesh=mesh, material=parts[0][2], shading="smooth",
+                                   parent=instance.root if node.skin is not None else by_index[i],
+                                   skin=skin, parts=_parts(parts)))
+    return objects
 
 
 class _Materials:
     """Scene materials of the asset's materials: albedo baseColorFactor.rgb, times the
     baseColorTexture where the mesh has TEXCOORD_0 (the factor premultiplied into the
-    image: bilinear filtering is linear, so the product is the same), specular and
-    shininess from the entry. Each made once."""
+    image: bilinear filtering is linear, so the product is the same; the scene's images
+    make each image and factor pair once), specular and shininess from the entry. Each
+    made once."""
 
-    def __init__(self, asset, specular: float, shininess: float):
-        self.asset, self.specular, self.shininess = asset, specular, shininess
+    def __init__(self, loader, errors: _AssetErrors, asset, specular: float, shininess: float):
+        self.loader, self.errors, self.asset = loader, errors, asset
+        self.specular, self.shininess = specular, shininess
         self.made: dict = {}
 
     def get(self, index: int | None, textured: bool) -> Material:
@@ -115,8 +156,10 @@ class _Materials:
             albedo = np.clip(base[:3], 0.0, None)
             texture = None
             if textured and image is not None:
-                texture = Texture(kind="image",
-                                  image=(image * albedo.astype(np.float32)).astype(np.float32))
+                try:
+                    texture = self.loader.images.texture(self.loader.images.tinted(image, albedo))
+                except ImageError as e:
+                    self.errors.fail(f"materials[{index}]: {e}")
             self.made[key] = Material(albedo=albedo, specular=self.specular,
                                       shininess=self.shininess, texture=texture)
         return self.made[key]
@@ -142,14 +185,14 @@ def _unit(n: np.ndarray) -> np.ndarray:
     return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
 
 
-def _mesh(loader, parts: list[GltfPart], key: str) -> dict:
+def _mesh(parts: list[GltfPart], skinned: bool) -> dict:
     """One Mesh of a glTF mesh's primitives, in order. A primitive with NORMAL is smooth
     (its normals interpolated); one without is flat: its corners unshared, each with its
     face's normal. UVs turned to this project's convention (origin bottom-left: v -> 1 -
     v); zeros for a primitive without TEXCOORD_0 where another has them. Returns the mesh,
-    the face ranges with their material and whether they have UVs, joints and weights."""
+    the face ranges with their material and whether they have UVs, and for a `skinned`
+    node's mesh its joints and weights (the reader checked that every primitive has them)."""
     pos, nrm, uvs, faces, joints, weights, ranges = [], [], [], [], [], [], []
-    skinned = [p.joints is not None for p in parts]
     any_uv = any(p.uv is not None for p in parts)
     nv = nf = 0
     for p in parts:
@@ -170,10 +213,7 @@ def _mesh(loader, parts: list[GltfPart], key: str) -> dict:
             uv = cols["uv"]
             uvs.append(np.zeros((len(v), 2)) if uv is None
                        else np.stack([uv[:, 0], 1.0 - uv[:, 1]], axis=1))
-        if any(skinned):
-            if cols["joints"] is None:
-                loader.fail(key, "a skinned mesh's primitives all need JOINTS_0 and WEIGHTS_0; "
-                            "one has none")
+        if skinned:
             joints.append(cols["joints"])
             weights.append(cols["weights"])
         faces.append(f + nv)
@@ -185,8 +225,6 @@ def _mesh(loader, parts: list[GltfPart], key: str) -> dict:
     mesh = Mesh(vertices=vertices, faces=allf, vertex_normals=np.concatenate(nrm),
                 face_normals=face_normals(vertices, allf),
                 uv=np.concatenate(uvs) if any_uv else None)
-    if len(allf) == 0:
-        loader.fail(key, "expected a mesh with triangles, this one has none")
     width = max((j.shape[1] for j in joints), default=0)
 
     def padded(a, fill):           # JOINTS_1 on some primitives only: pad the others
@@ -195,23 +233,6 @@ def _mesh(loader, parts: list[GltfPart], key: str) -> dict:
     return {"mesh": mesh, "ranges": ranges,
             "joints": padded(joints, 0) if joints else None,
             "weights": padded(weights, 0.0) if weights else None}
-
-
-def _skin(loader, instance: AssetInstance, skin: int, arrays: dict, key: str) -> Skin:
-    joints, weights = arrays["joints"], arrays["weights"]
-    if joints is None:
-        loader.fail(key, "a node with a skin needs a mesh with JOINTS_0 and WEIGHTS_0")
-    count = len(instance.asset.skins[skin].joints)
-    if count == 0:
-        loader.fail(key, f"skins[{skin}] has no joints")
-    used = weights != 0
-    if (joints[used] >= count).any() or (joints < 0).any():
-        loader.fail(key, f"a vertex names a joint past skins[{skin}]'s {count} joints")
-    if not (weights.sum(axis=1) > 0).all():
-        loader.fail(key, "a vertex's skin weights sum to 0")
-    mesh = arrays["mesh"]
-    return Skin(instance, skin, mesh.vertices, mesh.vertex_normals,
-                np.where(used, joints, 0), weights)
 
 
 def _posed(mesh: Mesh, vertices: np.ndarray, normals: np.ndarray) -> Mesh:

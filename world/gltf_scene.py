@@ -1,5 +1,6 @@
-"""A glTF entry's nodes in the scene tree (scene format v1.2): the asset's animated node
-tree under the entry's placement, and linear blend skinning of its skinned meshes.
+"""A glTF entry's nodes in the scene tree (scene format v1.2): the asset's node tree
+evaluated at an animation time (every node's local and world matrix), under the entry's
+placement. Skinned meshes are posed from these world matrices in world/skinning.py.
 
 One pose evaluation per time: an entry's every node's world matrix at a time is computed
 once (all channels sampled, the tree walked once) and kept for the last few times, and a
@@ -8,9 +9,12 @@ screen-path bend, the static raster's key and the ray tracer all read these.
 """
 from __future__ import annotations
 
+from collections import OrderedDict
+
 import numpy as np
 
-from world.gltf import GltfAsset, skin_vertices
+from world import transforms as tf
+from world.gltf import GltfAsset, sample
 from world.scene import Placement
 
 # Times kept per entry and per skinned mesh: a frame asks for t, the shutter's ends and
@@ -18,11 +22,88 @@ from world.scene import Placement
 POSE_MEMO = 12
 
 
-def _remember(memo: dict, key, value):
+def remember(memo: dict, key, value):
     if len(memo) >= POSE_MEMO:
         memo.pop(next(iter(memo)))
     memo[key] = value
     return value
+
+
+class NodeTree:
+    """An asset's node tree at animation times: which nodes the played animations move,
+    and every node's local and world matrix (arrays indexed by glTF node index)."""
+
+    def __init__(self, asset: GltfAsset):
+        self.asset = asset
+        nodes = asset.nodes
+        n = len(nodes)
+        self._parent = np.array([-1 if nd.parent is None else nd.parent for nd in nodes], dtype=np.int64)
+        self._has_matrix = np.array([nd.matrix is not None for nd in nodes], dtype=bool)
+        self._t0 = np.array([nd.translation for nd in nodes], dtype=np.float64).reshape(n, 3)
+        self._r0 = np.array([nd.rotation for nd in nodes], dtype=np.float64).reshape(n, 4)
+        self._s0 = np.array([nd.scale for nd in nodes], dtype=np.float64).reshape(n, 3)
+        self._m0 = np.array([np.eye(4) if nd.matrix is None else nd.matrix for nd in nodes],
+                            dtype=np.float64).reshape(n, 4, 4)
+        # nodes grouped by depth (all nodes, in or out of the scene): parents before children
+        depth = np.zeros(n, dtype=np.int64)
+        for i in asset.walk([nd.index for nd in nodes if nd.parent is None]):
+            p = nodes[i].parent
+            depth[i] = 0 if p is None else depth[p] + 1
+        self._levels = [np.nonzero(depth == d)[0] for d in range(int(depth.max()) + 1)] if n else []
+        self._cache: OrderedDict = OrderedDict()
+
+    def _channels(self, anims):
+        """The played TRS channels in file order, `matrix` nodes left out."""
+        for i in sorted(set(int(x) for x in anims)):
+            for ch in self.asset.animations[i].channels:
+                if not self._has_matrix[ch.node]:
+                    yield ch
+
+    def animated(self, anims) -> np.ndarray:
+        """(N,) whether a played channel targets the node."""
+        out = np.zeros(len(self.asset.nodes), dtype=bool)
+        for ch in self._channels(anims):
+            out[ch.node] = True
+        return out
+
+    def moving(self, anims) -> np.ndarray:
+        """animated(anims) or any ancestor animated."""
+        out = self.animated(anims)
+        for level in self._levels[1:]:
+            out[level] |= out[self._parent[level]]
+        return out
+
+    def local_matrices(self, a, anims) -> np.ndarray:
+        """(N, 4, 4) local matrices at animation time `a` (already wrapped and scaled)."""
+        t, r, s = self._t0.copy(), self._r0.copy(), self._s0.copy()
+        for ch in self._channels(anims):           # file order: the later channel wins
+            v = sample(ch.sampler, a, ch.path)
+            if ch.path == "translation":
+                t[ch.node] = v
+            elif ch.path == "rotation":
+                r[ch.node] = v
+            else:
+                s[ch.node] = v
+        m = tf.trs(t, tf.quat_normalised(r), s)
+        m[self._has_matrix] = self._m0[self._has_matrix]
+        return m
+
+    def world_matrices(self, a, anims) -> np.ndarray:
+        """(N, 4, 4) World(node) = World(parent) @ Local(node) at animation time `a`; the last
+        few results are memoised (read-only arrays)."""
+        key = (float(a), tuple(sorted(set(int(x) for x in anims))))
+        hit = self._cache.get(key)
+        if hit is not None:
+            self._cache.move_to_end(key)
+            return hit
+        w = self.local_matrices(a, anims)
+        for level in self._levels[1:]:
+            w[level] = np.matmul(w[self._parent[level]], w[level])
+        w.flags.writeable = False
+        self._cache[key] = w
+        while len(self._cache) > 8:
+            self._cache.popitem(last=False)
+        return w
 
 
 class AssetInstance:
@@ -34,7 +115,8 @@ class AssetInstance:
         self.name, self.asset, self.animations = name, asset, animations
         self.time_offset, self.time_scale, self.loop = time_offset, time_scale, loop
         self.root = root
-        self.node_moving = asset.moving(animations)        # (N,) the animated subtrees
+        self.tree = NodeTree(asset)
+        self.node_moving = self.tree.moving(animations)     # (N,) the animated subtrees
         self._worlds: dict[float, np.ndarray] = {}
         # (t0, f): the animation runs f times as fast about t0 (hmblur bench --speeds, as
         # keyed paths are retimed); None: as written.
@@ -56,9 +138,9 @@ class AssetInstance:
         a = self.animation_time(t) if self.animated else 0.0
         w = self._worlds.get(a)
         if w is None:
-            w = self.asset.world_matrices(a, self.animations)
+            w = self.tree.world_matrices(a, self.animations)
             w.flags.writeable = False
-            _remember(self._worlds, a, w)
+            remember(self._worlds, a, w)
         return w
 
     def node_matrix(self, index: int, t: float) -> np.ndarray:
@@ -86,46 +168,3 @@ class AssetNode:
         if self.skinned:
             return self.instance.root.matrix(t)
         return self.instance.node_matrix(self.index, t)
-
-
-class Skin:
-    """Linear blend skinning of one mesh node's vertices by a glTF skin: at time t the
-    vertices in the asset's space, B v with B = sum_i w_i J_(j_i)(t) (the skinned node's own
-    World is not applied; the object's matrix is the entry's placement P(t))."""
-
-    def __init__(self, instance: AssetInstance, skin: int, positions: np.ndarray,
-                 normals: np.ndarray, joints: np.ndarray, weights: np.ndarray):
-        self.instance, self.skin = instance, skin
-        self.positions, self.normals = positions, normals     # the bind pose, (n, 3)
-        self.joints, self.weights = joints, weights            # (n, k)
-        joint_nodes = np.asarray(instance.asset.skins[skin].joints, np.int64)
-        self.moving = bool(instance.node_moving[joint_nodes].any())
-        self._memo: dict[float, tuple[np.ndarray, np.ndarray]] = {}
-
-    def stamp(self, *times) -> tuple:
-        """What the poses at `times` depend on (their animation times): a key for what is
-        kept of them (posed buffers, Embree scenes)."""
-        return tuple(self.instance.animation_time(t) if self.moving else 0.0
-                     for t in times if t is not None)
-
-    def points(self, t: float, step: int) -> np.ndarray:
-        """Every `step`-th vertex posed at t (the screen-path bend's samples): only those
-        skinned, or taken from the whole pose where that is kept already."""
-        a = self.instance.animation_time(t) if self.moving else 0.0
-        if a in self._memo:
-            return self._memo[a][0][::step]
-        mats = self.instance.asset.joint_matrices(self.skin, self.instance.worlds(t))
-        return skin_vertices(self.positions[::step], None, self.joints[::step],
-                             self.weights[::step], mats)[0]
-
-    def deformed(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """(positions, unit normals) at time t, (n, 3) float64 each, read-only."""
-        a = self.instance.animation_time(t) if self.moving else 0.0
-        got = self._memo.get(a)
-        if got is None:
-            mats = self.instance.asset.joint_matrices(self.skin, self.instance.worlds(t))
-            p, n = skin_vertices(self.positions, self.normals, self.joints, self.weights, mats)
-            for x in (p, n):
-                x.flags.writeable = False
-            got = _remember(self._memo, a, (p, n))
-        return got

@@ -1,10 +1,10 @@
 """One line on stderr before numba compiles the project's kernels, with the expected wait.
 
-The kernels (`raytrace/kernels.py`, `viewer/render/modes/hybrid/tile_kernels.py`, `hybrid/reveal_kernels.py`,
-the camera's rays in `world/camera.py`) are compiled on the first hybrid frame and cached
-on disk beside their modules (`__pycache__`), so a later process loads them in well under
-a second; `scripts/setup.sh` compiles them ahead
-(`python -m viewer.cli.warmup`). Where the cache is cold anyway (an install that skipped
+The kernels (`raytrace/kernels.py`, `viewer/render/passes/tile_kernels.py`,
+`viewer/render/modes/hybrid/reveal_kernels.py`, the camera's rays in `world/camera.py`) are
+compiled on the first hybrid frame and cached on disk beside their modules
+(`__pycache__`), so a later process loads them in well under a second; `scripts/setup.sh`
+compiles them ahead (`python -m viewer.cli.warmup`). Where the cache is cold anyway (an install that skipped
 the set-up, or kernels just edited), the user sees why the first frame waits. numba fires
 its "numba:compile" event only on a cache miss, so a warm cache prints nothing.
 """
@@ -14,7 +14,7 @@ import sys
 
 from numba.core import event
 
-EXPECTED_S = 40          # seconds: the whole set on one core (38 s of CPU measured)
+EXPECTED_S = 40          # seconds the notice announces: the whole set on one core
 PACKAGES = ("world.", "viewer.", "raytrace.")
 
 
@@ -45,7 +45,8 @@ _installed = False
 
 
 def install() -> CompileNotice:
-    """Register the notice with numba (once a process); the kernel modules call this."""
+    """Register the notice with numba (once a process): the CLI and the warm-up call this
+    before any work; importing a kernel module registers nothing."""
     global _installed
     if not _installed:
         event.register("numba:compile", _NOTICE)

@@ -15,15 +15,34 @@ MAX_FRAME_PIXELS = 2048 * 2048
 # Triangles of a scene, all meshes together (a revolve or file counted before it is built
 # or read into the renderer): ~0.5 kB each through trimesh, Embree and the GPU.
 MAX_TRIANGLES = 2_000_000
-# Objects and lights of a scene: each object costs ~25 kB of host memory and a draw call
-# per pass; every pixel's shading loops over the lights.
+# Objects and lights of a scene (a glTF entry's mesh nodes are objects): each object costs
+# ~25 kB of host memory and a draw call per pass; every pixel's shading loops over the
+# lights.
 MAX_OBJECTS = 10_000
 MAX_LIGHTS = 4_096
+# Names (of objects, scenes, glTF nodes and animations): they head error messages and
+# name parents.
+MAX_NAME_CHARS = 1024
 # Asset files a scene names (meshes, images) and their decoded size.
 MAX_SCENE_BYTES = 16 << 20
 MAX_MESH_BYTES = 256 << 20
 MAX_IMAGE_BYTES = 256 << 20
 MAX_IMAGE_PIXELS = 4096 * 4096          # a texture: 16.8 Mpx, 200 MB as float32 RGB
+# Texels a scene's images hold together (scene-file textures and glTF images alike, each
+# distinct image once, a glTF image tinted by a material's colour once more): each is
+# 12 bytes decoded and as much again on the GPU.
+MAX_SCENE_IMAGE_PIXELS = 2 * 4096 * 4096
+# glTF assets (world/gltf/), each bounded before it is allocated so that a small hostile
+# file cannot make the program allocate gigabytes.
+MAX_GLTF_FILE_BYTES = 256 << 20         # any one .gltf/.glb/.bin/image file or data URI
+MAX_GLTF_COMPONENTS = 2 ** 26           # decoded accessor components together (512 MiB as float64)
+# Vertices of an asset's mesh nodes, each node's mesh counted (as triangles are against
+# MAX_TRIANGLES): three per triangle drawn.
+MAX_GLTF_VERTICES = 3 * MAX_TRIANGLES
+MAX_GLTF_NODES = 2 ** 16
+MAX_GLTF_JOINTS = 2 ** 16               # per skin
+MAX_GLTF_ITEMS = 2 ** 16                # entries of any array (meshes, accessors, ...)
+MAX_GLTF_JSON_DEPTH = 64
 # `--params FILE.json`: a sidecar is a few kB; JSON nesting and integers beyond these are
 # not a sidecar's.
 MAX_PARAMS_BYTES = 4 << 20

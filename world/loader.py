@@ -22,11 +22,10 @@ from pathlib import Path
 
 import numpy as np
 import trimesh
-from PIL import Image
 
 import scenes
 
-from world import asset_scene, limits
+from world import asset_scene, images, limits
 from world.assets import asset_file
 from world.errors import SceneError
 from world.scene import (INTERPOLATIONS, CameraKeys, CameraSpec, Light, Material, Mesh, ObjectKeys,
@@ -66,8 +65,11 @@ def builtin_scene_path(name: str) -> Path:
     return path
 
 
-def load_scene(source) -> Scene:
-    """A scene from a TOML path, or from a built-in name (no ".toml", not an existing path)."""
+def load_scene(source, animations: dict | None = None) -> Scene:
+    """A scene from a TOML path, or from a built-in name (no ".toml", not an existing path).
+    `animations`: {gltf entry name: "all", "none", an animation's name or index}, each
+    replacing the `animation` key of the entries of that name (the viewer's choice, kept
+    in sidecars)."""
     path = Path(source)
     if not _is_file(path):
         if isinstance(source, str) and not source.endswith(".toml") and not _exists(path):
@@ -77,14 +79,56 @@ def load_scene(source) -> Scene:
         else:
             raise SceneError(path, "", "file not found")
     if asset_scene.is_asset(path):      # a bare glTF asset: a scene made around it
-        return load_asset(path)[0]
-    return _Loader(path).load()
+        return load_asset(path, animations)[0]
+    if not animations:
+        return _out_of_memory_said(path, _Loader(path).load)
+    loader = _Loader(path)
+    return _out_of_memory_said(path, lambda: _Loader(
+        path, document=choose_animations(loader.parse(), animations, path)).load())
 
 
-def load_asset(path) -> tuple[Scene, dict]:
+def load_asset(path, animations: dict | None = None) -> tuple[Scene, dict]:
     """(Scene, the scene document it was loaded from) of a bare .gltf/.glb file
-    (world.asset_scene; docs/scene-format.md, "A glTF file as a scene")."""
-    return asset_scene.load_asset_scene(Path(path), _Loader)
+    (world.asset_scene; docs/scene-format.md, "A glTF file as a scene"); `animations` as
+    for load_scene (the framing follows the animations chosen)."""
+    path = Path(path)
+    choose = (lambda doc: choose_animations(doc, animations, path)) if animations else None
+    return _out_of_memory_said(path, lambda: asset_scene.load_asset_scene(path, _Loader,
+                                                                         choose))
+
+
+def choose_animations(doc: dict, animations: dict, path) -> dict:
+    """`doc` with the `animation` of each gltf entry named in `animations` replaced (the
+    values are checked as the file's are, when the entry loads); a name that is no gltf
+    entry's is a SceneError."""
+    if not isinstance(animations, dict) or len(animations) > limits.MAX_OBJECTS:
+        raise SceneError(path, "animations", "expected a table of at most "
+                         f"{limits.MAX_OBJECTS} gltf entry names")
+    entries = doc.get("objects") if isinstance(doc, dict) else None
+    if not isinstance(entries, list):
+        entries = []
+    found = set()
+    chosen = []
+    for number, t in enumerate(entries, 1):
+        if isinstance(t, dict) and "gltf" in t:
+            name = t.get("name", f"object{number}")
+            if isinstance(name, str) and name in animations:
+                t = {**t, "animation": animations[name]}
+                found.add(name)
+        chosen.append(t)
+    missing = [n for n in animations if n not in found]
+    if missing:
+        raise SceneError(path, "animations", f"no gltf entry named {str(missing[0])[:80]!r}")
+    return {**doc, "objects": chosen}
+
+
+def _out_of_memory_said(path, load):
+    """load(), with a MemoryError a SceneError naming the scene file (the files a scene
+    names say so themselves, with their key, where they are read)."""
+    try:
+        return load()
+    except MemoryError:
+        raise SceneError(path, "", "out of memory while loading the scene") from None
 
 
 def _is_file(p: Path) -> bool:
@@ -138,6 +182,9 @@ class _Loader:
         self.path = path
         self.document = document        # a scene document made elsewhere, else the file's
         self.triangles = 0          # of the meshes built so far (limits.MAX_TRIANGLES)
+        self.images = images.SceneImages()      # the scene's decoded images, each once
+        # Every earlier object and glTF node by name, for `parent` (v1.2).
+        self.named: dict[str, list] = {}
 
     def fail(self, key: str, expected: str):
         if "[" in key:
@@ -169,6 +216,13 @@ class _Loader:
         if not isinstance(v, str):
             self.fail(key, f"expected a string, got {describe_value(v)}")
         return v
+
+    def name(self, v, key: str) -> str:
+        s = self.string(v, key)
+        if len(s) > limits.MAX_NAME_CHARS:
+            self.fail(key, f"expected a name of at most {limits.MAX_NAME_CHARS} characters, "
+                      f"got {len(s)}")
+        return s
 
     def table(self, v, key: str, allowed) -> dict:
         if not isinstance(v, dict):
@@ -235,7 +289,7 @@ class _Loader:
         doc = self.parse() if self.document is None else self.document
         self.table(doc, "", ("name", "background", "ambient", "camera", "render", "lights",
                              "objects"))
-        name = self.string(doc.get("name", self.path.stem), "name")
+        name = self.name(doc.get("name", self.path.stem), "name")
         background = self.colour(doc.get("background", [0, 0, 0]), "background")
         ambient = self.colour(doc.get("ambient", [0, 0, 0]), "ambient")
         camera = self.camera(self.require(doc, "camera", "", "a [camera] table"))
@@ -244,8 +298,6 @@ class _Loader:
                   for i, t in enumerate(self.at_most(self.array_of_tables(
                       doc.get("lights", []), "lights"), "lights", limits.MAX_LIGHTS), 1)]
         objects, assets = [], []
-        # Every earlier object and glTF node by name, for `parent` (v1.2).
-        self.named: dict[str, list] = {}
         entries = self.at_most(self.array_of_tables(doc.get("objects", []), "objects"),
                                "objects", limits.MAX_OBJECTS)
         for i, t in enumerate(entries, 1):
@@ -416,7 +468,7 @@ class _Loader:
         """How errors name objects entry `number`: objects[k] (name)."""
         k = f"objects[{number}]"
         name = t.get("name", f"object{number}")
-        return f"{k} ({name})" if isinstance(name, str) else k
+        return f"{k} ({name})" if isinstance(name, str) and len(name) <= limits.MAX_NAME_CHARS else k
 
     def object(self, t: dict, number: int, oid: int) -> SceneObject:
         k = self.entry_key(t, number)
@@ -424,7 +476,7 @@ class _Loader:
         self.table(t, k, ("name", "mesh", "position", "rotation", "scale", "shading",
                           "material", "velocity", "angular_velocity", "interpolation", "keys",
                           "parent"))
-        name = self.string(name, f"{k}.name")
+        name = self.name(name, f"{k}.name")
         placement = self.placement(t, k)
         mesh_value = self.require(t, "mesh", k, "a file path or a primitive table")
         mesh = self.mesh(mesh_value, f"{k}.mesh")
@@ -504,7 +556,10 @@ class _Loader:
                           "this mesh has none (primitives never do)")
             rel = self.string(self.require(v, "path", k, "an image file"), f"{k}.path")
             path = self.file(rel, f"{k}.path", "image")
-            return Texture(kind=kind, path=path, image=self.image(path, f"{k}.path"))
+            try:
+                return self.images.texture(self.images.from_file(path), path)
+            except images.ImageError as e:
+                self.fail(f"{k}.path", f"{path}: {e}")
         axis = 0
         if kind == "stripes":
             axis = self.integer(self.require(v, "axis", k, "0, 1 or 2"), f"{k}.axis")
@@ -518,26 +573,10 @@ class _Loader:
     # -- files
 
     def file(self, rel: str, key: str, what: str) -> Path:
-        """world/assets.asset_file's rule: inside the scene's folder, a regular file,
+        """world.assets.asset_file's rule: inside the scene's folder, a regular file,
         within the size limit of its kind."""
         cap = limits.MAX_IMAGE_BYTES if what == "image" else limits.MAX_MESH_BYTES
         return asset_file(self.path, rel, key, what, cap)
-
-    def image(self, path: Path, key: str) -> np.ndarray:
-        try:
-            with Image.open(path) as im:          # (lazy: the header only, so far)
-                w, h = im.size
-                if w * h > limits.MAX_IMAGE_PIXELS:
-                    self.fail(key, f"expected an image of at most {limits.MAX_IMAGE_PIXELS} "
-                              f"pixels (e.g. 4096x4096), {path} is {w}x{h}")
-                linear = image_linear(im)
-        except SceneError:
-            raise
-        except Exception as e:   # Pillow raises many types for bad files
-            self.fail(key, f"expected a readable image, {path} failed: {type(e).__name__}: {e}")
-        if linear.size == 0:
-            self.fail(key, f"expected a non-empty image, {path} has no pixels")
-        return linear
 
     # -- meshes
 
@@ -553,6 +592,8 @@ class _Loader:
                 tm = trimesh.load(str(path), force="mesh")
             except SceneError:
                 raise
+            except MemoryError:
+                self.fail(k, f"{path}: out of memory reading the mesh")
             except Exception as e:   # trimesh raises many types for bad files
                 self.fail(k, f"expected a readable mesh file, {path} failed: "
                           f"{type(e).__name__}: {e}")
@@ -659,23 +700,6 @@ class _Loader:
         return Mesh(vertices=vertices, faces=faces, vertex_normals=vn, face_normals=fn, uv=uv)
 
 
-# Pillow's single-channel modes wider than 8 bits, and their full scale: convert("RGB")
-# would clip them to 255 (a 16-bit grey PNG opens as "I;16", or "I" in older Pillows).
-_WIDE_GREY = {"I;16": 65535.0, "I;16L": 65535.0, "I;16B": 65535.0, "I;16N": 65535.0,
-              "I": 65535.0, "F": 1.0}
-
-
-def image_srgb(im: Image.Image) -> np.ndarray:
-    """An image's sRGB-encoded values in [0, 1], (H, W, 3) float64: 8-bit modes through
-    Pillow's RGB conversion (alpha dropped, palettes expanded), 16-bit grey at its own
-    precision, float grey as is."""
-    scale = _WIDE_GREY.get(im.mode)
-    if scale is None:
-        return np.asarray(im.convert("RGB"), dtype=np.float64) / 255.0
-    grey = np.clip(np.asarray(im, dtype=np.float64) / scale, 0.0, 1.0)
-    return np.repeat(grey[..., None], 3, axis=-1)
-
-
 def check_camera(data: dict, source: str) -> CameraSpec:
     """A camera table ([camera], docs/scene-format.md) from elsewhere than a scene file (an
     image's sidecar), checked as a scene file's is; errors name `source`."""
@@ -699,27 +723,5 @@ def merge_camera(spec: CameraSpec, data: dict, source: str) -> CameraSpec:
     return check_camera(merged, source)
 
 
-# The linear value of each 8-bit sRGB code: an 8-bit image decodes through this table to
-# float32 (4 bytes a channel; the same values as srgb_to_linear(code / 255) in float64).
-_SRGB8_LINEAR = None
-
-
-def image_linear(im: Image.Image) -> np.ndarray:
-    """An image's linear values, (H, W, 3) float32: 8-bit modes through a 256-entry table
-    (no float64 copy of the image), others through image_srgb."""
-    global _SRGB8_LINEAR
-    if im.mode in _WIDE_GREY:
-        return srgb_to_linear(image_srgb(im)).astype(np.float32)
-    if _SRGB8_LINEAR is None:
-        _SRGB8_LINEAR = srgb_to_linear(np.arange(256) / 255.0).astype(np.float32)
-    return _SRGB8_LINEAR[np.asarray(im.convert("RGB"))]
-
-
-def srgb_to_linear(c: np.ndarray) -> np.ndarray:
-    """The standard sRGB decoding (IEC 61966-2-1) of values in [0, 1]."""
-    c = np.asarray(c, dtype=np.float64)
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-
-
 __all__ = ["load_scene", "load_asset", "builtin_scene_names", "builtin_scene_path", "check_camera",
-           "merge_camera", "image_srgb", "srgb_to_linear"]
+           "merge_camera"]

@@ -38,17 +38,16 @@ FAR_PX = 1e7
 
 def object_points(obj, t: float = 0.0) -> np.ndarray:
     """At most MAX_POINTS of the object's vertices at time t, homogeneous (4, n): a rigid
-    mesh's kept on the object (a frame asks once per mode and step count; 32 movers'
-    points cost ~1 ms to build), a skinned mesh's from its pose at t."""
+    mesh's kept on the object (a frame asks once per mode and step count), a skinned
+    mesh's from its pose at t."""
     if obj.skin is not None:
         v = obj.skin.points(t, max(1, -(-len(obj.mesh.vertices) // MAX_POINTS)))
         return np.vstack([v.T, np.ones(len(v))])
-    kept = obj.__dict__.get("_bend_points")
-    if kept is None or kept[0] is not obj.mesh:
+    if obj.bend_points is None or obj.bend_points[0] is not obj.mesh:
         v = np.asarray(obj.mesh.vertices, dtype=np.float64)
         v = v[::max(1, -(-len(v) // MAX_POINTS))]
-        kept = obj.__dict__["_bend_points"] = (obj.mesh, np.vstack([v.T, np.ones(len(v))]))
-    return kept[1]
+        obj.bend_points = (obj.mesh, np.vstack([v.T, np.ones(len(v))]))
+    return obj.bend_points[1]
 
 
 def screen_bend(scene: Scene, camera: Camera, t: float, shutter: float) -> float:

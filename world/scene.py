@@ -119,11 +119,7 @@ class ObjectKeys:
 
     def matrix(self, t: float) -> np.ndarray:
         """M(t) = T(p(t)) @ R(q(t)) @ S(s(t))."""
-        p, q, s = self.pose(t)
-        m = np.eye(4)
-        m[:3, :3] = tf.quat_matrix(q) * s      # R @ diag(s): column k scaled by s[k]
-        m[:3, 3] = p
-        return m
+        return tf.trs(*self.pose(t))
 
     def retimed(self, t0: float, speed: float) -> "ObjectKeys":
         """The same path run `speed` times as fast about the time t0 (pose'(t) =
@@ -201,12 +197,16 @@ class Placement:
     keys: ObjectKeys | None = None
     # What this node hangs from: another placement or a glTF node (AssetNode); None: the world.
     parent: "Placement | AssetNode | None" = None
+    # Kept own matrices (the last 8, by t and every field they depend on), and R0 @ S by
+    # the rotation and scale it was made from.
+    _matrix_memo: dict = field(default_factory=dict, init=False, repr=False)
+    _rest_cache: tuple | None = field(default=None, init=False, repr=False)
 
     @property
     def own_moving(self) -> bool:
         if self.keys is not None:
             return self.keys.varies
-        return bool(self.velocity.any() or self.angular_velocity.any())   # (np.any: 3x slower)
+        return bool(self.velocity.any() or self.angular_velocity.any())
 
     @property
     def moving(self) -> bool:
@@ -226,7 +226,7 @@ class Placement:
         the last few results are kept, keyed by t and every field they depend on. A node
         that does not move has one matrix at every t (translation p + 0 t = p, no
         turn): keyed as t = 0, so an animation's frames do not rebuild it three times
-        each (living_room: 28 still objects)."""
+        each."""
         moving = self.own_moving
         if self.keys is not None:
             key = (float(t) if moving else 0.0, self.keys.token)
@@ -234,7 +234,7 @@ class Placement:
             key = (float(t) if moving else 0.0, self.position.tobytes(), self.velocity.tobytes(),
                    self.angular_velocity.tobytes(), self.rotation.tobytes(),
                    self.scale.tobytes())
-        memo = self.__dict__.setdefault("_matrix_memo", {})
+        memo = self._matrix_memo
         m = memo.get(key)
         if m is None and self.keys is not None:
             m = self.keys.matrix(t if moving else float(self.keys.times[0]))
@@ -256,11 +256,10 @@ class Placement:
     def _rest(self) -> np.ndarray:
         """R0 @ S, cached against the values it was made from (the fields may be edited)."""
         key = (self.rotation.tobytes(), self.scale.tobytes())
-        cached = getattr(self, "_rest_cache", None)
-        if cached is None or cached[0] != key:
-            cached = (key, tf.homogeneous(tf.euler_xyz_degrees(self.rotation)) @ tf.scale(self.scale))
-            self._rest_cache = cached
-        return cached[1].copy()
+        if self._rest_cache is None or self._rest_cache[0] != key:
+            self._rest_cache = (key, tf.homogeneous(tf.euler_xyz_degrees(self.rotation))
+                                @ tf.scale(self.scale))
+        return self._rest_cache[1].copy()
 
 
 @dataclass(eq=False)
@@ -278,6 +277,8 @@ class SceneObject(Placement):
     # A mesh of several materials (glTF primitives): (first face, face count, material)
     # per part, covering the faces in order; None: `material` for every face.
     parts: list | None = None
+    # world.path_bend's sample of a rigid mesh's vertices: (the mesh, homogeneous points).
+    bend_points: tuple | None = field(default=None, init=False, repr=False)
 
     @property
     def moving(self) -> bool:
@@ -288,10 +289,6 @@ class SceneObject(Placement):
         """The mesh's vertices in the object's own space at time t (what M(t) places): a
         skinned mesh's posed at t, else the mesh's own."""
         return self.mesh.vertices if self.skin is None else self.skin.deformed(t)[0]
-
-    def normals_at(self, t: float) -> np.ndarray:
-        """The vertex normals in the object's own space at time t, as vertices_at."""
-        return self.mesh.vertex_normals if self.skin is None else self.skin.deformed(t)[1]
 
 
 @dataclass
@@ -308,25 +305,27 @@ class CameraSpec:
     # A keyed path instead of position, look_at and the velocities (which then hold the
     # first key's pose and zero velocities; `up` is the keys' default up).
     keys: CameraKeys | None = None
+    # Kept poses: the last 8, by t and every field they depend on.
+    _pose_memo: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def moving(self) -> bool:
         if self.keys is not None:
             return self.keys.varies
-        return bool(self.velocity.any() or self.angular_velocity.any())   # (np.any: 3x slower)
+        return bool(self.velocity.any() or self.angular_velocity.any())
 
     def pose(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(eye, forward, up) at time t; forward and up are turned by Rot(angular_velocity t),
         or for a keyed camera CameraKeys.pose(t).
 
         Read-only arrays, the last few kept by t and every field they depend on: a frame
-        asks for a handful of times in many places (a turning camera's pose costs ~20 us)."""
+        asks for a handful of times in many places."""
         if self.keys is not None:
             key = (float(t), self.keys.token)
         else:
             key = (float(t), self.position.tobytes(), self.look_at.tobytes(), self.up.tobytes(),
                    self.velocity.tobytes(), self.angular_velocity.tobytes())
-        memo = self.__dict__.setdefault("_pose_memo", {})
+        memo = self._pose_memo
         pose = memo.get(key)
         if pose is None and self.keys is not None:
             pose = tuple(np.array(a) for a in self.keys.pose(t))

@@ -16,8 +16,8 @@ def _f64(v) -> np.ndarray:
 
 def _undecorated(f):
     """pyrr's argument-converting decorator inspects the function's signature on every
-    call (~8-30 us, a moving object's matrices ask three times a frame); the arguments
-    here are float64 arrays already, so the function beneath it is called."""
+    call; the arguments here are float64 arrays already, so the function beneath it is
+    called."""
     return getattr(f, "__wrapped__", f)
 
 
@@ -135,7 +135,9 @@ def cofactor_direction(m3: np.ndarray) -> np.ndarray:
 
 
 # ---------------------------------------------------------------- unit quaternions
-# (w, x, y, z), the rotation q v q*; keyed rotations (scene format v1.1) are slerped as these.
+# (w, x, y, z), the rotation q v q*: the project's one order. Keyed rotations (scene format
+# v1.1) and glTF's rotations (stored (x, y, z, w); world/gltf/reader.py reorders them as it
+# reads them) are slerped and made matrices as these.
 
 def quat_axis(axis: int, angle: float) -> np.ndarray:
     """The rotation by `angle` radians about coordinate axis 0, 1 or 2."""
@@ -161,13 +163,41 @@ def quat_euler_xyz_degrees(deg) -> np.ndarray:
     return quat_mul(quat_axis(2, rz), quat_mul(quat_axis(1, ry), quat_axis(0, rx)))
 
 
+def quat_normalised(q) -> np.ndarray:
+    """Quaternions (..., 4) divided by their length; the identity where the length is 0 or
+    not finite."""
+    q = _f64(q)
+    n = np.sqrt(np.einsum("...i,...i->...", q, q))[..., None]
+    good = (n > 0.0) & np.isfinite(n)
+    return np.where(good, q / np.where(good, n, 1.0), [1.0, 0.0, 0.0, 0.0])
+
+
 def quat_matrix(q) -> np.ndarray:
-    """3x3 rotation of the unit quaternion q = (w, x, y, z)."""
-    w, x, y, z = _f64(q)
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+    """3x3 rotations (..., 3, 3) of unit quaternions (..., 4) = (w, x, y, z)."""
+    q = _f64(q)
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    r = np.empty(q.shape[:-1] + (3, 3))
+    r[..., 0, 0] = 1 - 2 * (y * y + z * z)
+    r[..., 0, 1] = 2 * (x * y - w * z)
+    r[..., 0, 2] = 2 * (x * z + w * y)
+    r[..., 1, 0] = 2 * (x * y + w * z)
+    r[..., 1, 1] = 1 - 2 * (x * x + z * z)
+    r[..., 1, 2] = 2 * (y * z - w * x)
+    r[..., 2, 0] = 2 * (x * z - w * y)
+    r[..., 2, 1] = 2 * (y * z + w * x)
+    r[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    return r
+
+
+def trs(t, q, s) -> np.ndarray:
+    """T(t) @ R(q) @ S(s), (..., 4, 4), of translations (..., 3), unit quaternions (..., 4)
+    and scale factors (..., 3)."""
+    t, s = _f64(t), _f64(s)
+    m = np.zeros(t.shape[:-1] + (4, 4))
+    m[..., :3, :3] = quat_matrix(q) * s[..., None, :]    # R @ diag(s): column k scaled by s[k]
+    m[..., :3, 3] = t
+    m[..., 3, 3] = 1.0
+    return m
 
 
 SLERP_MIN_ANGLE = 1e-6     # below it, slerp's 1 / sin(theta) is replaced by a normalised lerp

@@ -42,7 +42,7 @@ vec2 clamp_tap(vec2 p) {
 }
 
 // Colour at tap p: bilinear from the four texels around it, weighted here (see
-// viewer/render/ue4.py), or the texel that holds it, whose depth and velocity the weights use.
+// viewer/render/modes/ue4.py), or the texel that holds it, whose depth and velocity the weights use.
 vec3 tap_color(vec2 p) {
     if (!u_bilinear) return texelFetch(u_color, ivec2(p), 0).rgb;
     vec2 q = p - 0.5;

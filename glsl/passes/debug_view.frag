@@ -1,8 +1,8 @@
 #version 330 core
 // Draws one pool texture into a destination rectangle with a visualisation chosen at run
-// time (viewer/render/debug_view.py). The same rules as viewer/visualize.py, on the GPU.
+// time (viewer/render/passes/debug_view.py). The same rules as viewer/io/visualize.py, on the GPU.
 // SOURCE_TYPE (define): 0 float/normalised texture, SOURCE_UINT unsigned integer, SOURCE_INT
-// signed integer; u_kind one of KIND_<NAME> (viewer/render/debug_view.py view_defines).
+// signed integer; u_kind one of KIND_<NAME> (viewer/render/passes/debug_view.py view_defines).
 #if SOURCE_TYPE == SOURCE_UINT
 uniform usampler2D u_src;
 #elif SOURCE_TYPE == SOURCE_INT

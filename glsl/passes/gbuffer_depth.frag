@@ -1,5 +1,5 @@
 #version 330 core
-// The static objects' kept depths (viewer/render/static_raster.py) at the pixels whose
+// The static objects' kept depths (viewer/render/passes/static_raster.py) at the pixels whose
 // static has a draw rank in [u_ranks.x, u_ranks.y), written through the depth test into a
 // depth-only target: where those statics still hold the pixel at one float farther than
 // their own depth, they take it back before the next mover is drawn.

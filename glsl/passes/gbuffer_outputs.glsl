@@ -1,12 +1,12 @@
 // G-buffer render targets. GBUFFER_LAYOUT picks which are written: one of the codes
-// GBUFFER_LAYOUT_<NAME> of viewer/render/gbuffer.py's LAYOUTS (injected). FULL = all,
+// GBUFFER_LAYOUT_<NAME> of viewer/render/passes/gbuffer.py's LAYOUTS (injected). FULL = all,
 // VISIBILITY = colour, depth and id (reference sub-frames that record visibility), COLOR =
 // colour only (plain reference sub-frames), HYBRID = the hybrid mode's: colour, normal and
 // the packed front layer (D, depth, id) that every hybrid pass reads, one fetch for all
-// three (writing depth, id and D once each costs ~2.5 ms a frame at 640x360 on llvmpipe);
+// three (every target written costs per fragment on llvmpipe: docs/architecture.md);
 // FRONT = colour and the packed front layer (the hybrid mode's without the poster's edge
 // test, which alone reads the normal target; and the static objects' layer that the
-// hybrid reveal copies where a ray's first hit is static: viewer/render/hybrid/reveal.py);
+// hybrid reveal copies where a ray's first hit is static: viewer/render/modes/hybrid/reveal.py);
 // MOTION = colour, depth and displacement (the post-process filters').
 #define GBUFFER_FULL (GBUFFER_LAYOUT == GBUFFER_LAYOUT_FULL)
 #define GBUFFER_HYBRID (GBUFFER_LAYOUT == GBUFFER_LAYOUT_HYBRID)
@@ -41,7 +41,7 @@ layout(location = PATH_LOCATION) out vec4 out_path0;
 layout(location = PATH_LOCATION1) out vec4 out_path1;
 #endif
 #endif
-// The static objects' kept raster (viewer/render/static_raster.py) also writes each
+// The static objects' kept raster (viewer/render/passes/static_raster.py) also writes each
 // pixel's static draw rank (1 + its place in the draw order, 0 = background), last.
 #ifdef RANK_LOCATION
 layout(location = RANK_LOCATION) out uint out_rank;

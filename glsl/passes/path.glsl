@@ -1,4 +1,4 @@
-// Each pixel's screen-space path over the exposure (viewer/render/gbuffer.py PATH_TARGETS):
+// Each pixel's screen-space path over the exposure (viewer/render/passes/gbuffer.py PATH_TARGETS):
 // SEGMENTS (2 or 4) linear pieces between the window positions at t_k = t - s/2 + k s/K,
 // k = 0..K, each projected from V(t_k) M(t_k) per vertex and interpolated like the open
 // and close positions of glsl/passes/motion.glsl. A point is stored as its offset (px, GL axes)

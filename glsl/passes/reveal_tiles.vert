@@ -1,6 +1,6 @@
 #version 330 core
 // Tile quads (glsl/passes/tiles.vert) that also carry where each pixel's hit record lies in the
-// block-packed record texture (viewer/render/hybrid/reveal.py layer_hits): the record
+// block-packed record texture (viewer/render/modes/hybrid/reveal.py layer_hits): the record
 // coordinate is an affine function of the window position, so its interpolated value at
 // a fragment is that fragment's record (floor it).
 in vec2 in_corner;

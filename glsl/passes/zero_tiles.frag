@@ -1,8 +1,8 @@
 #version 330 core
 // Every target of the framebuffer back to 0, drawn over the tiles a tiled pass wrote last
-// frame and does not draw again (viewer/render/tile_lists.py clear_outside; a scissored
+// frame and does not draw again (viewer/render/passes/tile_runs.py clear_outside; a scissored
 // clear would cover their whole box). OUTk: OUT_FLOAT for a float target at location k,
-// OUT_INT for an integer one, 0 past the last (up to 4 targets; codes from tile_lists.py).
+// OUT_INT for an integer one, 0 past the last (up to 4 targets; codes from tile_runs.py).
 #if OUT0 == OUT_FLOAT
 layout(location = 0) out vec4 o0;
 #elif OUT0 == OUT_INT

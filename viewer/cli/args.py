@@ -31,11 +31,11 @@ def other_scene(name: str) -> Path | None:
     return None
 
 
-def load(source: str):
+def load(source: str, animations: dict | None = None):
     """load_scene, with the file named when `source` is the name of a bench, example or
     conformance scene rather than a built-in one."""
     try:
-        return load_scene(source)
+        return load_scene(source, animations)
     except SceneError as exc:
         path = None if Path(source).exists() or source.endswith(".toml") else other_scene(source)
         if path is None:
@@ -47,12 +47,19 @@ def load(source: str):
         raise UserError(f"{exc}; {source!r} is the scene file {shown}") from None
 
 
-def add_scene_args(p, samples: bool = True):
+# What every render command (shot, compare, bench, video, view) takes, beside its own
+# flags; bench renders no reference, so it takes no --samples (docs: README, "Commands").
+SCENE_FLAGS = ("--time", "--size", "--samples", "--seed", "--shutter", "--set", "--params")
+
+
+def add_scene_args(p, samples: bool = True, scene_help: str | None = None,
+                   time_help: str = "frame time in seconds (default: the scene's [render] "
+                                    "time)", time_aliases: tuple = ()):
     p.add_argument("scene", nargs="?", default=None, metavar="SCENE",
-                   help="scene file (.toml), glTF asset (.gltf, .glb) or built-in scene name; "
-                        "may be left out with --params (the sidecar's scene)")
-    p.add_argument("--time", type=str, default=None, metavar="T",
-                   help="frame time in seconds (default: the scene's [render] time)")
+                   help=scene_help or "scene file (.toml), glTF asset (.gltf, .glb) or built-in "
+                        "scene name; may be left out with --params (the sidecar's scene)")
+    p.add_argument("--time", *time_aliases, dest="time", type=str, default=None, metavar="T",
+                   help=time_help)
     p.add_argument("--size", type=str, default=None, metavar="WxH",
                    help="image size (default: the scene's [render] size, else 1280x720)")
     if samples:
@@ -60,11 +67,39 @@ def add_scene_args(p, samples: bool = True):
                        help="reference sub-frames (default 64; = --set reference.samples=N)")
     p.add_argument("--seed", type=str, default=None, metavar="N",
                    help="seed of every jitter (default 0, or the --params file's)")
+    p.add_argument("--shutter", type=str, default=None, metavar="S",
+                   help="exposure time in seconds, replacing the scene camera's (and the "
+                        "--params file's)")
     p.add_argument("--set", action="append", default=[], metavar="GROUP.FIELD=VALUE",
                    help="set a parameter (repeatable; 'hmblur params' lists them)")
     p.add_argument("--params", type=str, default=None, metavar="FILE.json",
                    help="JSON sidecar of an earlier output: reproduce its scene, parameters, "
                         "time, size, seed and camera (flags given beside it win)")
+
+
+def parse_shutter(flag: str, text: str) -> float:
+    """An exposure time in seconds, within the bounds a scene file's camera.shutter has."""
+    v = parse_float(flag, text)
+    if not 0.0 <= v <= limits.MAX_SCENE_NUMBER:
+        raise UserError(f"{flag} {text!r}: expected seconds from 0 to "
+                        f"{limits.MAX_SCENE_NUMBER:g}")
+    return v
+
+
+def check_shutter_read(shutter: str | None, modes, what: str = ""):
+    """--shutter where every mode rendered is `off` (the sharp frame at t, no exposure)
+    would change nothing: one line."""
+    if shutter is not None and modes and all(m == "off" for m in modes):
+        raise UserError(f"--shutter {shutter}: mode off draws the sharp frame at the frame "
+                        f"time, with no exposure{what}")
+
+
+def check_samples_read(samples: str | None, modes, what: str = ""):
+    """--samples where the reference is not rendered would change nothing: one line."""
+    if samples is not None and "reference" not in modes:
+        which = f"mode {modes[0]}" if len(modes) == 1 else "modes " + ", ".join(modes)
+        raise UserError(f"--samples {samples}: only the reference mode takes sub-frames, "
+                        f"not {which}{what}")
 
 
 def scene_source(arg: str) -> dict:
@@ -179,6 +214,7 @@ class Setup:
     params: ParamSet
     seed: int
     sidecar: dict | None = None
+    animations: dict | None = None     # {gltf entry: animation} chosen in the viewer
 
 
 def read_sidecar(path: str) -> dict:
@@ -263,7 +299,16 @@ def setup(args) -> Setup:
                             "or a built-in name ("
                             + ", ".join(builtin_scene_names()) + "), or --params FILE.json")
         args.scene = sidecar_scene(side, args.params)
-    scene = load(args.scene)
+    animations = None
+    if side is not None and "animations" in side:
+        animations = sidecar_animations(side["animations"], f"--params {args.params}")
+    try:
+        scene = load(args.scene, animations)
+    except SceneError as exc:
+        if animations is None:
+            raise
+        load(args.scene)                   # (the scene's own mistake, named as such)
+        raise UserError(f"--params {args.params}: animations: {exc}") from None
     size = (scene.render.width, scene.render.height)
     t = scene.render.time
     seed = 0
@@ -286,21 +331,45 @@ def setup(args) -> Setup:
         t = parse_time("--time", args.time)
     if args.seed is not None:
         seed = parse_seed("--seed", args.seed)
+    if getattr(args, "shutter", None) is not None:
+        scene.camera.shutter = parse_shutter("--shutter", args.shutter)
     if getattr(args, "samples", None) is not None:
         params.set("reference.samples", str(parse_int("--samples", args.samples, 1)),
                    label="--samples")
     params.apply(args.set)
-    return Setup(scene, size, t, params, seed, side)
+    return Setup(scene, size, t, params, seed, side, animations)
+
+
+def sidecar_animations(value, source: str) -> dict:
+    """A sidecar's "animations" (the viewer's choice per gltf entry): a table of entry
+    names to "all", "none", an animation's name or index; what they name is checked when
+    the scene loads."""
+    if (not isinstance(value, dict) or len(value) > limits.MAX_OBJECTS
+            or not all(isinstance(v, (str, int)) and not isinstance(v, bool)
+                       for v in value.values())):
+        raise UserError(f"{source}: animations: expected a table of gltf entry names to "
+                        "\"all\", \"none\", an animation's name or index")
+    return value
 
 
 # What `shot` and `view` render when no mode is given: the blur this project is about.
 DEFAULT_MODE = "hybrid"
 
 
-def pick_mode(flag: str | None, sidecar: dict | None) -> str:
-    """--mode, else the --params file's mode, else DEFAULT_MODE (checked by the caller)."""
+def add_mode_arg(p, modes):
+    """--mode, for a command that renders one of `modes` (shot, view)."""
+    p.add_argument("--mode", default=None,
+                   help=f"one of: {', '.join(modes)} (default: {DEFAULT_MODE}, or the "
+                        "--params file's)")
+
+
+def pick_mode(flag: str | None, sidecar: dict | None, modes) -> str:
+    """--mode, else the --params file's mode, else DEFAULT_MODE: one of `modes`."""
     mode = flag if flag is not None else (sidecar or {}).get("mode")
-    return str(mode) if mode is not None else DEFAULT_MODE
+    mode = str(mode) if mode is not None else DEFAULT_MODE
+    if mode not in modes:
+        raise UserError(f"--mode {mode}: expected one of {', '.join(modes)}")
+    return mode
 
 
 def parse_modes(flag: str, text: str, available: list[str]) -> list[str]:

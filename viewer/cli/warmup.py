@@ -41,6 +41,7 @@ def variants(mode: str) -> list[ParamSet]:
 
 def warm_up(size=SIZE) -> int:
     """Render the frames; the number of kernels numba compiled (cache misses)."""
+    jit_notice.install()
     ctx = create_headless()
     for name in builtin_scene_names():
         scene = load_scene(builtin_scene_path(name))

@@ -120,7 +120,7 @@ def time_modes(r: Renderer, modes: list[str], s, frames: int, warmup: int, progr
                 batch = res.host.get(REVEAL_BATCH)
                 res.stats["embree_rays_per_s"] = bare_embree_rays_per_s(batch, repeats=1)
                 # The static part into the whole static scene: rays of a static own
-                # object stop at it (the ceiling as measured up to session 10).
+                # object stop at it (a cheaper query than the reveal's own).
                 res.stats["embree_front_rays_per_s"] = bare_embree_rays_per_s(
                     batch, repeats=1, front=True)
             stats[mode].append(res.stats)
@@ -234,6 +234,7 @@ def run(args) -> int:
         if any(abs(v) > MAX_SPEED for v in speeds):
             raise cliargs.UserError(f"--speeds {args.speeds}: expected factors within "
                                     f"+-{MAX_SPEED:g}")
+    cliargs.check_shutter_read(args.shutter, modes + (["hybrid"] if speeds else []))
     fps = None
     if args.animate is not None:
         fps = cliargs.parse_float("--animate", args.animate)
@@ -258,6 +259,7 @@ def run(args) -> int:
         r.release()
     device = f"{device_name(ctx)}; CPU {cpu_name()}"
     report = {"device": device, "size": list(s.size), "scene": s.scene.name, "time": s.time,
+              "shutter": s.scene.camera.shutter,
               "animate_fps": fps, "frames": frames, "pass_timing": describe(method),
               "modes": results, "reveal": reveal, "ratios": {}, "seed": s.seed,
               "params": s.params.to_dict()}     # (--params of shot/compare reads these back)

@@ -39,8 +39,6 @@ def register(sub):
                    help="a mode under a name with its own parameters, e.g. "
                         "fast=hybrid:hybrid.curve_steps=1 (repeatable; shown beside --modes, "
                         "which then defaults to none; the same mode may appear many times)")
-    p.add_argument("--shutter", default=None, metavar="S",
-                   help="exposure time in seconds, replacing the scene camera's")
     p.add_argument("--inset", type=str, default=None, metavar="WxH",
                    help="inset size in pixels (default: a quarter of the image height, square)")
     p.set_defaults(run=run)
@@ -78,10 +76,6 @@ def run(args) -> int:
     variants = choose_variants(args)
     cliargs.check_set_groups(args.set, [v.mode for v in variants] + ["reference"], MODE_GROUPS)
     out = cliargs.check_output_dir(args.out, "--out")
-    if args.shutter is not None:
-        s.scene.camera.shutter = cliargs.parse_float("--shutter", args.shutter)
-        if s.scene.camera.shutter < 0:
-            raise cliargs.UserError(f"--shutter {args.shutter}: expected seconds >= 0")
     w, h = s.size
     inset = cliargs.parse_size(args.inset, "--inset") if args.inset else (max(8, h // 4),) * 2
     ctx = create_headless()

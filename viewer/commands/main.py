@@ -3,12 +3,14 @@ through `register(subparsers)`; a user's mistake prints one line and exits 2."""
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 import textwrap
 import threading
 from pathlib import Path
 
+from world import jit_notice
 from world.errors import UserError, printable
 from viewer.cli.args import OTHER_SCENE_DIRS
 from viewer.io.ending import Terminated, catch_signals, received, restore_signals
@@ -101,6 +103,19 @@ def _terminated(signum: int) -> int:
     return 128 + signum
 
 
+def _reader_gone() -> int:
+    """stdout's reader has closed the pipe (`hmblur graph | head`): nothing more to say to
+    it, so no message; stdout goes to /dev/null so that the interpreter's last flush is
+    quiet, and the status is a SIGPIPE's, as for any tool in such a pipeline."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):   # a stdout without a descriptor
+        pass
+    return 128 + signal.SIGPIPE
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     old_handlers = catch_signals() if threading.current_thread() is threading.main_thread() else {}
@@ -111,11 +126,15 @@ def main(argv=None) -> int:
                 parser.print_help(sys.stderr)
                 return 2
             args = parser.parse_args(argv)
+            jit_notice.install()
             return int(args.run(args) or 0)
         finally:
             end_line()                     # (a progress bar's line, cut short)
             remove_partials()              # (what an interrupted write left: none, else)
             restore_signals(old_handlers)
+            sys.stdout.flush()             # (a reader gone away shows here, not at exit)
+    except BrokenPipeError:
+        return _reader_gone()
     except Terminated as exc:
         return _terminated(exc.signum)
     except KeyboardInterrupt:

@@ -22,9 +22,7 @@ def register(sub):
                        "frame's counters; 'hmblur shot --params x.json --out y.png' "
                        "reproduces it byte for byte.")
     cliargs.add_scene_args(p)
-    p.add_argument("--mode", default=None,
-                   help=f"one of: {', '.join(MODES)} (default: {cliargs.DEFAULT_MODE}, or the "
-                        "--params file's)")
+    cliargs.add_mode_arg(p, MODES)
     p.add_argument("--out", required=True, metavar="PATH.png",
                    help="output PNG path (missing folders are made; the .json sidecar goes "
                         "beside it)")
@@ -36,13 +34,11 @@ def register(sub):
 
 def run(args) -> int:
     s = cliargs.setup(args)
-    mode = cliargs.pick_mode(args.mode, s.sidecar)
-    if mode not in MODES:
-        raise cliargs.UserError(f"--mode {mode}: expected one of {', '.join(MODES)}")
+    mode = cliargs.pick_mode(args.mode, s.sidecar, MODES)
     cliargs.check_set_groups(args.set, [mode], MODE_GROUPS)
-    if args.samples is not None and mode != "reference":
-        raise cliargs.UserError(f"--samples {args.samples}: only the reference mode takes "
-                                f"sub-frames, not {mode}")
+    cliargs.check_samples_read(args.samples, [mode])
+    if args.buffers is None:          # (the buffers hold the exposure's velocities)
+        cliargs.check_shutter_read(args.shutter, [mode], " (only --buffers would show its velocities)")
     out = cliargs.check_output_file(args.out, suffix=".png")
     side = out.with_suffix(".json")
     cliargs.check_output_file(str(side), "--out's sidecar")

@@ -40,28 +40,18 @@ def register(sub):
         description="Frame k at time START + k / FPS (objects, keys and camera advance); two "
                     "or more modes side by side with labels, one mode as its bare image (a PNG "
                     "frame is then byte-identical to `hmblur shot` at that time).")
-    p.add_argument("scene", nargs="?", default=None,
-                   help="scene file (.toml), glTF asset (.gltf, .glb) or built-in scene name "
-                        "(default: the --params file's)")
+    cliargs.add_scene_args(
+        p, scene_help="scene file (.toml), glTF asset (.gltf, .glb) or built-in scene name "
+                      "(default: the --params file's)",
+        time_help="time of the first frame in seconds (--start is the same flag; default: "
+                  "the scene's [render] time)", time_aliases=("--start",))
     p.add_argument("--modes", default=None,
                    help=f"comma-separated, any of {', '.join(MODES)} (default: the --params "
                         "file's, else every mode but reference)")
-    p.add_argument("--start", type=str, default=None,
-                   help="time of the first frame in seconds (scene default)")
     p.add_argument("--frames", type=str, default=None,
                    help=f"number of frames (default {DEFAULT_FRAMES})")
     p.add_argument("--fps", type=str, default=None,
-                   help=f"frames per second: frame k is at start + k / fps (default {DEFAULT_FPS:g})")
-    p.add_argument("--size", type=str, default=None, help="WxH of each mode's image (scene default)")
-    p.add_argument("--samples", type=str, default=None,
-                   help="reference sub-frames (default 64; = --set reference.samples=N)")
-    p.add_argument("--seed", type=str, default=None,
-                   help="seed of every jitter, the same in every frame (default 0, or the --params file's)")
-    p.add_argument("--set", action="append", default=[], metavar="GROUP.FIELD=VALUE",
-                   help="set a parameter (repeatable)")
-    p.add_argument("--params", type=str, default=None,
-                   help="JSON sidecar of an earlier video: reproduce its scene, modes, frames, "
-                        "times, size and parameters (flags given override it)")
+                   help=f"frames per second: frame k is at time + k / fps (default {DEFAULT_FPS:g})")
     p.add_argument("--out", required=True, help=OUT_HELP)
     p.add_argument("--metrics", action="store_true",
                    help="also render the reference of every frame and write per-frame "
@@ -95,10 +85,9 @@ def run(args) -> int:
     if not isinstance(scene, str) or not scene:
         raise UserError("video: expected a SCENE (a file or built-in name), or --params "
                         "with the sidecar of an earlier video")
-    start = None if args.start is None else repr(cliargs.parse_time("--start", args.start))
-    setup_args = argparse.Namespace(scene=scene, time=start, size=args.size,
-                                    samples=args.samples, seed=args.seed, set=args.set,
-                                    params=args.params)
+    setup_args = argparse.Namespace(scene=scene, time=args.time, size=args.size,
+                                    samples=args.samples, seed=args.seed, shutter=args.shutter,
+                                    set=args.set, params=args.params)
     s = cliargs.setup(setup_args)
     src = f"--params {args.params}"
     modes_text = args.modes
@@ -120,6 +109,9 @@ def run(args) -> int:
     if args.metrics and modes == ["reference"]:
         raise UserError("--metrics: measures modes against the reference: expected --modes "
                         "with a mode other than reference")
+    rendered = modes + (["reference"] if args.metrics else [])
+    cliargs.check_samples_read(args.samples, rendered, " (the reference is rendered with --metrics)")
+    cliargs.check_shutter_read(args.shutter, rendered)
     cliargs.parse_time("last frame time", repr(s.time + (frames - 1) / fps))
     out = video_paths(args.out, "--out", METRIC_FILES if args.metrics else ())
     check_gif_memory(out, frames, s.size, len(modes))
@@ -160,7 +152,7 @@ def run(args) -> int:
             writer.commit(files)
     finally:
         r.release()
-    w, h = writer.size
+    w, h = writer.file_size
     print(f"{out.video}: {frames} frames {w}x{h} ({', '.join(modes)}) at {fps:g} fps, "
           f"{out.kind}, in {seconds:.1f} s ({1e3 * seconds / frames:.0f} ms/frame)")
     if metrics is not None:
@@ -188,6 +180,7 @@ def sidecar(s: cliargs.Setup, scene: str, modes, frames: int, fps: float, out: V
             device: str, seconds: float) -> dict:
     return {
         "scene": scene_for_sidecar(scene),
+        **({"animations": dict(s.animations)} if s.animations else {}),
         "scene_name": s.scene.name,
         "modes": list(modes),
         "time": s.time,                # of frame 0; frame k is at time + k / fps

@@ -39,9 +39,7 @@ def register(sub):
                        "tests; under Xvfb without a display).",
                        epilog=KEYS + "\n\n" + script_help)
     cliargs.add_scene_args(p)
-    p.add_argument("--mode", default=None,
-                   help=f"one of: {', '.join(MODES)} (default: {cliargs.DEFAULT_MODE}, or the "
-                        "--params file's)")
+    cliargs.add_mode_arg(p, MODES)
     p.add_argument("--frames", type=str, default=None, metavar="N",
                    help="run this many frames, then exit (no person needed)")
     p.add_argument("--screenshot", default=None, metavar="PNG",
@@ -64,9 +62,7 @@ def register(sub):
 
 def run(args) -> int:
     s = cliargs.setup(args)
-    args.mode = cliargs.pick_mode(args.mode, s.sidecar)
-    if args.mode not in MODES:
-        raise cliargs.UserError(f"--mode {args.mode}: expected one of {', '.join(MODES)}")
+    args.mode = cliargs.pick_mode(args.mode, s.sidecar, MODES)
     frames = (cliargs.parse_int("--frames", args.frames, 1, limits.MAX_FRAMES)
               if args.frames is not None else None)
     if args.screenshot is not None and frames is None:

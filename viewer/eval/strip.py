@@ -1,5 +1,5 @@
 """Comparison figures and tables: a labelled side-by-side strip with zoomed insets (in the
-spirit of Figure 1 of Tan et al., Hybrid MBlur) and the metrics table as Markdown/JSON.
+spirit of Figure 1 of Tan et al., Hybrid MBlur) and the metrics table as Markdown.
 
 Strip layout, one column per image, on a white background:
 
@@ -12,13 +12,12 @@ Boxes are half-open pixel rectangles (x0, y0, x1, y1): columns x0..x1-1, rows y0
 """
 from __future__ import annotations
 
-import json
 import math
 
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
-from viewer.io.imageio import json_safe, linear_to_srgb8
+from viewer.io.imageio import linear_to_srgb8
 from viewer.render.modes.regions import INNER, NAMES, OUTER, STATIC
 
 GAP = 4                    # pixels between columns and between stacked parts
@@ -52,11 +51,6 @@ def _font(image_height: int):
 
 def _line_height(font) -> int:
     return font.getbbox("Ag")[3] + 2 * PAD
-
-
-def line_height(image_height: int) -> int:
-    """Height of one text row (label or metric line) beside panels `image_height` tall."""
-    return _line_height(_font(image_height))
 
 
 def _as_srgb8(image) -> np.ndarray:
@@ -264,12 +258,6 @@ def metrics_rows(table) -> list[dict]:
                 rows.append({"mode": str(mode), "region": region, "pixels": int(m["pixels"]),
                              "psnr": m["psnr"], "ssim": m["ssim"], "flip": m["flip"]})
     return rows
-
-
-def metrics_json(table) -> str:
-    """The rows as JSON text (sorted keys, indent 2; inf as "inf", empty region as null)."""
-    return json.dumps(json_safe(metrics_rows(table)), sort_keys=True, indent=2,
-                      allow_nan=False) + "\n"
 
 
 def _fmt(value, digits: int) -> str:

@@ -27,10 +27,10 @@ from typing import Any, Callable
 import numpy as np
 from PIL import Image
 
+from world.images import srgb8_to_linear  # noqa: F401  (the decoding is world's)
 from .ending import held
 
 _SRGB_LINEAR_MAX = 0.0031308   # linear-side breakpoint of the sRGB curve
-_SRGB_ENCODED_MAX = 0.04045    # encoded-side breakpoint (decoding)
 
 
 def _clamped(linear) -> np.ndarray:
@@ -54,13 +54,6 @@ def linear_to_srgb8(linear) -> np.ndarray:
 def srgb_float(linear) -> np.ndarray:
     """Linear colour -> float32 sRGB in [0, 1], unquantised (what FLIP's "LDR" expects)."""
     return _encode(_clamped(linear)).astype(np.float32)
-
-
-def srgb8_to_linear(srgb8) -> np.ndarray:
-    """uint8 sRGB -> float32 linear (inverse transfer function, computed in float64)."""
-    c = np.asarray(srgb8, dtype=np.float64) / 255.0
-    lin = np.where(c <= _SRGB_ENCODED_MAX, c / 12.92, np.power((c + 0.055) / 1.055, 2.4))
-    return lin.astype(np.float32)
 
 
 # --- atomic writers ------------------------------------------------------------------
@@ -235,9 +228,3 @@ def write_json_atomic(path, obj: Any) -> Path:
     """Write `obj` as JSON (sorted keys, indent 2, trailing newline) via `json_safe`."""
     data = _json_bytes(obj)      # encoded first: a serialisation error must not touch disk
     return _atomic_write(path, lambda f: f.write(data))
-
-
-def write_npy_atomic(path, array) -> Path:
-    """Write one array in .npy format (no pickles), atomically."""
-    a = np.asarray(array)
-    return _atomic_write(path, lambda f: np.save(f, a, allow_pickle=False))

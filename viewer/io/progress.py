@@ -18,24 +18,34 @@ def end_line():
         _open_line = None
 
 
+def is_terminal(stream) -> bool:
+    return hasattr(stream, "isatty") and stream.isatty()
+
+
+def redraw(stream, text: str, last: bool):
+    """`text` over a terminal's current line; `last`: the line ends (else it stays open
+    until the next redraw, or end_line)."""
+    global _open_line
+    stream.write("\r" + text + ("\n" if last else ""))
+    _open_line = None if last else stream
+    stream.flush()
+
+
 class Progress:
     def __init__(self, label: str, stream=None):
         self.label, self.stream = label, stream or sys.stderr
-        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
+        self.tty = is_terminal(self.stream)
         self.t0 = time.perf_counter()
         self._last = -1
 
     def __call__(self, k: int, n: int):
         done = k + 1
-        global _open_line
         if self.tty:
             bar = "#" * (20 * done // n)
-            self.stream.write(f"\r{self.label} [{bar:<20}] {done}/{n}")
-            _open_line = self.stream
+            text = f"{self.label} [{bar:<20}] {done}/{n}"
             if done == n:
-                self.stream.write(f"  {time.perf_counter() - self.t0:.1f} s\n")
-                _open_line = None
-            self.stream.flush()
+                text += f"  {time.perf_counter() - self.t0:.1f} s"
+            redraw(self.stream, text, done == n)
         else:
             quarter = 4 * done // n
             if quarter != self._last and (quarter > 0 or done == 1):

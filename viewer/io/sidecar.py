@@ -52,6 +52,7 @@ def sidecar(s: cliargs.Setup, mode: str, result, ctx, scene_arg: str,
         timing["render_ms"] = ms
     return {
         **cliargs.scene_source(scene_arg),
+        **({"animations": dict(s.animations)} if s.animations else {}),
         "scene_name": s.scene.name,
         "mode": mode,
         "time": s.time,

@@ -185,6 +185,14 @@ class VideoWriter:
             self._encode(even_size(a))
         self.count += 1
 
+    @property
+    def file_size(self) -> tuple[int, int] | None:
+        """The frames' size as the file holds them: an MP4's sides rounded up to even
+        (even_size), the frames' own otherwise."""
+        if self.size is None or self.out.kind != "mp4":
+            return self.size
+        return (self.size[0] + self.size[0] % 2, self.size[1] + self.size[1] % 2)
+
     def frame_name(self, k: int) -> str:
         return f"frame_{k:04d}.png"
 

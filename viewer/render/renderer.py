@@ -39,14 +39,15 @@ class Renderer:
     def __init__(self, ctx: moderngl.Context, scene: Scene, size: tuple[int, int]):
         self.ctx, self.scene = ctx, scene
         keep_freed_memory()          # frame-sized host arrays reused, not re-faulted
-        self._check_size(size)
+        w, h = self._check_size(size)
         self.programs = ProgramCache(ctx)
         self.gpu = GpuScene(ctx, scene)
         self.pool = ResourcePool(ctx)
+        self.pool.resize((w, h))
+        self.camera = Camera(scene.camera, w, h)     # resize() makes it again
         self._pipelines: dict = {}
         self.kept = KeptState()          # state kept across frames (e.g. the ray tracer)
         self.made: list[str] = []        # the textures the last frame made, in order
-        self.resize(size)
 
     def _check_size(self, size):
         w, h = int(size[0]), int(size[1])

@@ -20,6 +20,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from world.errors import UserError
+from viewer.io import progress
 from viewer.io.imageio import OutputSet, json_safe
 from .bundle import scene_bundle
 from .cells import CellTask, run_cell
@@ -79,11 +80,11 @@ def write_cell(out: Path, result: dict) -> dict:
 
 class Bar:
     """One line on stderr: cells done, failed and left, elapsed and the estimated time
-    left (from the cells run in this session)."""
+    left (from the cells this run has finished)."""
 
     def __init__(self, total: int, skipped: int, stream=None):
         self.stream = stream or sys.stderr
-        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
+        self.tty = progress.is_terminal(self.stream)
         self.total, self.skipped, self.done, self.failed = total, skipped, 0, 0
         self.t0 = time.perf_counter()
 
@@ -93,7 +94,6 @@ class Bar:
         self.show()
 
     def show(self):
-        from viewer.io import progress
         finished = self.skipped + self.done
         left = self.total - finished
         el = time.perf_counter() - self.t0
@@ -101,11 +101,10 @@ class Bar:
         line = (f"sweep: {finished}/{self.total} cells done ({self.skipped} from earlier runs), "
                 f"{self.failed} failed, {left} left, {_clock(el)} elapsed{eta}")
         if self.tty:
-            self.stream.write("\r" + line + "\x1b[K" + ("\n" if not left else ""))
-            progress._open_line = self.stream if left else None
+            progress.redraw(self.stream, line + "\x1b[K", not left)
         else:
             self.stream.write(line + "\n")
-        self.stream.flush()
+            self.stream.flush()
 
 
 def _clock(s: float) -> str:

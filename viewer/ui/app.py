@@ -64,7 +64,8 @@ class App:
     def __init__(self, setup: Setup, scene_arg: str, mode: str, options: RunOptions):
         self.options = options
         self.state = ViewState(scene_arg, setup.scene, mode, setup.time, setup.params, setup.seed,
-                               scene_text=scene_arg, overlay=initial_level(setup.size[1]))
+                               scene_text=scene_arg, overlay=initial_level(setup.size[1]),
+                               animations=dict(setup.animations or {}))
         self.camera = CameraControl(setup.scene.camera, lambda: self.state.time)
         self.router = InputRouter(lambda: self.camera, lambda: self.window.size[1])
         self.router.actions.update({
@@ -89,6 +90,7 @@ class App:
         self.stats: dict = {}
         self.shown_name = self.shown_kind = ""
         self.panel_rect = self.overlay_rect = (0.0, 0.0, 0.0, 0.0)
+        self.panel_sections: dict = {}        # section -> (top, bottom) y in the window
         self.script_failure: str | None = None      # the first scripted action that failed
         self.rss: list[tuple[int, int]] = []
         self.frame_index = 0
@@ -156,14 +158,33 @@ class App:
         self.renderer, self.debug = renderer, DebugView(renderer.programs)
         s = self.state
         s.scene, s.scene_arg, s.scene_text, s.time = scene, source, source, scene.render.time
-        s.buffer, s.error = "", ""
+        s.buffer, s.error, s.animations = "", "", {}
         self.camera = CameraControl(scene.camera, lambda: self.state.time)
         self.progressive.reset()
         glfw.set_window_title(self.window.handle, f"hmblur view - {scene.name}")
 
+    def choose_animation(self, entry: str, choice):
+        """Play `choice` ("all", "none", an animation's name or index) on the gltf entry
+        `entry`: the scene is loaded again with that choice (what moves, and so what the
+        renderer keeps still, follows from it); the view and time stay."""
+        s = self.state
+        chosen = {**s.animations, entry: choice}
+        try:
+            scene = load_scene(s.scene_arg, chosen)
+            scene.camera = s.scene.camera
+            renderer = Renderer(self.ctx, scene, self.renderer.size)
+        except Exception as exc:             # an unknown entry or animation
+            s.report(f"animation {entry} {choice}: {exc}")
+            return
+        self.renderer.release()
+        self.renderer, self.debug = renderer, DebugView(renderer.programs)
+        s.scene, s.animations = scene, chosen
+        self.progressive.reset()
+
     def setup(self) -> Setup:
         s = self.state
-        return Setup(s.scene, self.renderer.size, s.time, s.params, s.seed)
+        return Setup(s.scene, self.renderer.size, s.time, s.params, s.seed,
+                     animations=dict(s.animations) or None)
 
     def screenshot(self):
         s = self.state
@@ -256,6 +277,9 @@ class App:
                 s.seed = parse_seed("seed", args[0])
             elif a.name == "open":
                 self.open_scene(args[0])
+            elif a.name == "animation":
+                choice = args[1]
+                self.choose_animation(args[0], int(choice) if choice.isdigit() else choice)
             elif a.name == "reset":
                 self.camera.reset()
             elif a.name in ("fly", "panel"):
@@ -397,6 +421,9 @@ class App:
             "pass_ms": self.pass_ms, "pass_cpu_ms": self.pass_cpu_ms, "stats": self.stats,
             "rss_kb": self.rss, "errors": s.errors, "screenshots": s.shots,
             "panel_rect": list(self.panel_rect) if s.show_panel else None,
+            "panel_sections": {k: list(v) for k, v in self.panel_sections.items()}
+            if s.show_panel else None,
+            "animations": s.animations,
             "overlay_rect": list(self.overlay_rect) if self.overlay_rect else None,
             "overlay": s.overlay,
             "camera": {k: list(map(float, v)) for k, v in

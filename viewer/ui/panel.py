@@ -30,6 +30,9 @@ class PanelHost(Protocol):
     recorder: object | None                 # the open recording, if any
     shown_name: str
     shown_kind: str
+    panel_sections: dict
+
+    def choose_animation(self, entry: str, choice): ...
 
     def screenshot(self): ...
     def toggle_record(self, path=None): ...
@@ -72,20 +75,15 @@ def draw_panel(app: PanelHost) -> tuple[float, float, float, float]:
     _errors(app)
     _scene(app)
     _mode(app)
-    if imgui.collapsing_header("Parameters", imgui.TreeNodeFlags_.default_open):
-        groups = MODE_GROUPS.get(s.mode, ())
-        if not groups:
-            imgui.text_disabled(f"mode {s.mode} has no parameters")
-        for g in groups:
-            imgui.separator_text(g)
-            for err in group_widgets(s.params, g):
-                s.report(err)
-    if imgui.collapsing_header("Buffer view", imgui.TreeNodeFlags_.default_open):
-        _buffers(app)
-    if imgui.collapsing_header("Animation", imgui.TreeNodeFlags_.default_open):
-        _animation(app)
-    if imgui.collapsing_header("Camera", imgui.TreeNodeFlags_.default_open):
-        _camera(app)
+    # Short sections first, so that the animation and buffer view stay above the fold of a
+    # 720 px window; a mode's parameters (the hybrid's run to ~40 rows) come after them.
+    app.panel_sections = {}
+    for title, draw in (("Animation", _animation), ("Buffer view", _buffers),
+                        ("Parameters", _parameters), ("Camera", _camera)):
+        top = imgui.get_cursor_screen_pos().y
+        if imgui.collapsing_header(title, imgui.TreeNodeFlags_.default_open):
+            draw(app)
+        app.panel_sections[title] = (top, imgui.get_cursor_screen_pos().y)
     imgui.separator()
     if imgui.button("Screenshot (F12 / P)"):
         app.screenshot()
@@ -97,6 +95,17 @@ def draw_panel(app: PanelHost) -> tuple[float, float, float, float]:
     pos, size = imgui.get_window_pos(), imgui.get_window_size()
     imgui.end()
     return (pos.x, pos.y, size.x, size.y)
+
+
+def _parameters(app):
+    s = app.state
+    groups = MODE_GROUPS.get(s.mode, ())
+    if not groups:
+        imgui.text_disabled(f"mode {s.mode} has no parameters")
+    for g in groups:
+        imgui.separator_text(g)
+        for err in group_widgets(s.params, g):
+            s.report(err)
 
 
 def _errors(app):
@@ -190,8 +199,41 @@ def _animation(app):
     changed, seed = imgui.input_int("seed", s.seed)
     if changed:
         s.seed = max(0, int(seed))
-    for line in animation_lines(s.scene):
+    for inst, line in zip(s.scene.assets, animation_lines(s.scene)):
         imgui.text_wrapped(line)
+        labels, values = animation_choices(inst)
+        if len(values) > 2:                      # more than "all" and "none"
+            current = chosen_index(inst, values, s.animations.get(inst.name))
+            changed, idx = imgui.combo(f"plays##{inst.name}", current, labels)
+            if changed and idx != current:
+                app.choose_animation(inst.name, values[idx])
+
+
+def animation_choices(inst) -> tuple[list[str], list]:
+    """What a gltf entry can play, as the panel lists it and as the scene file's
+    `animation` names it: all, each animation (by name, by index where it has none or
+    shares it), none."""
+    anims = inst.asset.animations
+    names = [a.name for a in anims]
+    labels, values = ["all"], ["all"]
+    for i, name in enumerate(names):
+        unique = bool(name) and names.count(name) == 1 and name not in ("all", "none")
+        labels.append(name if unique else f"#{i} {name or ''}".rstrip())
+        values.append(name if unique else i)
+    return labels + ["none"], values + ["none"]
+
+
+def chosen_index(inst, values: list, chosen) -> int:
+    """The entry's current choice among `values`: the one made in the viewer, else what
+    it plays (every animation: all; none; one)."""
+    if chosen in values:
+        return values.index(chosen)
+    played = tuple(inst.animations)
+    if played == tuple(range(len(values) - 2)):
+        return 0
+    if not played:
+        return len(values) - 1
+    return 1 + played[0]
 
 
 def animation_lines(scene) -> list[str]:

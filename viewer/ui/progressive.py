@@ -28,10 +28,6 @@ class Progressive:
         self.key = None
 
     @property
-    def complete(self) -> bool:
-        return self.key is not None and self.done >= self.total
-
-    @property
     def gain(self) -> float:
         """What the partial sum (each sub-frame weighted 1/N) is multiplied by to show the
         mean of the sub-frames so far."""

@@ -38,6 +38,7 @@ class Recorder:
     def _state_at_start(self, s):
         self.side = {
             "scene": scene_for_sidecar(s.scene_arg), "scene_name": s.scene.name,
+            **({"animations": dict(s.animations)} if s.animations else {}),
             "modes": [s.mode], "fps": self.fps, "size": list(self.size),
             "seed": s.seed, "params": s.params.to_dict(), "camera": camera_dict(s.scene.camera),
             "format": self.out.kind,

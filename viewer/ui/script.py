@@ -49,6 +49,8 @@ ACTIONS = {
     "shutter": (1, "seconds"),
     "seed": (1, "an integer"),
     "open": (1, "a scene path or built-in name"),
+    "animation": (2, "a gltf entry's name and what it plays: all, none, an animation's name "
+                     "or index"),
     "reset": (0, "nothing"),
     "fly": (1, "on or off"),
     "panel": (1, "on or off"),
@@ -242,7 +244,3 @@ class Timeline:
 
     def due(self, frame: int) -> list:
         return self._due.pop(frame, [])
-
-    @property
-    def last_frame(self) -> int:
-        return max(self._due, default=-1)

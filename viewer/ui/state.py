@@ -33,6 +33,7 @@ class ViewState:
     error: str = ""                # shown in the panel until dismissed
     errors: list = field(default_factory=list)   # every distinct error, for --stats-json
     shots: list = field(default_factory=list)    # screenshot paths written
+    animations: dict = field(default_factory=dict)   # {gltf entry: animation} chosen here
 
     def report(self, message: str):
         message = " ".join(str(message).split()) or "unknown error"

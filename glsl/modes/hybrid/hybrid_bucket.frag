@@ -32,7 +32,7 @@
 // (|D| < 1e-3: no own line, no time pairing): llvmpipe would still pay for them (a branch
 // in a loop costs even where no pixel takes it; both sides run where an 8-wide group
 // disagrees). SIMPLE 1 compiles the one for tiles with no other object within the lines'
-// reach (viewer/render/hybrid/composite.py near_outlines, which also covers the merged
+// reach (viewer/render/modes/hybrid/composite.py near_outlines, which also covers the merged
 // own lines' spread off the neighbourhood's direction): every tap lands on the own object,
 // so the buckets of other objects stay empty and the unmerged neighbourhood's line adds
 // nothing. All four give the image the full variant gives.
@@ -416,7 +416,7 @@ void main() {
     // The neighbourhood's line: what passes over the pixel; where merged, only its ends
     // beyond the own line, about as densely as the whole line's taps (rounded to the
     // nearest count, at least one a side: under a pan the ends are a few pixels long, and
-    // a second tap each cost 0.6 ms of pan's 16 for no measured gain), and the own
+    // a second tap each costs time for no gain in quality), and the own
     // object's fragments there count. (llvmpipe pays for a branch in a loop whether taken or not:
     // each tap fetches its colour once, unconditionally, and every bucket takes it with a
     // weight of 0 or w.)

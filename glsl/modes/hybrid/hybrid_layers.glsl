@@ -1,4 +1,4 @@
-// The layers the hybrid composites resolve (viewer/render/hybrid/composite.py).
+// The layers the hybrid composites resolve (viewer/render/modes/hybrid/composite.py).
 // front: the G-buffer's hybrid_front, (D.xy, depth, object id), D the displacement over the
 //     exposure, read through front_motion() which clamps it to the blur limit u_max_disp
 //     (|D| <= 2k);

@@ -1,6 +1,6 @@
 #version 330 core
 // Per u_tile x u_tile tile of the G-buffer's hybrid_front (D, depth, id), for the host's
-// tile lists (viewer/render/tile_lists.py): .x the longest displacement |D| (px over the
+// tile lists (viewer/render/modes/hybrid/tile_select.py): .x the longest displacement |D| (px over the
 // exposure), .y 1 where the tile may hold an id boundary (a pixel whose right or upper
 // neighbour shows another object), else 0. Two separable steps so the reads spread over
 // many fragments: STAGE 0 over u_tile texels along x (full size -> strip), STAGE 1 over

@@ -1,4 +1,4 @@
-// Shared by the ray-mask passes (viewer/render/hybrid/mask.py). Positions are GL window pixels
+// Shared by the ray-mask passes (viewer/render/modes/hybrid/mask.py). Positions are GL window pixels
 // (row 0 at the bottom), displacements the G-buffer's full motion over the exposure.
 
 // The pixel whose centre is nearest to (centre of x) + offset, clamped to the screen: a

@@ -35,7 +35,7 @@
 // STEP 0 runs both steps in one pass. Where the camera moves, most moving tiles hold no
 // survivor of step 1 and llvmpipe would pay the Sobel kernel in every 8-pixel group
 // holding one: STEP 1 then runs the displacement test alone, and STEP 2 the edge test on
-// the tiles that hold a survivor (viewer/render/hybrid/mask.py). STEP 3 is the mask without
+// the tiles that hold a survivor (viewer/render/modes/hybrid/mask.py). STEP 3 is the mask without
 // the range check (hybrid.range_check off): the displacement test alone, its survivors
 // written straight into the ray mask as their object ids.
 #include "modes/hybrid/raymask_common.glsl"

@@ -3,7 +3,7 @@
 // shade() with the same GpuScene uniforms, the object's M(t) (relative to the eye) for
 // position and normal, and its M at shutter open and close for the displacement, so the
 // filter can blur it.
-// Drawn over the tiles holding traced pixels (viewer/render/hybrid/reveal.py), in draws
+// Drawn over the tiles holding traced pixels (viewer/render/modes/hybrid/reveal.py), in draws
 // of one or more revealed objects over their own tiles, each of whose pixels a draw
 // writes: its record's key is one of the draw's (shaded), 0 (no ray: cleared), or -1
 // (another draw writes it). The hit

@@ -3,8 +3,8 @@
 A frame allocates numpy arrays of tens to hundreds of kilobytes (ray batches, hit
 records, tile maps). glibc serves each one of 128 kB and more from a fresh mmap and
 unmaps it when freed, and trims the heap's top when free space there passes 128 kB: each
-frame then pays a page fault per 4 kB page it touches again (the reveal of spinner's
-17k rays: 1.7 ms, 1.1 ms with the settings below). A real-time loop reuses the same
+frame then pays a page fault per 4 kB page it touches again (docs/architecture.md, "Fresh
+memory faults per page"). A real-time loop reuses the same
 sizes frame after frame, so the renderer asks malloc to serve blocks up to 32 MB from
 the heap and to keep up to 256 MB free there: the process holds on to its peak heap.
 """

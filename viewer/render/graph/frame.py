@@ -121,6 +121,7 @@ class PassTimer:
 
     def __init__(self, frame: Frame, name: str):
         self.frame, self.name = frame, name
+        self.t0 = self.c0 = 0.0        # the clocks when the pass began (__enter__)
 
     def __enter__(self):
         if self.frame.timing:

@@ -13,8 +13,9 @@ default, and the pass does without (e.g. draws full screen instead of on tile li
 """
 from __future__ import annotations
 
-from contextlib import contextmanager
 from dataclasses import dataclass
+
+from .opened import OpenToPass
 
 
 @dataclass(frozen=True)
@@ -29,26 +30,16 @@ class HostResource:
         return " | ".join(t.__name__ for t in types) + (" | None" if self.optional else "")
 
 
-class HostResources:
+class HostResources(OpenToPass):
     """One frame's host resources, put by their producers (module doc)."""
 
     def __init__(self):
+        super().__init__()
         self._values: dict[HostResource, object] = {}
-        self._pass = None                  # the pass a pipeline is running, if any
-
-    @contextmanager
-    def opened_to(self, p):
-        """While pass `p` runs: what it puts and gets is checked against its declarations."""
-        before, self._pass = self._pass, p
-        try:
-            yield self
-        finally:
-            self._pass = before
 
     def put(self, res: HostResource, value) -> None:
-        if self._pass is not None and res not in self._pass.host_outputs:
-            raise RuntimeError(f"pass {self._pass.name} puts host resource {res.name}, "
-                               f"which it does not declare in host_outputs")
+        self._require((res,), lambda p: p.host_outputs, "puts host resource {}",
+                      "host_outputs", lambda r: r.name)
         if not (isinstance(value, res.type) or value is None and res.optional):
             raise TypeError(f"host resource {res.name}: expected {res.type_name()}, "
                             f"got {type(value).__name__}")
@@ -72,7 +63,5 @@ class HostResources:
         return [r.name for r in self._values]
 
     def _check_read(self, res: HostResource):
-        p = self._pass
-        if p is not None and res not in p.host_inputs and res not in p.host_outputs:
-            raise RuntimeError(f"pass {p.name} reads host resource {res.name}, which it "
-                               f"does not declare in host_inputs")
+        self._require((res,), lambda p: (*p.host_inputs, *p.host_outputs),
+                      "reads host resource {}", "host_inputs", lambda r: r.name)

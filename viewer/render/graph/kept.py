@@ -27,6 +27,14 @@ class KeptState:
         """The slot's value, or None before the first put."""
         return self._values.get(slot)
 
+    def get_or_make(self, slot: KeptSlot, make, fits=None):
+        """The slot's value; made by make() and kept where there is none yet, or where
+        fits(value) is false (it was made for another scene or context)."""
+        value = self.get(slot)
+        if value is None or fits is not None and not fits(value):
+            value = self.put(slot, make())
+        return value
+
     def put(self, slot: KeptSlot, value):
         """Keep `value` in `slot` (releasing what it held); returns value."""
         if not isinstance(value, slot.type):

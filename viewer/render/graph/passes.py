@@ -109,6 +109,11 @@ class Pipeline:
         have = set(produced)
         host: dict[str, Pass] = {}          # host resource name -> its producer
         for p in passes:
+            both = [n for n in p.inputs if n in p.produces]
+            if both:
+                raise ValueError(f"pipeline {mode}: pass {p.name} both reads and writes "
+                                 f"{both} (a texture drawn into while it is sampled is "
+                                 "undefined in GL)")
             missing = [n for n in p.inputs if n not in have]
             if missing:
                 raise ValueError(f"pipeline {mode}: pass {p.name} needs {missing}, not produced before it")

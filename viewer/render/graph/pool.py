@@ -7,13 +7,12 @@ framebuffers that used it are dropped. Nothing else holds a GL texture across fr
 While a pipeline runs a pass (`opened_to`), the pool checks each access against the pass's
 declarations, as Frame.host does for host resources: a texture bound or read must be
 one of its `inputs` or `produces`, a texture drawn into, cleared, written or allocated
-one of its `produces`, and a read-back to the host (`read_back`, the one way a pass reads
+one of its `produces` and none of its `inputs`, and a read-back to the host (`read_back`, the one way a pass reads
 GPU data) one of its `reads_back`. Outside a pipeline (a pass run on its own, as unit
 tests do, the sub-exposure accumulation, the caller reading results) nothing is checked.
 """
 from __future__ import annotations
 
-from contextlib import contextmanager
 from dataclasses import dataclass
 
 import moderngl
@@ -21,6 +20,7 @@ import numpy as np
 
 from viewer.render.graph import depth
 from .framebuffers import park_framebuffer
+from .opened import OpenToPass
 
 
 @dataclass(frozen=True)
@@ -44,8 +44,9 @@ class ReadBack:
     kept: bool = False
 
 
-class ResourcePool:
+class ResourcePool(OpenToPass):
     def __init__(self, ctx: moderngl.Context):
+        super().__init__()
         self.ctx = ctx
         self.size = (1, 1)
         self._tex: dict[str, tuple[TexSpec, tuple[int, int], moderngl.Texture]] = {}
@@ -57,28 +58,21 @@ class ResourcePool:
         # name -> (tile geometry, boolean tile map): the tiles a tiled pass wrote whole, the
         # texture zero elsewhere (mark_tiles); dropped by any other write.
         self._tiles: dict[str, tuple] = {}
-        self._pass = None                  # the pass a pipeline is running, if any
         self.made: set[str] = set()        # allocated or written since begin()
-
-    @contextmanager
-    def opened_to(self, p):
-        """While pass `p` runs: its texture accesses are checked (module doc)."""
-        before, self._pass = self._pass, p
-        try:
-            yield self
-        finally:
-            self._pass = before
 
     def _check(self, names, write: bool):
         p = self._pass
-        if p is None:
-            return
-        allowed = p.produces if write else (*p.inputs, *p.produces)
-        bad = [n for n in names if n not in allowed]
-        if bad:
-            what, where = ("writes", "produces") if write else ("reads", "inputs")
-            raise RuntimeError(f"pass {p.name} {what} texture {', '.join(bad)}, which it "
-                               f"does not declare in {where}")
+        if write and p is not None:
+            sampled = [n for n in names if n in p.inputs]
+            if sampled:
+                raise RuntimeError(f"pass {p.name} writes texture {', '.join(sampled)}, which "
+                                   "it declares as an input (a texture drawn into while it is "
+                                   "sampled is undefined in GL)")
+        if write:
+            self._require(names, lambda p: p.produces, "writes texture {}", "produces")
+        else:
+            self._require(names, lambda p: (*p.inputs, *p.produces), "reads texture {}",
+                          "inputs")
 
     def check_write(self, names):
         """Raise unless the open pass (if any) declares every one of `names` it writes."""
@@ -91,10 +85,8 @@ class ResourcePool:
         """Texture `name` read to the host (inside `viewport`, x, y, w, h GL pixels, where
         given): the one GPU-to-host read of a pass, which must declare it in
         `reads_back`. `texture`: a kept texture (not the pool's), labelled `name`."""
-        p = self._pass
-        if p is not None and name not in {r.name for r in p.reads_back}:
-            raise RuntimeError(f"pass {p.name} reads texture {name} back to the host, "
-                               f"which it does not declare in reads_back")
+        self._require((name,), lambda p: {r.name for r in p.reads_back},
+                      "reads texture {} back to the host", "reads_back")
         if texture is not None:
             return texture.read()
         if viewport is None:
@@ -179,6 +171,7 @@ class ResourcePool:
         """Clear textures `names` (one framebuffer) to `value`, only inside the box written
         since their last clear: a memset of a few thousand pixels instead of megabytes
         where a pass writes little (the revealed layers, the ray mask)."""
+        self._check(names, write=True)     # (also where nothing is left to clear)
         box = None
         for n in names:
             w, h = self._tex[n][1]

@@ -30,13 +30,14 @@ from viewer.render.graph.params import group, param
 from viewer.render.passes.blur_common import max_radius_px
 from viewer.render.graph.frame import Frame
 from viewer.render.passes.gather_tiles import draw_gather, gather_tiles, jitter_reach
-from viewer.render.passes.gbuffer import GBufferPass, PathConfig, path_targets, segments_param
+from viewer.render.passes.gbuffer import (GBufferPass, PathConfig, path_names, path_targets,
+                                          segments_param)
 from viewer.render.passes.motion_params import curve_steps_param
 from viewer.render.passes.half_velocity import EARLY_OUT_PX, VelocityPrep, path_bindings
 from viewer.render.graph.registry import mode
 from viewer.render.graph.passes import FullscreenPass, Pipeline
 from viewer.render.graph.pool import ReadBack, TexSpec
-from viewer.render.passes.tiles import PATH_SUFFIXES, tile_passes
+from viewer.render.passes.tiles import tile_passes
 
 # The tap jitter is glsl/graph/noise.glsl's interleaved gradient noise at offset TAP_NOISE (a
 # low-discrepancy pattern, the paper's Halton jitter); the NeighborMax lookup shift and
@@ -93,7 +94,7 @@ class Gather(FullscreenPass):
         self.segments = config.segments
         self.tiled = tiled
         paths = path_targets(config.segments)
-        tile_paths = tuple(f"guertin_neighbormax{s}" for s in PATH_SUFFIXES[:len(paths)])
+        tile_paths = path_names("guertin_neighbormax", config.segments)
         self.inputs = ("color", "depth", "guertin_velocity", "guertin_neighbormax", *paths,
                        *tile_paths)
         # The tiles to draw: NeighborMax read back (its path's extent where it has one).
@@ -112,7 +113,7 @@ class Gather(FullscreenPass):
         p = frame.params["guertin"]
         r = max_radius_px(frame)
         paths = path_bindings("guertin_neighbormax", self.segments)
-        tile_paths = tuple(v for key, v in paths.items() if key.startswith("u_tile_"))
+        tile_paths = path_names("guertin_neighbormax", self.segments)
         tiles = (gather_tiles(frame, "guertin_neighbormax", slice(0, 2), r, EARLY_OUT_PX,
                               jitter_reach(p.tile_jitter, r), tile_paths)
                  if self.tiled else None)

@@ -20,14 +20,15 @@ from viewer.render.passes.blur_common import max_radius_px
 from viewer.render.graph.frame import Frame
 from viewer.render.passes.gather_reach import mcguire_maps
 from viewer.render.passes.gather_tiles import draw_gather, gather_tiles, tile_list
-from viewer.render.passes.gbuffer import GBufferPass, PathConfig, path_targets, segments_param
+from viewer.render.passes.gbuffer import (GBufferPass, PathConfig, path_names, path_targets,
+                                          segments_param)
 from viewer.render.passes.motion_params import curve_steps_param
 from viewer.render.passes.half_velocity import EARLY_OUT_PX, VelocityPrep, path_bindings
 from viewer.render.graph.registry import mode
 from viewer.render.graph.passes import FullscreenPass, Pipeline
 from viewer.render.graph.pool import ReadBack, TexSpec
 from viewer.render.passes.tile_runs import FINE
-from viewer.render.passes.tiles import PATH_SUFFIXES, tile_passes
+from viewer.render.passes.tiles import tile_passes
 
 # Which noise stream of glsl/graph/noise.glsl's hash01 the per-pixel tap jitter uses.
 JITTER_STREAM = 1
@@ -71,7 +72,7 @@ class Gather(FullscreenPass):
         self.segments = config.segments
         self.tiled = tiled
         paths = path_targets(config.segments)
-        tile_paths = tuple(f"mcguire_neighbormax{s}" for s in PATH_SUFFIXES[:len(paths)])
+        tile_paths = path_names("mcguire_neighbormax", config.segments)
         # The tiles to draw come from tile textures read back: the NeighborMax path's
         # extent, or without a path NeighborMax and the TileMax strips (gather_reach.py).
         lookups = tile_paths or ("mcguire_neighbormax", "mcguire_tilemax_x")
@@ -90,7 +91,7 @@ class Gather(FullscreenPass):
         p = frame.params["mcguire"]
         k = max_radius_px(frame)
         paths = path_bindings("mcguire_neighbormax", self.segments)
-        tile_paths = tuple(v for key, v in paths.items() if key.startswith("u_tile_"))
+        tile_paths = path_names("mcguire_neighbormax", self.segments)
         tiles, variants = self.tiles(frame, k, p, tile_paths)
         draw_gather(self, frame, "mcguire",
                     {"u_color": "color", "u_depth": "depth", "u_velocity": "mcguire_velocity",

@@ -71,14 +71,6 @@ class RegionAccumulator:
         return region
 
 
-def classify_regions(ids, depths, centre_id, centre_depth) -> np.ndarray:
-    """(N,H,W) sample ids and depths + (H,W) centre id/depth -> (H,W) uint8 region map."""
-    acc = RegionAccumulator(centre_id, centre_depth)
-    for k in range(len(ids)):
-        acc.add(ids[k], depths[k])
-    return acc.result()
-
-
 def region_counts(region) -> dict[str, int]:
     """Pixel counts per region name, plus "all"."""
     r = np.asarray(region)

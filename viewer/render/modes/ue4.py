@@ -28,9 +28,10 @@ from viewer.render.passes.blur_common import max_radius_px
 from viewer.render.graph.frame import Frame
 from viewer.render.passes.gather_reach import ue4_map
 from viewer.render.passes.gather_tiles import draw_gather, gather_tiles, jitter_reach, tile_list
-from viewer.render.passes.gbuffer import GBufferPass, PathConfig, path_targets, segments_param
+from viewer.render.passes.gbuffer import (GBufferPass, PathConfig, path_names, path_samplers,
+                                          path_targets, segments_param)
 from viewer.render.passes.motion_params import curve_steps_param
-from viewer.render.passes.half_velocity import GBUFFER_PATHS, path_bindings
+from viewer.render.passes.half_velocity import path_bindings
 from viewer.render.graph.registry import mode
 from viewer.render.graph.passes import FullscreenPass, Pipeline
 from viewer.render.graph.pool import ReadBack, TexSpec
@@ -66,21 +67,9 @@ class UE4Params:
     curve_steps: int = curve_steps_param(1)     # the published linear blur by default
 
 
-PATH_SUFFIXES = ("_path", "_path2")
-
-
 @dataclass(frozen=True)
 class UE4Config(PathConfig):
     group: ClassVar[str] = "ue4"
-
-
-def declared(base: str, segments: int) -> tuple[str, ...]:
-    """BASE's path targets for `segments` path pieces (none for one)."""
-    return tuple(base + x for x in PATH_SUFFIXES[:segments // 2])
-
-
-def samplers(names: tuple[str, ...]) -> dict[str, str]:
-    return {f"u_path{j}": name for j, name in enumerate(names)}
 
 
 FLAT = TexSpec(4, "f4")           # (v.x, v.y, depth, |v|), v the clamped half vector in px
@@ -114,51 +103,52 @@ class Flatten(FullscreenPass):
 
     def execute(self, frame):
         self.draw(frame, self.produces, {"u_velocity": "velocity", "u_depth": "depth",
-                                         **samplers(GBUFFER_PATHS[:self.segments // 2])},
+                                         **path_samplers(path_targets(self.segments))},
                   {"u_max_px": float(max_radius_px(frame))})
 
 
-class TileMinMax(FullscreenPass):
+class _TilePass(FullscreenPass):
+    """A pass into `output` and its path targets (the path's extent carried along), at
+    the ue4 tile size."""
+
+    def __init__(self, output: str, inputs: tuple[str, ...], segments: int):
+        self.segments = segments
+        self.inputs = inputs
+        self.produces = (output, *path_names(output, segments))
+
+    def defines(self, frame):
+        return {"SEGMENTS": self.segments}
+
+    def outputs(self, frame):
+        return {name: tile_spec(frame) for name in self.produces}
+
+
+class TileMinMax(_TilePass):
     name = "ue4_tiles"
     fragment = "modes/ue4_tiles.frag"
 
     def __init__(self, config: UE4Config = UE4Config()):
-        self.segments = config.segments
-        self.inputs = ("ue4_flat", *path_targets(config.segments))
-        self.produces = ("ue4_tiles", *declared("ue4_tiles", config.segments))
-
-    def defines(self, frame):
-        return {"SEGMENTS": self.segments}
-
-    def outputs(self, frame):
-        return {name: tile_spec(frame) for name in ("ue4_tiles", *declared("ue4_tiles", self.segments))}
+        super().__init__("ue4_tiles", ("ue4_flat", *path_targets(config.segments)),
+                         config.segments)
 
     def execute(self, frame):
-        self.draw(frame, ("ue4_tiles", *declared("ue4_tiles", self.segments)),
-                  {"u_flat": "ue4_flat", **samplers(GBUFFER_PATHS[:self.segments // 2])},
+        self.draw(frame, self.produces,
+                  {"u_flat": "ue4_flat", **path_samplers(path_targets(self.segments))},
                   {"u_tile": frame.params["ue4"].tile})
 
 
-class Dilate(FullscreenPass):
+class Dilate(_TilePass):
     name = "ue4_dilate"
     fragment = "modes/ue4_dilate.frag"
 
     def __init__(self, config: UE4Config = UE4Config()):
-        self.segments = config.segments
-        self.inputs = ("ue4_tiles", *declared("ue4_tiles", config.segments))
-        self.produces = ("ue4_dilated", *declared("ue4_dilated", config.segments))
-
-    def defines(self, frame):
-        return {"SEGMENTS": self.segments}
-
-    def outputs(self, frame):
-        return {name: tile_spec(frame)
-                for name in ("ue4_dilated", *declared("ue4_dilated", self.segments))}
+        super().__init__("ue4_dilated", ("ue4_tiles", *path_names("ue4_tiles", config.segments)),
+                         config.segments)
 
     def execute(self, frame):
         p = frame.params["ue4"]
-        self.draw(frame, ("ue4_dilated", *declared("ue4_dilated", self.segments)),
-                  {"u_tiles": "ue4_tiles", **samplers(declared("ue4_tiles", self.segments))},
+        self.draw(frame, self.produces,
+                  {"u_tiles": "ue4_tiles", **path_samplers(path_names("ue4_tiles", self.segments))},
                   {"u_tile": float(p.tile), "u_reach": dilation_reach(max_radius_px(frame), p.tile),
                    "u_guard": bool(p.fast_path_guard), "u_tile_jitter": p.tile_jitter})
 
@@ -180,7 +170,7 @@ class Gather(FullscreenPass):
         self.segments = config.segments
         self.tiled = tiled
         self.inputs = ("color", "ue4_flat", "ue4_tiles", "ue4_dilated",
-                       *path_targets(config.segments), *declared("ue4_dilated", config.segments))
+                       *path_targets(config.segments), *path_names("ue4_dilated", config.segments))
         # The tiles to draw come from the tile textures read back (tiles()).
         lookups = ("ue4_dilated",) if config.segments > 1 else ("ue4_dilated", "ue4_tiles")
         self.reads_back = tuple(ReadBack(n) for n in lookups) if tiled else ()

@@ -37,9 +37,23 @@ STATIC_RASTER_READ = ReadBack("static_raster", "once per still view", kept=True)
 SEGMENT_CHOICES = (1, 2, 4)
 
 
+PATH_SUFFIXES = ("_path", "_path2")       # two path points a target (glsl/passes/path.glsl)
+
+
+def path_names(base: str, segments: int) -> tuple[str, ...]:
+    """BASE's path targets for `segments` path pieces: BASE_path, and BASE_path2 for 4;
+    none for one (the chord alone)."""
+    return tuple(base + s for s in PATH_SUFFIXES[:segments // 2])
+
+
+def path_samplers(names) -> dict[str, str]:
+    """The sampler bindings u_path0, u_path1 of path targets `names`."""
+    return {f"u_path{j}": name for j, name in enumerate(names)}
+
+
 def path_targets(segments: int) -> tuple[str, ...]:
-    """The path targets written for `segments` pieces: K stored points, two a target."""
-    return ("hybrid_path", "hybrid_path2")[:segments // 2]
+    """The G-buffer's path targets for `segments` pieces: K stored points, two a target."""
+    return path_names("hybrid", segments)
 
 
 @dataclass(frozen=True)
@@ -69,7 +83,7 @@ def path_times(t_open: float, t_close: float, segments: int) -> list[float]:
 
 
 # Target sets by GBUFFER_LAYOUT (glsl/passes/gbuffer_outputs.glsl), in attachment order. Each
-# mode writes only what it reads (a target costs ~0.3-0.5 ms a frame at 640x360 here).
+# mode writes only what it reads (every target costs per fragment: docs/architecture.md).
 LAYOUTS = {
     "full": (0, ("color", "depth", "normal", "id", "velocity")),
     "visibility": (1, ("color", "depth", "id")),

@@ -8,23 +8,19 @@ from .blur_common import max_radius_px
 from viewer.render.graph.frame import Frame
 from viewer.render.graph.passes import FullscreenPass
 from viewer.render.graph.pool import TexSpec
+from viewer.render.passes.gbuffer import path_names, path_targets
 
 # The paper's early out is |vN| <= 0.5 px + eps: the 0.5 px floor of the velocity clamp,
 # plus room for its float rounding, so a neighbourhood moving at the floor stays sharp.
 EARLY_OUT_PX = 0.5 + 1e-3
 
-# The G-buffer's path targets, and the NeighborMax winner's path as the gather reads them.
-GBUFFER_PATHS = ("hybrid_path", "hybrid_path2")
-
-
 def path_bindings(tile_source: str, segments: int) -> dict[str, str]:
     """A path gather's samplers for `segments` path pieces (none for one): the pixel's and
-    the taps' paths, and the NeighborMax winner's (TILE_SOURCE_path, _path2)."""
-    n = segments // 2
-    names = {"u_path0": GBUFFER_PATHS[0], "u_path1": GBUFFER_PATHS[1],
-             "u_tile_path0": tile_source + "_path", "u_tile_path1": tile_source + "_path2"}
-    return {key: names[key] for key in ("u_path0", "u_tile_path0", "u_path1", "u_tile_path1")
-            [:2 * n]}
+    the taps' paths (the G-buffer's), and the NeighborMax winner's (TILE_SOURCE_path,
+    _path2)."""
+    own, tile = path_targets(segments), path_names(tile_source, segments)
+    return {key: name for j in range(len(own))
+            for key, name in ((f"u_path{j}", own[j]), (f"u_tile_path{j}", tile[j]))}
 
 
 class VelocityPrep(FullscreenPass):

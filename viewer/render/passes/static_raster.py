@@ -257,8 +257,7 @@ KEPT_STATIC = KeptSlot("static_raster", StaticRasters,
 
 
 def rasters(frame) -> StaticRasters:
-    r = frame.kept.get(KEPT_STATIC)
-    return r if r is not None else frame.kept.put(KEPT_STATIC, StaticRasters())
+    return frame.kept.get_or_make(KEPT_STATIC, StaticRasters)
 
 
 def union(boxes):

@@ -33,7 +33,10 @@ class TileList:
         self.count = 0                 # tiles in the current list
         self.quads = 0                 # quads drawn: one per tile, or merged rectangles
         self.tiles = np.zeros((0, 2), np.int64)
+        self.tile = self.tile_h = FINE  # tile width and height in px
+        self.size = (0, 0)             # the target's size
         self.box = None                # (x0, y0, x1, y1) GL pixels around the tiles
+        self.quad_first = None         # block-mapped lists: each tile's first quad
         self.vertex_shader = "passes/tiles.vert"
         self.blocks_per_row = None
 
@@ -142,11 +145,8 @@ def _box(tiles: np.ndarray, tile: int, size) -> tuple[int, int, int, int]:
 def kept_tile_list(frame: Frame, name: str) -> TileList:
     """A TileList kept across frames under `name` (its vertex buffer reused), made the
     first time (e.g. clear_outside's "zero_tiles")."""
-    slot = KeptSlot(name, TileList)
-    tl = frame.kept.get(slot)
-    if tl is None or tl.ctx is not frame.ctx:
-        tl = frame.kept.put(slot, TileList(frame.ctx))
-    return tl
+    return frame.kept.get_or_make(KeptSlot(name, TileList), lambda: TileList(frame.ctx),
+                                  lambda tl: tl.ctx is frame.ctx)
 
 
 def within_reach(sources: np.ndarray, reach, tile: int) -> np.ndarray:

@@ -18,9 +18,9 @@ from .blur_common import max_radius_px
 from viewer.render.graph.frame import Frame
 from viewer.render.graph.passes import FullscreenPass, Pass
 from viewer.render.graph.pool import TexSpec
+from viewer.render.passes.gbuffer import path_names, path_samplers
 
 
-PATH_SUFFIXES = ("_path", "_path2")       # two path points a target (glsl/passes/path.glsl)
 
 
 @dataclass(frozen=True)
@@ -46,7 +46,7 @@ class TileMaxPass(FullscreenPass):
         if axis not in ("x", "y"):
             raise ValueError(f"TileMaxPass axis must be 'x' or 'y', got {axis!r}")
         self.name = output
-        self.path_outputs = tuple(output + s for s in PATH_SUFFIXES[:len(paths)])
+        self.path_outputs = path_names(output, 2 * len(paths))   # one per source path
         self.inputs, self.produces = (source, *paths), (output, *self.path_outputs)
         self.source, self.output, self.axis, self.tile = source, output, axis, tile
         self.select, self.segments, self.paths = select, segments, paths
@@ -70,8 +70,7 @@ class TileMaxPass(FullscreenPass):
         if tiles is not None:
             uniforms["u_viewport"] = tuple(float(x) for x in tiles.size)
         n = self.segments // 2
-        textures = {"u_velocity": self.source,
-                    **{f"u_path{j}": self.paths[j] for j in range(n)}}
+        textures = {"u_velocity": self.source, **path_samplers(self.paths[:n])}
         self.draw(frame, (self.output, *self.path_outputs[:n]), textures, uniforms,
                   tiles=tiles)
 
@@ -85,7 +84,7 @@ class NeighborMaxPass(FullscreenPass):
     def __init__(self, source: str, output: str, tile=max_radius_px, segments: int = 1,
                  paths: tuple[str, ...] = (), diagonal_toward: bool = False):
         self.name = output
-        self.path_outputs = tuple(output + s for s in PATH_SUFFIXES[:len(paths)])
+        self.path_outputs = path_names(output, 2 * len(paths))   # one per source path
         self.inputs, self.produces = (source, *paths), (output, *self.path_outputs)
         self.source, self.output, self.tile = source, output, tile
         self.segments, self.paths = segments, paths
@@ -103,7 +102,7 @@ class NeighborMaxPass(FullscreenPass):
     def execute(self, frame: Frame):
         n = self.segments // 2
         self.draw(frame, (self.output, *self.path_outputs[:n]),
-                  {"u_tiles": self.source, **{f"u_path{j}": self.paths[j] for j in range(n)}})
+                  {"u_tiles": self.source, **path_samplers(self.paths[:n])})
 
 
 def tile_passes(source: str, prefix: str, tile=max_radius_px, select_x=None,
@@ -114,7 +113,7 @@ def tile_passes(source: str, prefix: str, tile=max_radius_px, select_x=None,
     for the first and the host resources it reads; paths: the source's path targets,
     carried along where segments > 1; diagonal_toward: NeighborMaxPass's."""
     tx, ty, nm = f"{prefix}_tilemax_x", f"{prefix}_tilemax", f"{prefix}_neighbormax"
-    names = lambda base: tuple(base + s for s in PATH_SUFFIXES[:len(paths)])  # noqa: E731
+    carried = 2 * len(paths)      # the path pieces the tile passes carry
     return [TileMaxPass(source, tx, "x", tile, select_x, segments, paths, select_reads),
-            TileMaxPass(tx, ty, "y", tile, None, segments, names(tx)),
-            NeighborMaxPass(ty, nm, tile, segments, names(ty), diagonal_toward)]
+            TileMaxPass(tx, ty, "y", tile, None, segments, path_names(tx, carried)),
+            NeighborMaxPass(ty, nm, tile, segments, path_names(ty, carried), diagonal_toward)]

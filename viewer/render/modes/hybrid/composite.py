@@ -43,9 +43,9 @@ OUTLINE_MARGIN_PX = 0.05
 # instead of two under a camera pan, whose surfaces all move about the same way (pan:
 # 95% of pixels within 6 degrees of their NeighborMax vector). The merged own lines stray
 # off the neighbourhood's direction by up to the angle's sine times their reach, which
-# near_outlines adds to its margin. Measured: 10 degrees as fast on pan but worse where
-# the camera turns fast (curved paths: 60 random scenes' worst inner-blur FLIP +.015
-# against +.008 at 7); 5 degrees 1.2 ms slower on pan.
+# near_outlines adds to its margin. A wider angle merges no more under a pan but blurs
+# worse where the camera turns fast (curved paths); a narrower one merges less under a
+# pan and costs its time.
 MERGE_ANGLE_DEG = 7.0
 MERGE_COS = math.cos(math.radians(MERGE_ANGLE_DEG))
 MERGE_SPREAD = math.sin(math.radians(MERGE_ANGLE_DEG))
@@ -127,10 +127,9 @@ def composite_kind(frame: Frame) -> str:
     return frame.params["hybrid"].composite
 
 
-# Tiles around the masked ones that get the time-sampled composite in "split". Measured
-# (640x360, FLIP whole / inner / outer, composite ms): pan 0 tiles .036/.044/.053 246 ms,
-# 1 tile .035/.040/.042 376 ms, 5 tiles (all within the blur limit) the same as 1 at
-# 507 ms; vase_pan 1 tile = 5 tiles = .042/.059/.054 at 123 and 370 ms.
+# Tiles around the masked ones that get the time-sampled composite in "split": one tile
+# blurs as well as the blur limit's whole reach (pan, vase_pan) in less time; none
+# leaves the outer blur as the bucket's.
 SPLIT_REACH = 1
 # Tiles whose longest |D| is below this get the OWN_STILL variant: half of
 # glsl/modes/hybrid/hybrid_bucket.frag's "own surface moves" test (dot(D, D) >= 1e-6, |D| >= 1e-3 px),
@@ -300,8 +299,3 @@ def composite_tile_passes(config: HybridConfig = HybridConfig()) -> list:
     return [*tile_passes("hybrid_front", "hybrid", select_x=moving_strips, segments=config.segments,
                          paths=config.paths, select_reads=(TILE_LISTS,)),
             *((ReadNeighborMax(),) if config.reads_neighbormax else ())]
-
-
-def composite_passes(config: HybridConfig = HybridConfig()) -> list:
-    """The displacement tiles and the composite (the composite after the reveal)."""
-    return [*composite_tile_passes(config), Composite(config)]

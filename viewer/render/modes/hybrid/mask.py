@@ -5,11 +5,11 @@ at some time of the exposure, written as ray_mask by the displacement test's pas
 (STEP 3): probes along half the displacement relative to the background, which the probes
 along half the pixel's own displacement find (glsl/modes/hybrid/raymask_displacement.frag). With a
 still background that is the poster's displacement test; under a moving camera it marks
-only the band the relative motion uncovers (`pan` 640x360: 1.7 k pixels where the
-poster's test marks 32 k, the same FLIP). With hybrid.range_check on, the paper's three
-steps (`pan`: inner-blur FLIP .048 against .052, for 39 k rays and a frame 1.84x
-McGuire's), adapted to the contract's centred exposure, in two fragment passes (the
-first two steps read nothing but the pixel's own neighbourhood):
+only the band the relative motion uncovers (a small part of the pixels the poster's test
+marks). With hybrid.range_check on, the paper's three steps (a little better inner blur
+for many more rays: docs/performance.md, "Quality for time"), adapted to the contract's
+centred exposure, in two fragment passes (the first two steps read nothing but the
+pixel's own neighbourhood):
 
   mask_displacement (+ mask_relative): a moving pixel whose displaced position, looking
       both ways along half its displacement (and half the relative displacement to the
@@ -195,8 +195,8 @@ def edge_tiles(frame: Frame) -> np.ndarray:
 def reach_test(frame: Frame) -> bool:
     """Whether most tiles move (a moving camera), so that the mask passes take the
     shortcuts of the module's docstring: worth their read-backs and extra reductions there
-    (vase_pan 1280x720: mask passes 37 -> 21 ms), not where few tiles move (basic: the
-    reach reductions alone cost +0.3 ms). Exact either way."""
+    (a large share of the mask passes' time saved), not where few tiles move (the reach reductions
+    would cost more than they save). Exact either way."""
     moving = tile_list(frame, "moving")
     if moving is None:
         return False
@@ -254,7 +254,7 @@ class RangeCheck(FullscreenPass):
 
     def defines(self, frame: Frame):
         # The tile size as a constant: a division by a uniform runs lane by lane on
-        # llvmpipe, in the coarse look's loop (pan: ray_mask 4.3 -> 3.3 ms).
+        # llvmpipe, here in the coarse look's loop.
         return {"REACH_TEST": int(reach_test(frame)), "FINE": FINE}
 
     def outputs(self, frame: Frame):

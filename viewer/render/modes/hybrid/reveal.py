@@ -20,7 +20,7 @@ shade what they reveal on the GPU exactly as the raster layer is shaded.
       primary ray (RayScene.intersect's view) reveals what a raster of the static objects
       alone shows at its pixel: that layer, the G-buffer's kept static raster
       (viewer/render/passes/static_raster.py), is blitted in once per view (static_layer) and
-      copied there, not shaded again (spinner: 429 of 461 tiles).
+      copied there, not shaded again (under a still camera, most of the revealed tiles).
 """
 from __future__ import annotations
 
@@ -62,9 +62,8 @@ FACE_UNIT = 5
 RECORD_UNIT = 6
 # Tile side for reveal_shade's draws: finer than the tile lists' FINE, so fewer fragments
 # outside the revealed pixels run the shader. llvmpipe shades 4 x 4 blocks, twice where a
-# quad's diagonal crosses one; still 4 beats 8, whose blocks hold ~15% revealed pixels
-# under a moving camera (reveal_shade crowd_pan 640x360 1.80 -> 1.42 ms, pan 0.94 ->
-# 0.79, crowd 1.23 -> 1.05, the others 0.04-0.05 less).
+# quad's diagonal crosses one; still 4 beats 8, whose blocks hold few revealed pixels
+# under a moving camera.
 SHADE_TILE = 4
 
 
@@ -134,9 +133,9 @@ class ObjectTable:
 def shade_draws(keys, has_row) -> list[tuple[list[int], int, int]]:
     """reveal_shade's draws for a layer's keys [(key, first, count)], in order: (keys,
     first, count) per draw, a run of keys side by side with table rows in one draw (the
-    object table: llvmpipe charges ~0.1 ms a draw however small, crowd_pan's 15 draws are
-    1, and reading 18 texels a fragment costs no more than uniforms on pan's 39 k), any
-    other key (an image-textured object, the static layer) alone."""
+    object table: llvmpipe charges ~0.1 ms a draw however small, and reading 18 texels a
+    fragment costs no more than uniforms), any other key (an image-textured object, the
+    static layer) alone."""
     draws = []                  # [table?, keys, first, count]
     for key, first, count in keys:
         row = has_row(key)
@@ -158,6 +157,7 @@ class RevealState:
         self._faces: moderngl.Texture | None = None
         self._faces_motion: moderngl.Texture | None = None
         self._faces_data: np.ndarray | None = None
+        self._motion_data: np.ndarray | None = None
         self._faces_posed = None
         # The skinned movers: their rows of the face texture are posed per frame.
         self.skinned = [o for o, _ in self.rays.moving if o.skin is not None]
@@ -302,10 +302,8 @@ REVEAL_BATCH = HostResource("reveal_batch", dict, "the primary rays, for hmblur 
 
 
 def reveal_state(frame: Frame) -> RevealState:
-    rs = frame.kept.get(KEPT_REVEAL)
-    if rs is None or rs.scene is not frame.scene or rs.ctx is not frame.ctx:
-        rs = frame.kept.put(KEPT_REVEAL, RevealState(frame.ctx, frame.scene))
-    return rs
+    return frame.kept.get_or_make(KEPT_REVEAL, lambda: RevealState(frame.ctx, frame.scene),
+                                  lambda rs: rs.scene is frame.scene and rs.ctx is frame.ctx)
 
 
 def read_masked_pixels(frame: Frame) -> tuple[np.ndarray, np.ndarray]:
@@ -337,23 +335,18 @@ BLOCKS_PER_ROW = 256     # record blocks (SHADE_TILE x SHADE_TILE) per row; both
 
 def layer_hits(pixels: np.ndarray, layer, height: int, static_key: int | None = None
                ) -> LayerHits | None:
-    """The traced rows of a layer as hit records (face row, u, v, key), key = 1 + object
-    id, or static_key where given for the hits the static layer holds (layer.static_view),
-    one SHADE_TILE x SHADE_TILE block per (key, screen tile) holding its pixels, blocks in
+    """The revealed layer as hit records (face row, u, v, key), key = 1 + object id, or
+    static_key where given for the hits the static layer holds (layer.static_view), one
+    SHADE_TILE x SHADE_TILE block per (key, screen tile) holding its pixels, blocks in
     rows of BLOCKS_PER_ROW, sorted by key: each key's draw covers only its own run of
     tiles (reveal_kernels.pack_blocks); None when nothing was traced."""
-    every = bool(layer.traced.all())          # layer 1: no gather needed
-    rows = None if every else np.flatnonzero(layer.traced)
-    if not len(pixels) or rows is not None and not len(rows):
+    if not len(pixels):
         return None
-
-    def pick(a):
-        return a if every else np.take(a, rows, axis=0)
     gx, gy, key, face = kernels.record_inputs(
-        pick(pixels), height, pick(layer.object_id), pick(layer.prim_id),
-        layer.table.face_offset, pick(layer.static_view), -1 if static_key is None else static_key)
+        pixels, height, layer.object_id, layer.prim_id, layer.table.face_offset,
+        layer.static_view, -1 if static_key is None else static_key)
     records, _, tiles, runs = kernels.pack_blocks(
-        gx, gy, key, face, pick(layer.barycentrics), SHADE_TILE.bit_length() - 1,
+        gx, gy, key, face, layer.barycentrics, SHADE_TILE.bit_length() - 1,
         BLOCKS_PER_ROW.bit_length() - 1)
     return LayerHits(records, [tuple(r) for r in runs.tolist()], tiles)
 
@@ -375,11 +368,11 @@ class RevealTrace(Pass):
         result = None
         skin0 = st.rays.skin_ms
         if len(pixels) and p.trace:
-            result = reveal(st.rays, frame.camera, frame.time, pixels, own, layers=1,
+            result = reveal(st.rays, frame.camera, frame.time, pixels, own,
                             max_depth=p.max_depth, threads=p.threads or None,
                             matrices=frame_models(frame, st.rays.moving))
         t2 = time.perf_counter()
-        hits = (layer_hits(pixels, result.layers[0], frame.size[1], st.static_key)
+        hits = (layer_hits(pixels, result.layer, frame.size[1], st.static_key)
                 if result else None)
         t3 = time.perf_counter()
         s = frame.stats
@@ -387,7 +380,7 @@ class RevealTrace(Pass):
         s["rays"] = int(result.rays) if result else 0
         s["revealed_pixels"] = int(result.pixels_hit) if result else 0
         # Revealed surfaces copied from the static objects' raster (RevealState.static_layer).
-        s["static_layer_hits"] = np.count_nonzero(result.layers[0].static_view) if result else 0
+        s["static_layer_hits"] = np.count_nonzero(result.layer.static_view) if result else 0
         s["restarts"] = int(result.restarts) if result else 0
         s["unresolved"] = int(result.unresolved) if result else 0
         s["reveal_readback_ms"] = (t1 - t0) * 1e3

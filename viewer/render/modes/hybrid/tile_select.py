@@ -34,7 +34,7 @@ from viewer.render.graph.pool import ReadBack, TexSpec
 from viewer.render.modes.hybrid.params import HybridParams  # noqa: F401  (registers the "hybrid" group)
 from viewer.render.passes import tile_kernels
 from viewer.render.passes.blur_common import max_radius_px
-from viewer.render.passes.gbuffer import path_targets
+from viewer.render.passes.gbuffer import path_samplers, path_targets
 from viewer.render.passes.tile_runs import FINE, TileList, tile_coords, within_reach
 from viewer.render.passes.tiles import StripSpec
 
@@ -44,7 +44,8 @@ MARGIN = 1.0
 
 
 class TileLists:
-    """Per-renderer host state: the two lists, reused frame after frame."""
+    """Per-renderer host state: the tile lists and this frame's tile maps, reused frame
+    after frame."""
 
     def __init__(self, ctx: moderngl.Context):
         self.ctx = ctx
@@ -52,7 +53,12 @@ class TileLists:
         self.active = TileList(ctx)
         self.surface = TileList(ctx)   # moving, and an id boundary within the probes' reach
         self.shape = (0, 0)            # (rows, columns) of FINE tiles this frame
-        self.boundary = np.zeros((0, 0), bool)   # tiles that may hold an id boundary
+        # This frame's FINE tile maps (GL rows): the longest displacement (px), the moving
+        # tiles, those of `surface`, and the tiles that may hold an id boundary.
+        self.longest = np.zeros((0, 0), np.float32)
+        self.moving_tiles = np.zeros((0, 0), bool)
+        self.surface_tiles = np.zeros((0, 0), bool)
+        self.boundary = np.zeros((0, 0), bool)
         self._extra: dict[str, TileList] = {}
 
     def extra(self, name: str) -> TileList:
@@ -106,7 +112,7 @@ def near_boundary(longest: np.ndarray, boundary: np.ndarray, tile: int) -> np.nd
     return within_reach(boundary, 0.5 * longest.astype(np.float64) + 2.0, tile)
 
 
-PATH_TEXTURES = {"u_path0": "hybrid_path", "u_path1": "hybrid_path2"}
+PATH_TEXTURES = path_samplers(path_targets(4))
 
 
 def path_textures(segments: int, names=PATH_TEXTURES) -> dict[str, str]:
@@ -147,9 +153,8 @@ class SelectTiles(Pass):
     reads_back = (ReadBack("motion_tiles"),)
 
     def execute(self, frame: Frame):
-        lists = frame.kept.get(KEPT_LISTS)
-        if lists is None or lists.ctx is not frame.ctx:
-            lists = frame.kept.put(KEPT_LISTS, TileLists(frame.ctx))
+        lists = frame.kept.get_or_make(KEPT_LISTS, lambda: TileLists(frame.ctx),
+                                       lambda kept: kept.ctx is frame.ctx)
         tex = frame.pool.get("motion_tiles")
         tw, th = tex.size
         both = np.frombuffer(frame.pool.read_back("motion_tiles"),
