@@ -176,12 +176,13 @@ uniform float u_max_disp;
 // Whether the pixel's own mover covers it at every checked time.
 bool stays(ivec2 x) {
     begin_pixel(x);
-    Candidate c = candidate(int(own_id + 0.5));
-    if (c.kind == 0) return true;
+    int id = int(own_id + 0.5);
+    int kind = kind_of(id);
+    if (kind == KIND_STILL) return true;
     float d;
     ivec2 at;
     for (int i = 0; i < INVERSE_CHECKS; ++i) {
-        if (!covers(c, part_of(i, INVERSE_CHECKS, 0.5), own_depth, d, at)) return false;
+        if (!covers(id, kind, part_of(i, INVERSE_CHECKS, 0.5), own_depth, d, at)) return false;
     }
     return true;
 }

@@ -10,14 +10,16 @@ streaks follow arcs. This host pass makes what the shader reads:
 
   hybrid_motion_table: per object id (a row; row 0 the background), per time of the
       exposure t_k = t_open + (k + 1/2) (t_close - t_open) / K (k < K = motion.curve_samples,
-      the centres of K equal parts; a pixel's time samples are stratified over them):
-      L_k = (V(t_k) M(t_k))^-1, from view space at t_k to the object's own, and its
-      inverse (4 texels each, a column a texel), and the object's screen box at t_k (a
-      pixel outside it is not covered then); then, once per object: V(t) M(t) and its
-      inverse, its local bounding box (lo, hi: a ray that misses it at t_k is no
-      candidate, and where it enters is the first depth guess) and its kind: 0 still
-      (every static object shares the camera's map, its boxes unbounded), 1 rigid mover,
-      2 skinned mover (no rigid map: the shader walks its displacement instead);
+      the centres of K equal parts; a pixel's time samples are stratified over them),
+      three affine maps, each as its top three rows (a texel a row): L_k = (V(t_k)
+      M(t_k))^-1, view space at t_k to the object's own; F_k = V(t) M(t) L_k, view space
+      at t_k to view space at the frame time (where the G-buffer holds the point);
+      B_k = F_k^-1; and the object's screen box at t_k (a pixel outside it is not covered
+      then). Then, once per object: its local bounding box (lo, hi: a ray that misses it
+      at t_k is no candidate, and where it enters is the first depth guess), its kind:
+      0 still (every static object shares the camera's map, its boxes unbounded), 1 rigid
+      mover, 2 skinned mover (no rigid map: the shader walks its displacement instead),
+      and its screen box over the exposure (a pixel outside it never looks for it);
   hybrid_candidates: per FINE tile, up to MAX_CANDIDATES movers whose screen bounds over
       the exposure reach it, nearest first (0: none);
   host inverse_tiles: the tiles where the composite follows motion exactly: in a frame
@@ -33,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from world.path_bend import object_bends, object_points
+from world.pose_table import PoseTable
 from viewer.render.graph.frame import Frame
 from viewer.render.graph.host import HostResource
 from viewer.render.graph.passes import Pass
@@ -44,8 +47,10 @@ CANDIDATES = "hybrid_candidates"
 INVERSE_TILES = HostResource("inverse_tiles", np.ndarray,
                              "FINE tiles (GL rows) where the composite follows curves")
 MAX_CANDIDATES = 4
-COLS = 9                  # texels per time: L_k (4), L_k^-1 (4), screen box
-TAIL = 11                 # texels per object: V(t) M(t) (4), its inverse (4), lo, hi, kind
+# Texels per time: L_k, F_k, B_k (three rows each), the screen box; per object after the
+# times': lo, hi, kind, the screen box over the exposure (the shaders get these offsets).
+AT_L, AT_F, AT_B, AT_BOX, COLS = 0, 3, 6, 9, 10
+AT_LO, AT_HI, AT_KIND, AT_REACH, TAIL = 0, 1, 2, 3, 4
 UNBOUNDED = 3.0e38
 KIND_STILL, KIND_RIGID, KIND_SKINNED = 0, 1, 2
 
@@ -65,36 +70,21 @@ def table_times(t_open: float, t_close: float, parts: int) -> np.ndarray:
     return t_open + (t_close - t_open) * (np.arange(parts) + 0.5) / parts
 
 
-def columns(m: np.ndarray) -> np.ndarray:
-    """Matrices (..., 4, 4) as texels, a column each (GLSL's mat4 from four vec4)."""
-    return np.swapaxes(m, -1, -2)
-
-
 def object_row(view_t: np.ndarray, views: np.ndarray, model_t: np.ndarray,
                models: np.ndarray, lo, hi, kind: int, boxes: np.ndarray) -> np.ndarray:
     """One object's table row: K * COLS + TAIL texels (module doc), float64; `boxes` its
     screen box at each time (K, 4)."""
-    vm = views @ models                                       # V(t_k) M(t_k)
-    now = view_t @ model_t                                    # V(t) M(t)
+    local = np.linalg.inv(views @ models)                     # L_k = (V(t_k) M(t_k))^-1
+    forward = (view_t @ model_t) @ local                      # F_k
     times = np.zeros((len(views), COLS, 4))
-    times[:, 0:4] = columns(np.linalg.inv(vm))
-    times[:, 4:8] = columns(vm)
-    times[:, 8] = boxes
+    times[:, AT_L:AT_L + 3] = local[:, :3]
+    times[:, AT_F:AT_F + 3] = forward[:, :3]
+    times[:, AT_B:AT_B + 3] = np.linalg.inv(forward)[:, :3]
+    times[:, AT_BOX] = boxes
     tail = np.zeros((TAIL, 4))
-    tail[0:4] = columns(now)
-    tail[4:8] = columns(np.linalg.inv(now))
-    tail[8, :3], tail[9, :3], tail[10, 0] = lo, hi, kind
+    tail[AT_LO, :3], tail[AT_HI, :3], tail[AT_KIND, 0] = lo, hi, kind
+    tail[AT_REACH] = (*boxes[:, :2].min(axis=0), *boxes[:, 2:].max(axis=0))
     return np.concatenate([times.reshape(-1, 4), tail])
-
-
-def screen_box(clip: np.ndarray, size, near: float):
-    """(x0, y0, x1, y1) window pixels around points' clip positions (n, 4), or None where
-    one lies behind the near plane (its projection is no position: every tile)."""
-    w = clip[:, 3]
-    if (w <= near).any():
-        return None
-    win = (clip[:, :2] / w[:, None] * 0.5 + 0.5) * np.asarray(size, np.float64)
-    return (*win.min(axis=0), *win.max(axis=0))
 
 
 def lookup_uniforms(frame: Frame) -> dict:
@@ -109,7 +99,10 @@ def lookup_uniforms(frame: Frame) -> dict:
             "u_tolerance": float(p.tolerance), "u_depth_tolerance": float(p.depth_tolerance)}
 
 
-LOOKUP_DEFINES = {"TABLE_COLS": COLS}
+LOOKUP_DEFINES = {"TABLE_COLS": COLS, "AT_L": AT_L, "AT_F": AT_F, "AT_B": AT_B,
+                  "AT_BOX": AT_BOX, "AT_LO": AT_LO, "AT_HI": AT_HI, "AT_KIND": AT_KIND,
+                  "AT_REACH": AT_REACH, "KIND_STILL": KIND_STILL, "KIND_RIGID": KIND_RIGID,
+                  "KIND_SKINNED": KIND_SKINNED}
 # Times of the exposure at which the ray mask asks whether a pixel's own mover still
 # covers it (evenly spaced): where one does not, the pixel is traced.
 MASK_CHECKS = 8
@@ -150,7 +143,9 @@ class MotionTable(Pass):
         k = int(frame.params["motion"].curve_samples)
         times = table_times(t_open, t_close, k)
         view_t = cam.view(t)
-        views = np.stack([cam.view(float(tk)) for tk in times])
+        views = (np.stack([cam.view(float(tk)) for tk in times]) if camera_moves
+                 else np.broadcast_to(view_t, (k, 4, 4)))
+        poses = PoseTable((*times, t))
         eye = np.eye(4)
         unbounded = np.tile([-UNBOUNDED, -UNBOUNDED, UNBOUNDED, UNBOUNDED], (k, 1))
         still = object_row(view_t, views, eye, np.broadcast_to(eye, views.shape),
@@ -161,16 +156,16 @@ class MotionTable(Pass):
         count = np.zeros(shape, np.int64)
         order = []
         for o, bend in zip(movers, bends):
-            boxes, near = self._reach(frame, o, times, views)
-            order.append((near, o.id, o, boxes, bend))
+            models = poses.world(o)
+            boxes, near = self._reach(frame, o, times, views, models[:k])
+            order.append((near, o.id, o, boxes, models))
         dropped = 0
-        for _, _, o, boxes, bend in sorted(order, key=lambda x: (x[0], x[1])):
-            table[o.id, -1, 0] = KIND_SKINNED
+        for _, _, o, boxes, models in sorted(order, key=lambda x: (x[0], x[1])):
+            table[o.id, k * COLS + AT_KIND, 0] = KIND_SKINNED
             if o.skin is None:
                 lo, hi = frame.gpu.bounds[o.id]
-                models = np.stack([o.matrix(float(tk)) for tk in times])
                 try:
-                    table[o.id] = object_row(view_t, views, o.matrix(t), models, lo, hi,
+                    table[o.id] = object_row(view_t, views, models[k], models[:k], lo, hi,
                                              KIND_RIGID, boxes)
                 except np.linalg.LinAlgError:     # (scaled to nothing at some time: walked)
                     pass
@@ -189,28 +184,26 @@ class MotionTable(Pass):
         frame.stats["inverse_dropped_candidates"] = dropped
 
     @staticmethod
-    def _reach(frame: Frame, o, times, views):
+    def _reach(frame: Frame, o, times, views, models):
         """(the object's screen box (x0, y0, x1, y1, window px, a pixel wider) at each
         table time, unbounded where it crosses the near plane; its nearest view depth
         then): its bounding box's corners (a skinned mesh's sampled points)."""
-        cam = frame.camera
-        proj = cam.projection()
-        near = frame.scene.camera.near
-        boxes = np.tile([-UNBOUNDED, -UNBOUNDED, UNBOUNDED, UNBOUNDED], (len(times), 1))
-        nearest = np.inf
+        proj = frame.camera.projection()
         if o.skin is None:
             lo, hi = frame.gpu.bounds[o.id]
-            local = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                              for z in (lo[2], hi[2])]).T
-        for k, (v, tk) in enumerate(zip(views, times)):
-            if o.skin is not None:
-                local = object_points(o, float(tk))
-            clip = (proj @ v @ o.matrix(float(tk)) @ local).T
-            nearest = min(nearest, float(clip[:, 3].min()))
-            box = screen_box(clip, frame.size, near)
-            if box is not None:
-                boxes[k] = (box[0] - 1.0, box[1] - 1.0, box[2] + 1.0, box[3] + 1.0)
-        return boxes, nearest
+            corners = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                                for z in (lo[2], hi[2])]).T
+            clip = np.einsum("kij,jn->kin", proj @ views @ models, corners)   # (K, 4, 8)
+        else:
+            clip = np.stack([proj @ v @ m @ object_points(o, float(tk))
+                             for v, m, tk in zip(views, models, times)])
+        w = clip[:, 3]
+        size = np.asarray(frame.size, np.float64)[None, :, None]
+        win = (clip[:, :2] / np.where(w > 0.0, w, 1.0)[:, None] * 0.5 + 0.5) * size
+        boxes = np.concatenate([win.min(axis=2) - 1.0, win.max(axis=2) + 1.0], axis=1)
+        behind = (w <= frame.scene.camera.near).any(axis=1)
+        boxes[behind] = (-UNBOUNDED, -UNBOUNDED, UNBOUNDED, UNBOUNDED)
+        return boxes, float(w.min())
 
     @staticmethod
     def _union(boxes: np.ndarray):

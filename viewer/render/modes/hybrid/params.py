@@ -41,8 +41,9 @@ class HybridParams:
                             "reach; steps, curve_steps sub-frames (each a whole frame)")
     time_samples: int = param(8, unit="samples", lo=1, hi=64,
                               help="curve = inverse: times of the exposure sampled per "
-                                   "pixel (stratified, jittered per pixel) where motion "
-                                   "bends")
+                                   "pixel where motion bends, at most (one per "
+                                   "sample_spacing px of the motion near the pixel; "
+                                   "stratified, jittered per pixel)")
     depth_tolerance: float = param(0.02, unit="fraction of the depth", lo=0.0, hi=0.5,
                                    help="curve = inverse: a candidate covers a time sample "
                                         "where its surface lies on the pixel's ray within "
