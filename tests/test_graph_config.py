@@ -235,3 +235,24 @@ def test_every_mode_runs_under_its_checks(ctx, monkeypatch):
             assert every <= set(seen) <= {(b.name, p.name) for b, p in declared}, sets
     finally:
         r.release()
+
+
+@pytest.mark.parametrize("settings", [(), ("hybrid.curve=steps",), ("motion.steps=2",)])
+def test_every_pass_a_frame_times_is_in_the_graph(ctx, capsys, settings):
+    """What `hmblur bench` times (a frame's pass_ms: the pipeline's passes and the
+    renderer's own work around it) is what `hmblur graph` lists, on a glTF scene whose
+    motion bends."""
+    from viewer.commands.main import main
+    scene = load_scene("rover")
+    r = Renderer(ctx, scene, (96, 54))
+    try:
+        timed = set(r.render("hybrid", scene.render.time, params(*settings),
+                             timing=True).pass_ms)
+    finally:
+        r.release()
+    assert main(["graph", "hybrid", *[a for s in settings for a in ("--set", s)]]) == 0
+    listed = {line.split(":")[0].split()[0] for line in capsys.readouterr().out.splitlines()
+              if line.startswith("  ") and ":" in line}
+    assert {"scene_pose", "gbuffer", "hybrid_composite"} <= timed
+    assert timed <= listed, timed - listed
+    assert ("motion_bend" in listed) == (settings == ("hybrid.curve=steps",))

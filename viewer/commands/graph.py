@@ -1,7 +1,8 @@
 """`hmblur graph [MODE]`: a mode's pipeline as it runs under the given parameters (its
 configuration: viewer/render/graph/registry.py), GPU and CPU passes with the textures and host
 resources each reads and makes, the read-backs to the host, then every host resource
-with its type, producer and readers (Pipeline.describe; no scene or GL context needed)."""
+with its type, producer and readers (Pipeline.describe; no scene or GL context needed),
+and the renderer's own work around the pipeline (steps.around)."""
 from __future__ import annotations
 
 from world.errors import UserError
@@ -9,6 +10,14 @@ from viewer.cli.args import check_set_groups, read_sidecar
 from viewer.render.graph.params import ParamSet
 from viewer.render.modes import MODE_GROUPS, MODES
 from viewer.render.graph.registry import build
+from viewer.render.steps import around
+
+
+def around_text(mode: str, params: ParamSet) -> str:
+    """The renderer's own work around the pipeline, which `hmblur bench` times too."""
+    rows = around(mode, params)
+    return "\naround the pipeline (the renderer's own):\n" + "\n".join(
+        f"  {name}{' (cpu)' if where == 'cpu' else ''}: {when}" for name, where, when in rows)
 
 
 def register(sub):
@@ -43,5 +52,5 @@ def run(args) -> int:
     modes = [mode] if mode else list(MODES)
     check_set_groups(args.set, modes, MODE_GROUPS)
     params.apply(args.set)
-    print("\n\n".join(build(m, params).describe() for m in modes))
+    print("\n\n".join(build(m, params).describe() + around_text(m, params) for m in modes))
     return 0

@@ -246,14 +246,13 @@ class Composite(FullscreenPass):
 
     def _curves(self, frame: Frame, active: np.ndarray) -> np.ndarray | None:
         """The inverse-motion composite (glsl/modes/hybrid/hybrid_inverse.frag) on the
-        active tiles that bending movers reach; returns those tiles, or None where the
-        configuration does not follow curves or nothing bends."""
+        tiles the movers reach over the exposure (inverse.py; a mover that comes back
+        within it has a short chord, and its tiles need not be active); returns those
+        tiles, or None where the configuration does not follow curves or nothing bends."""
         inverse = frame.host.get(INVERSE_TILES) if self.inverse else None
-        if inverse is None or inverse.shape != active.shape:
+        if inverse is None or inverse.shape != active.shape or not inverse.any():
             return None
-        curved = active & inverse
-        if not curved.any():
-            return None
+        curved = inverse
         tl = frame.host.get(TILE_LISTS).extra("inverse")
         tl.set(tile_coords(curved), FINE, frame.size)
         self.draw(frame, ("hybrid",),

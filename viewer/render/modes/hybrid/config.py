@@ -13,7 +13,7 @@ class HybridConfig:
     segments: int = 1            # hybrid.segments: the path targets and every path variant
     range_check: bool = False    # hybrid.range_check: the poster's three-step mask passes
     composite: str = "bucket"    # hybrid.composite: the composite's variants and inputs
-    curve: str = "inverse"       # hybrid.curve: the motion table pass and inverse variant
+    curve: str = "steps"         # hybrid.curve: the motion table pass and inverse variant
 
     @classmethod
     def of(cls, params) -> "HybridConfig":

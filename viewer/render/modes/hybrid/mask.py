@@ -98,12 +98,12 @@ class SurfaceTests(FullscreenPass):
         return {n: specs[n] for n in self.produces}
 
     def _curved(self, frame: Frame) -> np.ndarray | None:
-        """The moving tiles where the composite follows curves (inverse.py), or None."""
+        """The tiles where the composite follows motion exactly (inverse.py: every tile a
+        mover reaches over the exposure, whatever its chord), or None."""
         inverse = frame.host.get(INVERSE_TILES) if self.inverse else None
-        lists = frame.host.get(TILE_LISTS)
-        if inverse is None or lists is None or not inverse.any():
+        if inverse is None or frame.host.get(TILE_LISTS) is None or not inverse.any():
             return None
-        return inverse & lists.moving_tiles
+        return inverse
 
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]

@@ -33,7 +33,7 @@ class HybridParams:
     # linear blur's on wheel, spinner, keys_arc, rover, basic, turning_car, where path
     # segments reach 0.59-1.08x (docs/performance.md); straight motion stays one frame.
     curve_steps: int = curve_steps_param(2)
-    curve: str = param("inverse", choices=CURVES, effect="recompile",
+    curve: str = param("steps", choices=CURVES, effect="recompile",
                        help="how motion that bends (more than motion.curve_px) is "
                             "followed: inverse, in one frame, each pixel's time samples "
                             "mapped back along every candidate object's exact motion "
