@@ -85,7 +85,8 @@ def test_graph_shows_the_configuration_and_counts(capsys):
     assert main(["graph", "hybrid", "--set", "hybrid.segments=4",
                  "--set", "hybrid.range_check=true"]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert out[1] == "config HybridConfig(segments=4, range_check=True, composite='bucket')"
+    assert out[1] == ("config HybridConfig(segments=4, range_check=True, composite='bucket', "
+                      "curve='steps')")
     assert out[2] == "12 passes (10 gpu, 2 cpu); read-backs: 4 every frame, 3 at times"
     assert "  mask_survivors: mask_displacement (most tiles moving)" in out
     assert main(["graph", "hybrid"]) == 0
@@ -237,7 +238,7 @@ def test_every_mode_runs_under_its_checks(ctx, monkeypatch):
         r.release()
 
 
-@pytest.mark.parametrize("settings", [(), ("hybrid.curve=steps",), ("motion.steps=2",)])
+@pytest.mark.parametrize("settings", [(), ("hybrid.curve=inverse",), ("motion.steps=2",)])
 def test_every_pass_a_frame_times_is_in_the_graph(ctx, capsys, settings):
     """What `hmblur bench` times (a frame's pass_ms: the pipeline's passes and the
     renderer's own work around it) is what `hmblur graph` lists, on a glTF scene whose
@@ -255,4 +256,5 @@ def test_every_pass_a_frame_times_is_in_the_graph(ctx, capsys, settings):
               if line.startswith("  ") and ":" in line}
     assert {"scene_pose", "gbuffer", "hybrid_composite"} <= timed
     assert timed <= listed, timed - listed
-    assert ("motion_bend" in listed) == (settings == ("hybrid.curve=steps",))
+    assert ("motion_bend" in listed) == (settings == ())
+    assert ("motion_table" in timed) == (settings == ("hybrid.curve=inverse",))

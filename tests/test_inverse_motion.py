@@ -95,7 +95,7 @@ def test_motion_table_maps_points_between_the_times(ctx):
     r, frame = run_table(ctx, scene, curve("inverse"))
     try:
         table = table_of(frame)
-        k_n = int(frame.params["motion"].curve_samples)
+        k_n = int(frame.params["hybrid"].curve_samples)
         times = inverse.table_times(*frame.exposure, k_n)
         cam, t = frame.camera, frame.time
         movers = [o for o in scene.objects if o.moving]
@@ -141,7 +141,7 @@ def test_candidates_are_the_movers_that_reach_a_tile_nearest_first(ctx):
         tiles = frame.host[inverse.INVERSE_TILES]
         assert np.array_equal(tiles, (cand != 0).any(axis=2))
         # nearest first: ordered as the movers' nearest depths over the exposure
-        k_n = int(frame.params["motion"].curve_samples)
+        k_n = int(frame.params["hybrid"].curve_samples)
         times = inverse.table_times(*frame.exposure, k_n)
         near = {}
         for i, o in movers.items():

@@ -8,7 +8,6 @@ from viewer.render.graph.params import group, param
 
 MAX_STEPS = 256
 MAX_CURVE_STEPS = 16
-MAX_CURVE_SAMPLES = 64
 
 
 @group("motion")
@@ -23,11 +22,6 @@ class MotionParams:
                                  "point's screen path strays more than this from uniform "
                                  "motion along its chord (rotation, approach, "
                                  "acceleration, a bounce; world/path_bend.py)")
-    curve_samples: int = param(32, unit="times", lo=1, hi=MAX_CURVE_SAMPLES,
-                               help="where motion is followed along its curve (hybrid.curve "
-                                    "= inverse): the exposure's times at which every "
-                                    "object's and the camera's pose is taken, this many "
-                                    "intervals (poses between them are blended)")
 
 
 def curve_steps_param(default: int):

@@ -9,7 +9,7 @@ accepts O there when the surface it holds maps back onto p (A_k^-1), so a turnin
 streaks follow arcs. This host pass makes what the shader reads:
 
   hybrid_motion_table: per object id (a row; row 0 the background), per time of the
-      exposure t_k = t_open + (k + 1/2) (t_close - t_open) / K (k < K = motion.curve_samples,
+      exposure t_k = t_open + (k + 1/2) (t_close - t_open) / K (k < K = hybrid.curve_samples,
       the centres of K equal parts; a pixel's time samples are stratified over them),
       three affine maps, each as its top three rows (a texel a row): L_k = (V(t_k)
       M(t_k))^-1, view space at t_k to the object's own; F_k = V(t) M(t) L_k, view space
@@ -95,7 +95,7 @@ def lookup_uniforms(frame: Frame) -> dict:
     return {"u_focal": (float(proj[0, 0]), float(proj[1, 1])),
             "u_viewport": tuple(float(x) for x in frame.size),
             "u_near": float(cam.spec.near),
-            "u_parts": int(frame.params["motion"].curve_samples),
+            "u_parts": int(frame.params["hybrid"].curve_samples),
             "u_tolerance": float(p.tolerance), "u_depth_tolerance": float(p.depth_tolerance)}
 
 
@@ -117,7 +117,7 @@ class MotionTable(Pass):
     host_outputs = (INVERSE_TILES,)
 
     def outputs(self, frame: Frame):
-        k = int(frame.params["motion"].curve_samples)
+        k = int(frame.params["hybrid"].curve_samples)
         rows = len(frame.scene.objects) + 1
         return {MOTION_TABLE: TableSpec(4, "f4", width=k * COLS + TAIL, height=rows),
                 CANDIDATES: TexSpec(4, "u4", tile=FINE)}
@@ -140,7 +140,7 @@ class MotionTable(Pass):
             frame.host.put(INVERSE_TILES, inverse)
             frame.stats["inverse_tiles"] = 0
             return
-        k = int(frame.params["motion"].curve_samples)
+        k = int(frame.params["hybrid"].curve_samples)
         times = table_times(t_open, t_close, k)
         view_t = cam.view(t)
         views = (np.stack([cam.view(float(tk)) for tk in times]) if camera_moves

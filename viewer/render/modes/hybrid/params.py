@@ -39,6 +39,11 @@ class HybridParams:
                             "mapped back along every candidate object's exact motion "
                             "(docs/algorithms.md 7.1) on the tiles that bending movers "
                             "reach; steps, curve_steps sub-frames (each a whole frame)")
+    curve_samples: int = param(32, unit="times", lo=1, hi=64,
+                               help="curve = inverse: the times of the exposure (centres "
+                                    "of equal parts) at which every mover's and the "
+                                    "camera's pose is taken; a pixel's time samples are "
+                                    "stratified over them")
     time_samples: int = param(8, unit="samples", lo=1, hi=64,
                               help="curve = inverse: times of the exposure sampled per "
                                    "pixel where motion bends, at most (one per "
