@@ -1,7 +1,9 @@
 """What each design for bending motion costs and gives: the hybrid linear (one chord),
-with curve steps (sub-frames where the paths bend, the default), and with 2 or 4 path
-segments in one run; whole-image and inner-blur FLIP (`hmblur compare`) and ms per frame
-against McGuire's (`hmblur bench`, the same run), at 640x360.
+with curve steps (sub-frames where the paths bend, the default), following each point's
+curve by inverse motion (`hybrid.curve=inverse`), with 2 path segments in one run, and
+time-interleaved sub-frames (a prototype: scripts/interleaved_subframes.py); whole-image
+and inner-blur FLIP (`hmblur compare`) and ms per frame against McGuire's (`hmblur
+bench`, the same run), at 640x360.
 
     python scripts/curve_designs.py              # measure (out/curve_designs/), write the table
     python scripts/curve_designs.py --table      # write the table from out/curve_designs/ only
@@ -25,14 +27,16 @@ DOC = ROOT / "docs" / "performance.md"
 MARK = "curve:designs"
 SIZE = "640x360"
 CONF = ROOT / "tests" / "conformance"
-SCENES = [("wheel", "wheel"), ("spinner", "spinner"), ("keys_arc", str(CONF / "keys_arc.toml")),
-          ("rover", "rover"), ("basic", str(CONF / "basic.toml")), ("thin", "thin"),
-          ("turning_car", "turning_car"), ("living_room", "living_room"), ("pan", "pan")]
+SCENES = [("fan", "fan"), ("wheel", "wheel"), ("spinner", "spinner"),
+          ("keys_arc", str(CONF / "keys_arc.toml")), ("rover", "rover"),
+          ("basic", str(CONF / "basic.toml")), ("thin", "thin"), ("turning_car", "turning_car"),
+          ("shapes", str(CONF / "shapes.toml")), ("living_room", "living_room"), ("pan", "pan")]
 # (label, --set values): curve_steps=1 turns the sub-frames off
 VARIANTS = [("linear", ["hybrid.curve_steps=1"]),
             ("curve steps 2", []),
-            ("segments 2", ["hybrid.curve_steps=1", "hybrid.segments=2"]),
-            ("segments 4", ["hybrid.curve_steps=1", "hybrid.segments=4"])]
+            ("inverse", ["hybrid.curve=inverse"]),
+            ("segments 2", ["hybrid.curve_steps=1", "hybrid.segments=2"])]
+PROTOTYPE = "interleaved 2"            # scripts/interleaved_subframes.py, --k 2
 
 
 def hmblur(*args):
@@ -51,12 +55,16 @@ def measure(scene_label, scene, frames, compare=True):
         hmblur("bench", scene, "--size", SIZE, "--modes", "mcguire,hybrid", "--frames",
                str(frames), "--json", str(out / f"bench{k}.json"),
                *sum((["--set", s] for s in sets), []))
+    subprocess.run([sys.executable, str(ROOT / "scripts" / "interleaved_subframes.py"), scene,
+                    "--k", "2", "--json", str(out / "interleaved.json")], cwd=ROOT, check=True,
+                   stdout=subprocess.DEVNULL)
 
 
 def table() -> str:
-    head = ("| scene | " + " | ".join(f"{v} FLIP whole / inner" for v, _ in VARIANTS)
-            + " | " + " | ".join(f"{v}: ms / McGuire ms (ratio)" for v, _ in VARIANTS) + " |")
-    rows = [head, "| --- |" + " ---: |" * (2 * len(VARIANTS))]
+    labels = [v for v, _ in VARIANTS] + [PROTOTYPE]
+    head = ("| scene | " + " | ".join(f"{v} FLIP whole / inner" for v in labels)
+            + " | " + " | ".join(f"{v}: ms / McGuire (ratio)" for v in labels) + " |")
+    rows = [head, "| --- |" + " ---: |" * (2 * len(labels))]
     for label, _ in SCENES:
         out = OUT / label
         if not all((out / f).exists() for f in
@@ -71,6 +79,15 @@ def table() -> str:
             b = json.loads((out / f"bench{k}.json").read_text())
             h, g = frame_ms(b, "hybrid"), frame_ms(b, "mcguire")
             times.append(f"{h:.1f} / {g:.1f} ({h / g:.2f}x)")
+        proto = out / "interleaved.json"
+        if proto.exists():
+            p = json.loads(proto.read_text())
+            cells.append(f"{p['flip']['all']:.4f} / {p['flip']['inner']:.3f}")
+            times.append(f"{p['frame_ms']:.1f} / {p['mcguire_ms']:.1f} "
+                         f"({p['frame_ms'] / p['mcguire_ms']:.2f}x)")
+        else:
+            cells.append("-")
+            times.append("-")
         rows.append(f"| {label} | " + " | ".join(cells) + " | " + " | ".join(times) + " |")
     return "\n".join(rows)
 

@@ -85,7 +85,8 @@ def test_graph_shows_the_configuration_and_counts(capsys):
     assert main(["graph", "hybrid", "--set", "hybrid.segments=4",
                  "--set", "hybrid.range_check=true"]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert out[1] == "config HybridConfig(segments=4, range_check=True, composite='bucket')"
+    assert out[1] == ("config HybridConfig(segments=4, range_check=True, composite='bucket', "
+                      "curve='steps')")
     assert out[2] == "12 passes (10 gpu, 2 cpu); read-backs: 4 every frame, 3 at times"
     assert "  mask_survivors: mask_displacement (most tiles moving)" in out
     assert main(["graph", "hybrid"]) == 0
@@ -235,3 +236,25 @@ def test_every_mode_runs_under_its_checks(ctx, monkeypatch):
             assert every <= set(seen) <= {(b.name, p.name) for b, p in declared}, sets
     finally:
         r.release()
+
+
+@pytest.mark.parametrize("settings", [(), ("hybrid.curve=inverse",), ("motion.steps=2",)])
+def test_every_pass_a_frame_times_is_in_the_graph(ctx, capsys, settings):
+    """What `hmblur bench` times (a frame's pass_ms: the pipeline's passes and the
+    renderer's own work around it) is what `hmblur graph` lists, on a glTF scene whose
+    motion bends."""
+    from viewer.commands.main import main
+    scene = load_scene("rover")
+    r = Renderer(ctx, scene, (96, 54))
+    try:
+        timed = set(r.render("hybrid", scene.render.time, params(*settings),
+                             timing=True).pass_ms)
+    finally:
+        r.release()
+    assert main(["graph", "hybrid", *[a for s in settings for a in ("--set", s)]]) == 0
+    listed = {line.split(":")[0].split()[0] for line in capsys.readouterr().out.splitlines()
+              if line.startswith("  ") and ":" in line}
+    assert {"scene_pose", "gbuffer", "hybrid_composite"} <= timed
+    assert timed <= listed, timed - listed
+    assert ("motion_bend" in listed) == (settings == ())
+    assert ("motion_table" in timed) == (settings == ("hybrid.curve=inverse",))

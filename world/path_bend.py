@@ -56,19 +56,27 @@ def screen_bend(scene: Scene, camera: Camera, t: float, shutter: float) -> float
     (module doc). Points behind the near plane at any sampled time are left out (their
     projection is not a position); so are points far outside the image at time t and
     paths that reach past FAR_PX."""
-    with np.errstate(all="ignore"):          # (absurd speeds overflow: left out below)
-        return _screen_bend(scene, camera, t, shutter)
-
-
-def _screen_bend(scene: Scene, camera: Camera, t: float, shutter: float) -> float:
-    if shutter <= 0.0:
-        return 0.0
-    t_open, t_close = conventions.exposure(t, shutter)
-    times = t_open + FRACTIONS * (t_close - t_open)
     camera_moves = scene.camera.moving
     objects = [o for o in scene.objects if camera_moves or o.moving]
-    if not objects:
-        return 0.0
+    bends = object_bends(scene, camera, t, shutter, objects)
+    return float(bends.max()) if len(bends) else 0.0
+
+
+def object_bends(scene: Scene, camera: Camera, t: float, shutter: float,
+                 objects: list) -> np.ndarray:
+    """screen_bend's measure for each of `objects` on its own (px; 0 for an object none of
+    whose points count)."""
+    with np.errstate(all="ignore"):          # (absurd speeds overflow: left out below)
+        return _object_bends(scene, camera, t, shutter, objects)
+
+
+def _object_bends(scene: Scene, camera: Camera, t: float, shutter: float,
+                  objects: list) -> np.ndarray:
+    bends = np.zeros(len(objects))
+    if shutter <= 0.0 or not objects:
+        return bends
+    t_open, t_close = conventions.exposure(t, shutter)
+    times = t_open + FRACTIONS * (t_close - t_open)
     points = [object_points(o) for o in objects]
     local = np.concatenate(points, axis=1)                      # (4, n) all objects'
     owner = np.repeat(np.arange(len(objects)), [p.shape[1] for p in points])
@@ -90,7 +98,9 @@ def _screen_bend(scene: Scene, camera: Camera, t: float, shutter: float) -> floa
             & (middle >= -MARGIN_PX).all(axis=0) & (middle <= size + MARGIN_PX).all(axis=0)
             & (np.abs(win) < FAR_PX).all(axis=(0, 1)))
     if not seen.any():
-        return 0.0
+        return bends
     w = win[:, :, seen]
     chord = w[0] + FRACTIONS[:, None, None] * (w[-1] - w[0])
-    return float(np.sqrt(((w - chord) ** 2).sum(axis=1)).max())
+    stray = np.sqrt(((w - chord) ** 2).sum(axis=1)).max(axis=0)
+    np.maximum.at(bends, owner[seen], stray)
+    return bends

@@ -253,6 +253,18 @@ class Placement:
             memo[key] = m
         return m.copy()
 
+    def own_matrices(self, times) -> np.ndarray:
+        """own_matrix at each of `times`: (n, 4, 4), a turn's rotations made at once."""
+        times = np.asarray(times, np.float64)
+        if self.keys is not None or not self.own_moving:
+            return np.stack([self.own_matrix(t) for t in times])
+        m = np.repeat(self._rest()[None], len(times), axis=0)
+        m[:, :3, 3] = self.position + self.velocity * times[:, None]
+        if self.angular_velocity.any():
+            turns = tf.axis_angles(self.angular_velocity[None] * times[:, None])
+            m[:, :3, :3] = turns @ m[:, :3, :3]
+        return m
+
     def _rest(self) -> np.ndarray:
         """R0 @ S, cached against the values it was made from (the fields may be edited)."""
         key = (self.rotation.tobytes(), self.scale.tobytes())

@@ -45,6 +45,18 @@ def axis_angle(w) -> np.ndarray:
     return _axis_rotation(w / theta, theta, dtype=np.float64).T.copy()
 
 
+def axis_angles(w: np.ndarray) -> np.ndarray:
+    """axis_angle of each row of w (n, 3): (n, 3, 3), by Rodrigues' formula."""
+    w = np.asarray(w, np.float64)
+    theta = np.linalg.norm(w, axis=1)
+    axis = w / np.where(theta > 0.0, theta, 1.0)[:, None]
+    k = np.zeros((len(w), 3, 3))
+    k[:, 0, 1], k[:, 0, 2], k[:, 1, 2] = -axis[:, 2], axis[:, 1], -axis[:, 0]
+    k[:, 1, 0], k[:, 2, 0], k[:, 2, 1] = axis[:, 2], -axis[:, 1], axis[:, 0]
+    s, c = np.sin(theta)[:, None, None], np.cos(theta)[:, None, None]
+    return np.eye(3) + s * k + (1.0 - c) * (k @ k)
+
+
 def euler_xyz_degrees(deg) -> np.ndarray:
     """R0 = Rz @ Ry @ Rx from Euler angles in degrees (X applied first)."""
     rx, ry, rz = np.radians(_f64(deg))

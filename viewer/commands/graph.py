@@ -1,7 +1,8 @@
 """`hmblur graph [MODE]`: a mode's pipeline as it runs under the given parameters (its
 configuration: viewer/render/graph/registry.py), GPU and CPU passes with the textures and host
 resources each reads and makes, the read-backs to the host, then every host resource
-with its type, producer and readers (Pipeline.describe; no scene or GL context needed)."""
+with its type, producer and readers (Pipeline.describe; no scene or GL context needed),
+and the renderer's own work around the pipeline (steps.around)."""
 from __future__ import annotations
 
 from world.errors import UserError
@@ -11,6 +12,14 @@ from viewer.render.modes import MODE_GROUPS, MODES
 from viewer.render.graph.registry import build
 from viewer.render.modes.user import user_pipeline
 from viewer.eval.comparison import parse_variant
+from viewer.render.steps import around
+
+
+def around_text(mode: str, params: ParamSet) -> str:
+    """The renderer's own work around the pipeline, which `hmblur bench` times too."""
+    rows = around(mode, params)
+    return "\naround the pipeline (the renderer's own):\n" + "\n".join(
+        f"  {name}{' (cpu)' if where == 'cpu' else ''}: {when}" for name, where, when in rows)
 
 
 def register(sub):
@@ -52,9 +61,12 @@ def run(args) -> int:
     check_set_groups(args.set, modes + [v.name for v in variants],
                      {**MODE_GROUPS, **{v.name: v.groups for v in variants}})
     params.apply(args.set)
-    graphs = [build(m, params) for m in modes]
+    graphs = [(build(m, params).describe(), m, params) for m in modes]
     for v in variants:
-        graphs.append(user_pipeline(v.name, v.method) if v.method is not None
-                      else build(v.mode, v.params(params, f"variant {v.name}")))
-    print("\n\n".join(g.describe() for g in graphs))
+        if v.method is not None:
+            graphs.append((user_pipeline(v.name, v.method).describe(), None, params))
+        else:
+            own = v.params(params, f"variant {v.name}")
+            graphs.append((build(v.mode, own).describe(), v.mode, own))
+    print("\n\n".join(text + (around_text(m, p) if m else "") for text, m, p in graphs))
     return 0

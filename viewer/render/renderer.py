@@ -25,7 +25,8 @@ from .modes.user import USER_GROUPS, UserPass, user_pipeline
 from .modes.user.pipeline import compile_glsl
 from viewer.render.graph.registry import mode_config
 from viewer.render.graph.pool import ResourcePool
-from viewer.render.steps import SUM, MakeFrame, Measure, run_steps, step_count, sub_exposures
+from viewer.render.steps import (BEND, SCENE_POSE, SUM, MakeFrame, Measure, run_steps,
+                                 step_count, sub_exposures)
 
 
 @dataclass
@@ -130,12 +131,12 @@ class Renderer:
         frame = run_steps(make_frame, pipeline, float(t), shutter, seed, n, measure)
         self.made = [n for n in (*pipeline.textures(), SUM) if n in self.pool.made]
         if pose is not None:   # (host work before the first pass: reported as one of them)
-            frame.pass_ms["scene_pose"], frame.pass_cpu_ms["scene_pose"] = pose[:2]
+            frame.pass_ms[SCENE_POSE], frame.pass_cpu_ms[SCENE_POSE] = pose[:2]
             frame.stats["skinned_vertices"] = pose[2]
         if bend:         # (host work before the first pass: reported as one of them)
             frame.stats["bend_px"] = bend["px"]
-            frame.pass_ms["motion_bend"] = bend["ms"]
-            frame.pass_cpu_ms["motion_bend"] = bend["cpu_ms"]
+            frame.pass_ms[BEND] = bend["ms"]
+            frame.pass_cpu_ms[BEND] = bend["cpu_ms"]
         return frame
 
     def _pose(self, t: float, shutter: float, steps: int):

@@ -79,11 +79,44 @@ def curve_steps(bend_px: float, curve_px: float, most: int) -> int:
     return int(min(most, max(2, math.ceil(math.sqrt(bend_px / curve_px)))))
 
 
+SCENE_POSE = "scene_pose"          # the glTF entries' poses at the frame's times (host)
+BEND = "motion_bend"               # how far the frame's screen paths bend (host)
+
+
+def most_curve_steps(mode: str, params: ParamSet, groups: tuple[str, ...] | None = None
+                     ) -> int:
+    """The sub-frames `mode` takes where motion bends: its curve_steps, 1 for a mode that
+    follows curves within the frame (hybrid.curve = inverse) or takes none."""
+    groups = MODE_GROUPS.get(mode, ()) if groups is None else groups
+    own = params[mode] if mode in groups else None
+    return (int(getattr(own, "curve_steps", 1))
+            if own is not None and getattr(own, "curve", "steps") == "steps" else 1)
+
+
+def around(mode: str, params: ParamSet) -> list[tuple[str, str, str]]:
+    """The work Renderer.run does around `mode`'s pipeline under `params`, as `hmblur
+    bench` times it: (name, "cpu" or "gpu", when it runs)."""
+    rows = [(SCENE_POSE, "cpu", "where the scene has glTF entries: their node matrices and "
+                                "skinned vertices at the frame's times, once a frame")]
+    if GROUP not in MODE_GROUPS.get(mode, ()):
+        return rows
+    n, most = int(params[GROUP].steps), most_curve_steps(mode, params)
+    if most > n:
+        rows.append((BEND, "cpu", f"how far the screen paths bend (world/path_bend.py): "
+                                  f"up to {most} sub-frames where more than "
+                                  f"motion.curve_px"))
+    if max(n, most) > 1:
+        rows.append((PASS_NAME, "gpu", "the sub-frames' average in linear light"
+                                       + ("" if n > 1 else ", where the motion bends")))
+    return rows
+
+
 def step_count(mode: str, params: ParamSet, shutter: float,
                bend: Callable[[], float] = lambda: 0.0,
                groups: tuple[str, ...] | None = None) -> int:
     """How many sub-frames `mode` renders under `params` for an exposure of `shutter`:
-    motion.steps, or the mode's curve_steps where the motion bends, whichever is more.
+    motion.steps, or the mode's curve_steps where the motion bends (unless it follows
+    curves within the frame), whichever is more.
     `bend()` is the frame's screen_bend (px), asked for only where it can matter;
     `groups`: the mode's parameter groups (default: the registry's; a user pass's are the
     renderer's)."""
@@ -91,7 +124,7 @@ def step_count(mode: str, params: ParamSet, shutter: float,
     if GROUP not in groups or shutter == 0:
         return 1
     n = int(params[GROUP].steps)
-    most = int(getattr(params[mode], "curve_steps", 1)) if mode in groups else 1
+    most = most_curve_steps(mode, params, groups)
     if most > n:
         n = max(n, curve_steps(bend(), float(params[GROUP].curve_px), most))
     return n

@@ -28,6 +28,10 @@
 // path's points is probed (a reversal's far point too, where the chord is short), the
 // relative ones at X - (o_k - o_bg,k), and the speed test reads the path's extent.
 //
+// With INVERSE_CHECKS (the hybrid following curves, on the tiles they reach) a moving
+// pixel is also kept where its own mover leaves it at one of that many evenly spaced
+// times (glsl/modes/hybrid/inverse_common.glsl): a reversal or an arc the chord misses.
+//
 // STEP 0 runs both steps in one pass. Where the camera moves, most moving tiles hold no
 // survivor of step 1 and llvmpipe would pay the Sobel kernel in every 8-pixel group
 // holding one: STEP 1 then runs the displacement test alone, and STEP 2 the edge test on
@@ -165,6 +169,25 @@ bool on_edge(ivec2 x, ivec2 size) {
 }
 #endif
 
+#ifdef INVERSE_CHECKS
+uniform float u_max_disp;
+#include "modes/hybrid/inverse_common.glsl"
+
+// Whether the pixel's own mover covers it at every checked time.
+bool stays(ivec2 x) {
+    begin_pixel(x);
+    int id = int(own_id + 0.5);
+    int kind = kind_of(id);
+    if (kind == KIND_STILL) return true;
+    float d;
+    ivec2 at;
+    for (int i = 0; i < INVERSE_CHECKS; ++i) {
+        if (!covers(id, kind, part_of(i, INVERSE_CHECKS, 0.5), own_depth, d, at)) return false;
+    }
+    return true;
+}
+#endif
+
 void main() {
     ivec2 x = ivec2(gl_FragCoord.xy);
     ivec2 size = textureSize(u_front, 0);
@@ -172,6 +195,9 @@ void main() {
     displacement_test(x, size);
 #endif
 #if STEP == 3
+#ifdef INVERSE_CHECKS
+    if (out_mask == 0u && own_id != 0.0 && !stays(x)) out_mask = 1u;
+#endif
     out_ray_mask = out_mask != 0u ? uint(own_id) : 0u;
 #endif
 #if STEP == 0

@@ -185,10 +185,12 @@ class GpuScene:
                 t.repeat_x = t.repeat_y = True
                 self.images[id(tex)] = t
         self._vaos: dict[tuple[int, int], moderngl.VertexArray] = {}
-        # Local bounding-box centres (homogeneous: (x, y, z, 1)), for the draw order.
-        self._centres = {o.id: np.append((o.mesh.vertices.min(0) + o.mesh.vertices.max(0)) / 2
-                                         if len(o.mesh.vertices) else np.zeros(3), 1.0)
-                         for o in scene.objects}
+        # Local bounding boxes (lo, hi) of the meshes as loaded, and their centres
+        # (homogeneous: (x, y, z, 1)) for the draw order.
+        self.bounds = {o.id: (o.mesh.vertices.min(0), o.mesh.vertices.max(0))
+                       if len(o.mesh.vertices) else (np.zeros(3), np.zeros(3))
+                       for o in scene.objects}
+        self._centres = {i: np.append((lo + hi) / 2, 1.0) for i, (lo, hi) in self.bounds.items()}
 
     def front_to_back(self, eye: np.ndarray, t: float) -> list[SceneObject]:
         """Objects nearest first, so the depth test rejects hidden fragments before they are

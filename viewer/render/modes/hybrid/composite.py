@@ -25,6 +25,8 @@ from viewer.render.graph.host import HostResource
 from .config import HybridConfig
 from viewer.render.graph.passes import FullscreenPass, Pass
 from viewer.render.graph.pool import ReadBack, TexSpec
+from .inverse import (CANDIDATES, INVERSE_TILES, LOOKUP_DEFINES, MAX_CANDIDATES, MOTION_TABLE,
+                      lookup_uniforms)
 from .reveal import MASKED_PIXELS
 from viewer.render.passes.tile_kernels import mark_tiles, outlines_along, pixel_tiles, square_max
 from viewer.render.passes.tile_runs import FINE, tile_coords, within_reach
@@ -47,7 +49,8 @@ OUTLINE_MARGIN_PX = 0.05
 MERGE_ANGLE_DEG = 7.0
 MERGE_COS = math.cos(math.radians(MERGE_ANGLE_DEG))
 MERGE_SPREAD = math.sin(math.radians(MERGE_ANGLE_DEG))
-FRAGMENTS = {"time": "modes/hybrid/hybrid_time.frag", "bucket": "modes/hybrid/hybrid_bucket.frag"}
+FRAGMENTS = {"time": "modes/hybrid/hybrid_time.frag", "bucket": "modes/hybrid/hybrid_bucket.frag",
+             "inverse": "modes/hybrid/hybrid_inverse.frag"}
 NEIGHBORMAX = HostResource("neighbormax", np.ndarray,
                            "hybrid_neighbormax read back (GL rows), for near_outlines")
 
@@ -173,13 +176,16 @@ class Composite(FullscreenPass):
 
     def __init__(self, config: HybridConfig = HybridConfig()):
         self.segments = config.segments
+        self.inverse = config.curve == "inverse"
         tile_paths = config.tile_paths("hybrid_neighbormax")
         self.inputs = ("color", "hybrid_front", "hybrid_back", "hybrid_back_color",
-                       "hybrid_tilemax", "hybrid_neighbormax", *config.paths, *tile_paths)
+                       "hybrid_tilemax", "hybrid_neighbormax", *config.paths, *tile_paths,
+                       *((MOTION_TABLE, CANDIDATES) if self.inverse else ()))
         # ray_mask_tiles: made where the time-sampled composite draws
         self.produces = ("hybrid",) + ((MASK_TILES,) if config.composite != "bucket" else ())
         self.host_inputs = (TILE_LISTS, MASKED_PIXELS,
-                            *((NEIGHBORMAX,) if config.reads_neighbormax else ()))
+                            *((NEIGHBORMAX,) if config.reads_neighbormax else ()),
+                            *((INVERSE_TILES,) if self.inverse else ()))
         # The bucket's tiles near no outline: along a path, from the path's extent read
         # back (path_reach); along the chord, from NEIGHBORMAX.
         self.reads_back = (tuple(ReadBack(n) for n in tile_paths)
@@ -203,10 +209,18 @@ class Composite(FullscreenPass):
             # write every pixel.)
             frame.ctx.copy_framebuffer(frame.pool.framebuffer(("hybrid",)),
                                        frame.pool.framebuffer(("color",), read=True))
-        if tiles is None or kind == "time":    # (no tile lists: a pass run on its own)
+        if tiles is None:                      # (no tile lists: a pass run on its own)
             return self._draw(frame, "time" if kind == "split" else kind, tiles)
         active = np.zeros(lists.shape, bool)
         active[tiles.tiles[:, 1], tiles.tiles[:, 0]] = True
+        curved = self._curves(frame, active)
+        if curved is not None:
+            active &= ~curved
+            if kind == "time":
+                tiles = lists.extra("time_straight")
+                tiles.set(tile_coords(active), FINE, frame.size)
+        if kind == "time":
+            return self._draw(frame, kind, tiles)
         masked = frame.host.get(MASKED_PIXELS, np.zeros((0, 2), int))
         # Only tiles holding a masked pixel have a revealed layer to blur (line 3); in
         # tiles where nothing moves (own D < 1e-3 px) the own surface needs no line.
@@ -229,6 +243,34 @@ class Composite(FullscreenPass):
             tl.set(tile_coords(selected), FINE, frame.size)
             self._draw(frame, which, tl, back, own_still, single)
         frame.stats["simple_tiles"] = int(simple.sum())
+
+    def _curves(self, frame: Frame, active: np.ndarray) -> np.ndarray | None:
+        """The inverse-motion composite (glsl/modes/hybrid/hybrid_inverse.frag) on the
+        tiles the movers reach over the exposure (inverse.py; a mover that comes back
+        within it has a short chord, and its tiles need not be active); returns those
+        tiles, or None where the configuration does not follow curves or nothing bends."""
+        inverse = frame.host.get(INVERSE_TILES) if self.inverse else None
+        if inverse is None or inverse.shape != active.shape or not inverse.any():
+            return None
+        curved = inverse
+        tl = frame.host.get(TILE_LISTS).extra("inverse")
+        tl.set(tile_coords(curved), FINE, frame.size)
+        self.draw(frame, ("hybrid",),
+                  {"u_front_color": "color", "u_front": "hybrid_front",
+                   "u_back_color": "hybrid_back_color", "u_back": "hybrid_back",
+                   "u_table": MOTION_TABLE, "u_candidates": CANDIDATES,
+                   "u_neighbormax": "hybrid_neighbormax"},
+                  {**lookup_uniforms(frame),
+                   "u_samples": int(frame.params["hybrid"].time_samples),
+                   "u_spacing": float(frame.params["hybrid"].sample_spacing),
+                   "u_tile": max_radius_px(frame),
+                   "u_camera_moves": bool(frame.scene.camera.moving),
+                   "u_max_disp": 2.0 * max_radius_px(frame)},
+                  tiles=tl, clear=False, fragment=FRAGMENTS["inverse"],
+                  defines={**LOOKUP_DEFINES, "MAX_CANDIDATES": MAX_CANDIDATES,
+                           "FINE_TILE": FINE})
+        frame.stats["inverse_drawn_tiles"] = int(curved.sum())
+        return curved
 
     def _draw(self, frame: Frame, kind: str, tiles, back: int = 1, own_still: int = 0,
               simple: int = 0):

@@ -13,11 +13,12 @@ class HybridConfig:
     segments: int = 1            # hybrid.segments: the path targets and every path variant
     range_check: bool = False    # hybrid.range_check: the poster's three-step mask passes
     composite: str = "bucket"    # hybrid.composite: the composite's variants and inputs
+    curve: str = "steps"         # hybrid.curve: the motion table pass and inverse variant
 
     @classmethod
     def of(cls, params) -> "HybridConfig":
         p = params["hybrid"]
-        return cls(int(p.segments), bool(p.range_check), str(p.composite))
+        return cls(int(p.segments), bool(p.range_check), str(p.composite), str(p.curve))
 
     @property
     def paths(self) -> tuple[str, ...]:

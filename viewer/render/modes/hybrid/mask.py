@@ -37,6 +37,7 @@ from viewer.render.passes.blur_common import max_radius_px
 from viewer.render.graph.frame import Frame
 from viewer.render.graph.host import HostResource
 from .config import HybridConfig
+from .inverse import INVERSE_TILES, LOOKUP_DEFINES, MASK_CHECKS, MOTION_TABLE, lookup_uniforms
 from viewer.render.graph.passes import FullscreenPass
 from viewer.render.graph.pool import ReadBack, TexSpec
 from viewer.render.passes.tile_runs import FINE, tile_coords, within_reach
@@ -74,6 +75,7 @@ class SurfaceTests(FullscreenPass):
         self._any = AnyTiles()
         self.range_check = config.range_check
         self.segments = config.segments
+        self.inverse = config.curve == "inverse"
         if self.range_check:
             self.inputs = ("hybrid_front", "normal", *config.paths)
             self.produces = RANGE_TARGETS
@@ -81,6 +83,9 @@ class SurfaceTests(FullscreenPass):
             self.reads_back = (ReadBack("mask_survivors", "most tiles moving"),)
         else:
             self.inputs, self.produces = ("hybrid_front", *config.paths), ("ray_mask",)
+        if self.inverse:
+            self.inputs += (MOTION_TABLE,)
+            self.host_inputs = (TILE_LISTS, INVERSE_TILES)
 
     def defines(self, frame: Frame):
         return {"SEGMENTS": self.segments}
@@ -92,6 +97,14 @@ class SurfaceTests(FullscreenPass):
                  "mask_survivors": TexSpec(1, "u1", tile=FINE), "ray_mask": RAY_MASK}
         return {n: specs[n] for n in self.produces}
 
+    def _curved(self, frame: Frame) -> np.ndarray | None:
+        """The tiles where the composite follows motion exactly (inverse.py: every tile a
+        mover reaches over the exposure, whatever its chord), or None."""
+        inverse = frame.host.get(INVERSE_TILES) if self.inverse else None
+        if inverse is None or frame.host.get(TILE_LISTS) is None or not inverse.any():
+            return None
+        return inverse
+
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
         # Only where an id boundary lies within the probes' reach can a probe see another
@@ -102,10 +115,25 @@ class SurfaceTests(FullscreenPass):
                  "u_depth_threshold": float(p.depth_threshold)}
         second = {"u_edge_depth": float(p.edge_depth), "u_edge_normal": float(p.edge_normal)}
         if not self.range_check:
-            # The mask is the displacement test's survivors, written as ray_mask at once.
-            return self.draw(frame, ("ray_mask",),
-                             {"u_front": "hybrid_front", **path_textures(self.segments)}, first,
-                             tiles=tiles, defines={"STEP": 3})
+            # The mask is the displacement test's survivors, written as ray_mask at once;
+            # where the composite follows curves, also each moving pixel whose own mover
+            # leaves it at some time (a reversal, an arc: what the chord misses).
+            textures = {"u_front": "hybrid_front", **path_textures(self.segments)}
+            curved = self._curved(frame)
+            if curved is None:
+                return self.draw(frame, ("ray_mask",), textures, first, tiles=tiles,
+                                 defines={"STEP": 3})
+            lists = frame.host[TILE_LISTS]
+            rest = lists.extra("mask_straight")
+            rest.set(tile_coords(lists.surface_tiles & ~curved), FINE, frame.size)
+            self.draw(frame, ("ray_mask",), textures, first, tiles=rest, defines={"STEP": 3})
+            tl = lists.extra("mask_curved")
+            tl.set(tile_coords(curved), FINE, frame.size)
+            return self.draw(frame, ("ray_mask",), {**textures, "u_table": MOTION_TABLE},
+                             {**first, **lookup_uniforms(frame),
+                              "u_max_disp": 2.0 * max_radius_px(frame)}, tiles=tl,
+                             defines={"STEP": 3, "INVERSE_CHECKS": MASK_CHECKS,
+                                      **LOOKUP_DEFINES}, clear=False)
         if not reach_test(frame):
             # Where the edge outputs were written (EdgeIdTiles).
             frame.host.put(PROBE_TILES, None if tiles is None

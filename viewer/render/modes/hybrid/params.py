@@ -8,6 +8,7 @@ from viewer.render.passes.gbuffer import SEGMENT_CHOICES
 from viewer.render.passes.motion_params import curve_steps_param
 
 COMPOSITES = ("bucket", "split", "time")
+CURVES = ("inverse", "steps")
 
 
 @group("hybrid")
@@ -32,6 +33,27 @@ class HybridParams:
     # linear blur's on wheel, spinner, keys_arc, rover, basic, turning_car, where path
     # segments reach 0.59-1.08x (docs/performance.md); straight motion stays one frame.
     curve_steps: int = curve_steps_param(2)
+    curve: str = param("steps", choices=CURVES, effect="recompile",
+                       help="how motion that bends (more than motion.curve_px) is "
+                            "followed: inverse, in one frame, each pixel's time samples "
+                            "mapped back along every candidate object's exact motion "
+                            "(docs/algorithms.md 7.1) on the tiles that bending movers "
+                            "reach; steps, curve_steps sub-frames (each a whole frame)")
+    curve_samples: int = param(32, unit="times", lo=1, hi=64,
+                               help="curve = inverse: the times of the exposure (centres "
+                                    "of equal parts) at which every mover's and the "
+                                    "camera's pose is taken; a pixel's time samples are "
+                                    "stratified over them")
+    time_samples: int = param(8, unit="samples", lo=1, hi=64,
+                              help="curve = inverse: times of the exposure sampled per "
+                                   "pixel where motion bends, at most (one per "
+                                   "sample_spacing px of the motion near the pixel; "
+                                   "stratified, jittered per pixel)")
+    depth_tolerance: float = param(0.02, unit="fraction of the depth", lo=0.0, hi=0.5,
+                                   help="curve = inverse: a candidate covers a time sample "
+                                        "where its surface lies on the pixel's ray within "
+                                        "this fraction of its depth (or maps back within "
+                                        "`tolerance` px)")
     # ---- ray mask (viewer/render/modes/hybrid/mask.py)
     min_speed: float = param(1.0, unit="px", lo=0.0, hi=64.0,
                              help="displacement over the exposure (px) below which a pixel "

@@ -30,6 +30,7 @@ from .composite import Composite, composite_tile_passes
 from .config import HybridConfig
 from viewer.render.graph.registry import mode
 from viewer.render.graph.passes import Pipeline
+from .inverse import MotionTable
 from .mask import raymask_passes
 from .reveal import reveal_passes
 from viewer.render.modes.hybrid.tile_select import selection_passes
@@ -39,6 +40,7 @@ def hybrid_passes(config: HybridConfig = HybridConfig()) -> list:
     """Everything after the G-buffer (the composite's tiles early: they need only the
     G-buffer, and their host read-back then waits for little)."""
     return [*selection_passes(config.segments), *composite_tile_passes(config),
+            *((MotionTable(),) if config.curve == "inverse" else ()),
             *raymask_passes(config), *reveal_passes(), Composite(config)]
 
 
