@@ -322,7 +322,7 @@ def test_compare_shows_two_settings_of_one_mode_side_by_side(tmp_path, capsys):
     names = {f.name for f in out.iterdir()}
     assert names == {"lin.png", "lin.json", "seg4.png", "seg4.json", "reference.png",
                      "reference.json", "regions.png", "strip.png", "flip.png", "metrics.md",
-                     "metrics.json"}
+                     "metrics.json", ".hmblur-outputs.json"}
     m = json.loads((out / "metrics.json").read_text())
     assert list(m["metrics"]) == ["lin", "seg4"]
     assert m["variants"]["seg4"] == {"mode": "hybrid",

@@ -32,3 +32,6 @@ MAX_FRAMES = 100_000
 MIN_FPS, MAX_FPS = 1e-3, 1e3
 # Seeds: the jitter keys use the low 32 bits.
 MAX_SEED = 2 ** 32 - 1
+# The list of the files hmblur wrote in an output folder (viewer/io/outdir.py): a video's
+# 100000 frames take ~6 MB.
+MAX_OUTPUTS_MANIFEST_BYTES = 32 << 20

@@ -9,6 +9,7 @@ from viewer.cli import args as cliargs
 from viewer.io.sidecar import FIRST_FRAME_NOTE, sidecar
 from viewer.glcontext import create_headless, device_name
 from viewer.io.imageio import OutputSet, linear_to_srgb8
+from viewer.io.outdir import OutputFolder
 from viewer.eval.comparison import REALTIME, Variant, compare_frame, parse_variant
 from viewer.eval.metrics import SPACE
 from viewer.io.progress import Progress
@@ -17,6 +18,7 @@ from viewer.render.modes import MODE_GROUPS, MODES
 from viewer.render.renderer import Renderer
 from viewer.eval.strip import choose_inset, error_strip, make_strip, metrics_markdown, region_picture
 
+FILES = ("regions.png", "strip.png", "flip.png", "metrics.md", "metrics.json")
 LABELS = {"off": "off (sharp)", "mcguire": "McGuire 2012", "ue4": "UE4-style",
           "guertin": "Guertin 2014",
           "hybrid": "hybrid", "reference": "reference"}
@@ -32,7 +34,8 @@ def register(sub):
                        "region, with pixel counts and the space they are computed in).")
     cliargs.add_scene_args(p)
     p.add_argument("--out", required=True, metavar="DIR",
-                   help="output folder (made, with missing parents, if missing)")
+                   help="output folder (made, with missing parents, if missing; a file of "
+                        "yours there is never replaced: only the files hmblur wrote there)")
     p.add_argument("--modes", default=None, metavar="M1,M2",
                    help=f"comma-separated real-time modes (default: every one of {', '.join(REALTIME)} that exists)")
     p.add_argument("--variant", action="append", default=[], metavar="NAME=MODE[:G.F=V,...]",
@@ -77,7 +80,10 @@ def run(args) -> int:
     s = cliargs.setup(args)
     variants = choose_variants(args)
     cliargs.check_set_groups(args.set, [v.mode for v in variants] + ["reference"], MODE_GROUPS)
-    out = cliargs.check_output_dir(args.out, "--out")
+    folder = OutputFolder(cliargs.check_output_dir(args.out, "--out"), "--out")
+    out = folder.path
+    folder.check([f"{n}{suffix}" for n in [v.name for v in variants] + ["reference"]
+                  for suffix in (".png", ".json")] + list(FILES))
     if args.shutter is not None:
         s.scene.camera.shutter = cliargs.parse_float("--shutter", args.shutter)
         if s.scene.camera.shutter < 0:
@@ -105,7 +111,7 @@ def run(args) -> int:
                          metrics=[[f"mean {table[n]['all']['flip']:.4f}"] for n in names],
                          inset_box=box)
 
-    files = OutputSet()                  # all of them, or none
+    files = OutputSet(folder)            # all of them, or none
     for v in variants:                   # each image with the sidecar that remakes it
         vs = replace(s, params=c.params[v.name])
         side = sidecar(vs, v.mode, c.results[v.name], ctx, args.scene, first_frame=True,

@@ -2,11 +2,11 @@
 from __future__ import annotations
 
 import time
-from pathlib import Path
 
 from viewer.cli import args as cliargs
 from viewer.glcontext import create_headless
 from viewer.io.imageio import OutputSet, linear_to_srgb8
+from viewer.io.outdir import OutputFolder
 from viewer.io.sidecar import sidecar
 from viewer.render.modes import MODE_GROUPS, MODES
 from viewer.render.renderer import Renderer
@@ -46,10 +46,11 @@ def run(args) -> int:
     out = cliargs.check_output_file(args.out, suffix=".png")
     side = out.with_suffix(".json")
     cliargs.check_output_file(str(side), "--out's sidecar")
-    bufdir = cliargs.check_output_dir(args.buffers, "--buffers") if args.buffers is not None else None
+    bufdir = (OutputFolder(cliargs.check_output_dir(args.buffers, "--buffers"), "--buffers")
+              if args.buffers is not None else None)
     ctx = create_headless()
     r = Renderer(ctx, s.scene, s.size)
-    files = OutputSet()
+    files = OutputSet(bufdir)
     try:
         t0 = time.perf_counter()
         res = r.render(mode, s.time, s.params, seed=s.seed)
@@ -66,8 +67,13 @@ def run(args) -> int:
     return 0
 
 
-def add_buffers(files: OutputSet, r: Renderer, folder: Path, mode: str):
+def add_buffers(files: OutputSet, r: Renderer, out: OutputFolder, mode: str):
+    """Every buffer as .npy and .png with README.txt, into a folder of hmblur's rule
+    (its names are checked once the renderer says which they are, before any is written)."""
     bufs = r.buffers()
+    folder = out.path
+    out.check([f"{name}{suffix}" for name in bufs for suffix in (".npy", ".png")]
+              + ["README.txt"])
     for name, a in bufs.items():
         files.npy(folder / f"{name}.npy", a)
         files.png(folder / f"{name}.png", visualise(name, a))
