@@ -10,7 +10,8 @@ from viewer.io.sidecar import FIRST_FRAME_NOTE, sidecar
 from viewer.glcontext import create_headless, device_name
 from viewer.io.imageio import OutputSet, linear_to_srgb8
 from viewer.io.outdir import OutputFolder
-from viewer.eval.comparison import REALTIME, Variant, compare_frame, parse_variant
+from viewer.eval.comparison import (REALTIME, Variant, check_capacity, compare_frame,
+                                     parse_variant)
 from viewer.eval.metrics import SPACE
 from viewer.io.progress import Progress
 from viewer.render.modes.regions import DEFINITIONS, region_counts
@@ -79,15 +80,14 @@ def label(v: Variant) -> str:
 def run(args) -> int:
     s = cliargs.setup(args)
     variants = choose_variants(args)
+    check_capacity(len(variants), s.size, "--modes/--variant")
     cliargs.check_set_groups(args.set, [v.mode for v in variants] + ["reference"], MODE_GROUPS)
     folder = OutputFolder(cliargs.check_output_dir(args.out, "--out"), "--out")
     out = folder.path
     folder.check([f"{n}{suffix}" for n in [v.name for v in variants] + ["reference"]
                   for suffix in (".png", ".json")] + list(FILES))
     if args.shutter is not None:
-        s.scene.camera.shutter = cliargs.parse_float("--shutter", args.shutter)
-        if s.scene.camera.shutter < 0:
-            raise cliargs.UserError(f"--shutter {args.shutter}: expected seconds >= 0")
+        s.scene.camera.shutter = cliargs.parse_shutter("--shutter", args.shutter)
     w, h = s.size
     inset = cliargs.parse_size(args.inset, "--inset") if args.inset else (max(8, h // 4),) * 2
     ctx = create_headless()
