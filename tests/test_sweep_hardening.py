@@ -213,6 +213,30 @@ def test_a_hostile_asset_path_is_the_scenes_error_found_before_opening(tmp_path_
         assert "\n" not in b.error
 
 
+def test_a_file_swapped_for_a_fifo_after_the_rule_is_refused_by_its_descriptor(tmp_path):
+    """Between asset_file's check and the read a file can become a FIFO: the read opens
+    it without blocking and checks the descriptor, so it is the scene's error at once."""
+    from viewer.sweep.bundle import _read
+    os.mkfifo(tmp_path / "swapped.obj")
+    t0 = time.monotonic()
+    with pytest.raises(UserError, match="is not a regular file"):
+        _read(tmp_path / "swapped.obj", 1 << 20, Budget("x"), UserError)
+    assert time.monotonic() - t0 < 5
+
+
+def test_a_glob_never_enters_a_symlinked_folder(tmp_path):
+    """`**` walks the real folders only: a link back up (a loop) or across is not
+    followed, so each scene is found once, by its own path."""
+    (tmp_path / "loop/a").mkdir(parents=True)
+    (tmp_path / "loop/a/up").symlink_to("..")
+    (tmp_path / "loop/a/across").symlink_to(tmp_path / "other")
+    (tmp_path / "other").mkdir()
+    shutil.copy(BASIC, tmp_path / "other/o.toml")
+    shutil.copy(BASIC, tmp_path / "loop/a/s.toml")
+    p = sweep_file(tmp_path, ONE.replace('["basic.toml"]', '["loop/**/*.toml"]'))
+    assert [sc.label for sc in load_sweep(p).scenes] == ["s"]
+
+
 def test_the_bytes_of_a_sweeps_scenes_are_bounded_before_they_are_read(tmp_path):
     scene = hostile_scene(tmp_path / "s", "mesh", "q.obj")
     budget = Budget("sweep.toml: scenes", limit=(scene.stat().st_size
@@ -438,6 +462,29 @@ def test_a_damaged_cell_file_is_run_again(tmp_path_factory, kind, rng):
     assert json.loads(cell.read_text())["key"] == cell.stem
 
 
+@pytest.mark.parametrize("field", sorted(sweep_run._CELL_FIELDS) + [
+    f"rows.{k}" for k in sorted(sweep_run._ROW_FIELDS)])
+def test_a_cell_file_lacking_a_field_or_with_one_of_another_type_is_run_again(tmp_path, field):
+    p = sweep_file(tmp_path)
+    out = tmp_path / "out"
+    sweep(tmp_path, p, out)
+    cell = next((out / "cells").glob("*.json"))
+    good = json.loads(cell.read_text())
+    for damage in ("missing", "another type"):
+        doc = json.loads(json.dumps(good))
+        where, _, k = field.rpartition(".")
+        target = doc["rows"][-1] if where else doc
+        if damage == "missing":
+            target.pop(k)
+        else:
+            target[k] = {"a": "table"}
+        cell.write_text(json.dumps(doc))
+        calls = []
+        sweep(tmp_path, p, out, in_process(calls))
+        assert calls == ["basic"], (field, damage)
+        assert json.loads(cell.read_text())["key"] == cell.stem
+
+
 def test_out_of_memory_anywhere_in_a_command_is_one_line(tmp_path, capsys, monkeypatch):
     from viewer.sweep import spec
     monkeypatch.setattr(spec, "load_sweep", lambda *a: (_ for _ in ()).throw(MemoryError()))
@@ -483,6 +530,73 @@ def test_ctrl_c_at_a_terminal_after_the_last_cell_is_one_line_and_no_table(tmp_p
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 0 and (out / "table.csv").is_file(), done.stderr
     assert "cells run now: 0" in (out / "summary.md").read_text()
+
+
+def _worker_pids(main_pid: int) -> list[int]:
+    """The Dask worker processes a sweep started (spawned children running spawn_main)."""
+    out = []
+    for pid in os.listdir("/proc"):
+        try:
+            with open(f"/proc/{pid}/stat") as f:
+                ppid = int(f.read().rsplit(")", 1)[1].split()[1])
+            with open(f"/proc/{pid}/cmdline", "rb") as f:
+                cmd = f.read()
+        except (OSError, ValueError, IndexError):
+            continue
+        if ppid == main_pid and b"spawn_main" in cmd:
+            out.append(int(pid))
+    return out
+
+
+@pytest.mark.parametrize("when", ["workers starting", "a worker restarted"])
+def test_ctrl_c_at_a_terminal_while_workers_start_or_restart_prints_no_traceback(
+        tmp_path, own_temp_dir, when):
+    """Ctrl-C to the process group while the local worker is still starting (it ignores
+    SIGINT from its first instruction, inherited), or after a worker was killed and
+    restarted by its nanny (the plugin makes the new one ignore it too; the scene it held,
+    lost with it, is scattered again and the cells run): one line, no Dask traceback."""
+    p = sweep_file(tmp_path, ONE.replace("samples = 2", "samples = 2\nseed = [0, 1, 2, 3, 4, 5]"))
+    out = tmp_path / "out"
+    env = dict(os.environ, PYTHONPATH=str(ROOT), TMPDIR=str(own_temp_dir))
+    proc = subprocess.Popen([sys.executable, "-m", "viewer", "sweep", str(p), "--out", str(out),
+                             "--workers", "1"], env=env, cwd=ROOT, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    sent = False
+    try:
+        t_end = time.monotonic() + 180
+        killed = None
+        while proc.poll() is None and time.monotonic() < t_end:
+            workers = _worker_pids(proc.pid)
+            cells = len(list((out / "cells").glob("*.json"))) if (out / "cells").is_dir() else 0
+            if when == "workers starting" and workers:
+                # (in its imports: past the interpreter's start, which dies of a SIGINT
+                # quietly, and before the plugin)
+                time.sleep(0.4)
+                os.killpg(proc.pid, signal.SIGINT)
+                sent = True
+                break
+            if when == "a worker restarted":
+                if killed is None and cells >= 1 and workers:
+                    killed, at_kill = workers[0], cells
+                    os.kill(killed, signal.SIGKILL)
+                elif (killed is not None and workers and killed not in workers
+                      and cells >= at_kill + 2):   # (the new worker has run a cell)
+                    os.killpg(proc.pid, signal.SIGINT)
+                    sent = True
+                    break
+            time.sleep(0.005)
+        _, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert sent, err
+    assert proc.returncode == 130 and "Traceback" not in err, err
+    lines = [ln for ln in err.splitlines() if not ln.startswith("sweep: ")]
+    assert len(lines) == 1 and lines[0].startswith("hmblur: interrupted; "), err
+    if when == "a worker restarted":       # (its scene, lost with it, scattered again)
+        cells = [json.loads(f.read_text()) for f in (out / "cells").glob("*.json")]
+        assert len(cells) >= 2 and all(c["error"] is None for c in cells), cells
 
 
 # --- 7. the cell key moves with everything a cell's numbers depend on ------------------
@@ -584,6 +698,30 @@ def test_a_task_carries_no_scene_bytes_and_each_bundle_is_scattered_once(tmp_pat
     assert sorted(scattered) == sorted(bundles) and facts["failed"] == 0
     assert len(facts["ran"]) == 6
     assert (tmp_path / "dask/table.csv").read_bytes() == (tmp_path / "here/table.csv").read_bytes()
+
+
+def test_timed_cells_ask_for_the_timer_that_the_local_worker_declares(tmp_path, monkeypatch,
+                                                                   capsys):
+    """--timing: every cell's task asks for the resource `timer`; the local cluster's one
+    worker declares it (so the cells run, one at a time); --timing with two local
+    workers is one line."""
+    import distributed
+    asked = []
+    real_submit = distributed.Client.submit
+
+    def recording(self, fn, *a, **kw):
+        asked.append(kw.get("resources"))
+        return real_submit(self, fn, *a, **kw)
+    monkeypatch.setattr(distributed.Client, "submit", recording)
+    p = sweep_file(tmp_path, ONE.replace("samples = 2", "samples = 2\nseed = [0, 1]"))
+    facts = sweep_run.run_sweep(load_sweep(p), tmp_path / "out", version(), 1, None, False,
+                                True, stream=open(tmp_path / "progress.txt", "a"))
+    assert facts["failed"] == 0 and asked == [{"timer": 1}] * 2
+    assert all(r["frame_ms"] > 0 for r in pq.read_table(tmp_path / "out/table.parquet").to_pylist())
+    if limits.MAX_LOCAL_WORKERS >= 2:
+        assert main(["sweep", str(p), "--out", str(tmp_path / "o2"), "--timing",
+                     "--workers", "2"]) == 2
+        one_line_error(capsys, "--timing with --workers 2")
 
 
 def test_the_worker_plugin_makes_the_context_once_and_releases_it(tmp_path):

@@ -38,6 +38,7 @@ from .table import plot_names, write_outputs
 
 
 WAIT_FOR_WORKERS_S = 30
+LOST_SCENE_TRIES = 3         # a cell whose scene was lost with its workers: run again
 TIMER = "timer"              # the Dask resource a timed cell asks for (one per machine)
 
 
@@ -74,18 +75,20 @@ def _whole(c, task: CellTask) -> bool:
     if not isinstance(c, dict) or c.get("key") != task.key:
         return False
     for k, kinds in _CELL_FIELDS.items():
-        if not isinstance(c.get(k), kinds) or isinstance(c.get(k), bool) and bool not in kinds:
+        if k not in c or not isinstance(c[k], kinds) or isinstance(c[k], bool) and bool not in kinds:
             return False
     if not (len(c["size"]) == 2 and all(isinstance(x, int) and not isinstance(x, bool)
                                         for x in c["size"])):
         return False
     names = {v.name for v in task.variants}
     for r in c["rows"]:
-        if not isinstance(r, dict) or r.get("variant") not in names:
+        if not isinstance(r, dict):
             return False
         for k, kinds in _ROW_FIELDS.items():
-            if not isinstance(r.get(k), kinds) or isinstance(r.get(k), bool):
+            if k not in r or not isinstance(r[k], kinds) or isinstance(r[k], bool):
                 return False
+        if r["variant"] not in names:
+            return False
         if task.timing and r["frame_ms"] is None:
             return False
     return {r["variant"] for r in c["rows"]} == names
@@ -210,24 +213,18 @@ class DaskEngine:
         if self.scheduler:
             self.client = _connect(self.scheduler)
         else:
-            # Ctrl-C at a terminal reaches the whole process group, and ending the sweep is
-            # this process's work (it closes the cluster), not the workers': they start
-            # with SIGINT ignored (inherited through exec; a Ctrl-C in these seconds is
-            # lost), and the plugin ignores it in a worker started later.
-            main = threading.current_thread() is threading.main_thread()
-            old = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
-            try:
-                self.cluster = LocalCluster(
-                    n_workers=self.workers, threads_per_worker=1, processes=True,
-                    dashboard_address=None, silence_logs=logging.ERROR,
-                    # no dashboard; the scheduler's own HTTP server on a free port (its
-                    # default 8787 may be another cluster's: a warning on stderr)
-                    scheduler_kwargs={"dashboard": False, "dashboard_address": ":0"},
-                    resources={TIMER: 1} if self.workers == 1 else None)
-            finally:
-                if main:
-                    signal.signal(signal.SIGINT, old)
+            self.cluster = LocalCluster(
+                n_workers=0, threads_per_worker=1, processes=True,
+                # Dask's own log lines off: what befalls a cell (a worker lost, a scene
+                # scattered again) is its row's or the sweep's to say
+                dashboard_address=None, silence_logs=logging.CRITICAL,
+                # no dashboard; the scheduler's own HTTP server on a free port (its
+                # default 8787 may be another cluster's: a warning on stderr)
+                scheduler_kwargs={"dashboard": False, "dashboard_address": ":0"},
+                resources={TIMER: 1} if self.workers == 1 else None)
             self.client = Client(self.cluster)
+            _spawn_ignoring_sigint(self.cluster, self.workers)
+            self.client.wait_for_workers(self.workers)
         info = self.client.scheduler_info()["workers"]
         if self.timing and not any(TIMER in w.get("resources", {}) for w in info.values()):
             raise UserError(f"--timing: no worker of {self.scheduler} declares the resource "
@@ -246,24 +243,38 @@ class DaskEngine:
     def __call__(self, tasks, bundles, on_result) -> dict:
         from dask.distributed import as_completed
         client = self.client
-        # Each scene once to every worker (replicas survive a worker's death); the cells
-        # name it by its future.
-        scattered = {d: client.scatter(b, broadcast=True, hash=False)
-                     for d, b in bundles.items() if any(t.digest == d for t in tasks)}
-        by_key, futures = {}, []
-        for task in tasks:
-            # a key per cell and run (a task lost with its worker is run again by the
+
+        def scatter(digest):
+            # Each scene once to every worker; the cells name it by its future.
+            return client.scatter(bundles[digest], broadcast=True, hash=False)
+        scattered = {d: scatter(d) for d in dict.fromkeys(t.digest for t in tasks)}
+        by_key, tries = {}, {}
+
+        def submit(task):
+            # a key per cell, run and try (a task lost with its worker is run again by the
             # scheduler under the same key)
-            fut = client.submit(run_cell, task, scattered[task.digest],
-                                key=f"cell-{task.key}-{self.run}", pure=False,
-                                resources={TIMER: 1} if task.timing else None)
-            by_key[fut.key] = task
-            futures.append(fut)
-        for fut in as_completed(futures):
-            task = by_key[fut.key]
+            tries[task.key] = tries.get(task.key, 0) + 1
+            scene = scattered[task.digest]
+            fut = client.submit(run_cell, task, scene,
+                                key=f"cell-{task.key}-{self.run}-{tries[task.key]}",
+                                pure=False, resources={TIMER: 1} if task.timing else None)
+            by_key[fut.key] = (task, scene)
+            return fut
+        pending = as_completed([submit(t) for t in tasks])
+        for fut in pending:
+            task, scene = by_key.pop(fut.key)
             try:
                 result = fut.result()
             except Exception as exc:       # KilledWorker: the cell took workers down
+                if scene.status != "finished" and tries[task.key] < LOST_SCENE_TRIES:
+                    # Scattered data dies with the last worker holding it (Dask cannot
+                    # make it again): scatter the scene anew (once), run the cell again.
+                    if scattered[task.digest] is scene:
+                        client.wait_for_workers(1, timeout=WAIT_FOR_WORKERS_S)
+                        scattered[task.digest] = scatter(task.digest)
+                    pending.add(submit(task))
+                    fut.release()
+                    continue
                 result = _failed(task, f"{type(exc).__name__}: {exc}")
             on_result(task, result)
             fut.release()
@@ -280,6 +291,29 @@ class DaskEngine:
                 self.client.close()
             if self.cluster is not None:
                 self.cluster.close()
+
+
+def _spawn_ignoring_sigint(cluster, n: int):
+    """Start the local cluster's n worker processes with SIGINT ignored. Ctrl-C at a
+    terminal reaches the whole process group, and ending the sweep is this process's
+    work (it closes the cluster), not the workers'. An ignored signal is inherited
+    through exec, so it is ignored here only until their processes exist (a Ctrl-C in
+    those milliseconds is lost); a worker started later (a nanny's restart) is quieted by
+    the plugin."""
+    import multiprocessing
+    if threading.current_thread() is not threading.main_thread():
+        cluster.scale(n)
+        return
+    before = set(multiprocessing.active_children())
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        cluster.scale(n)
+        t_end = time.monotonic() + WAIT_FOR_WORKERS_S
+        while (len(set(multiprocessing.active_children()) - before) < n
+               and time.monotonic() < t_end):
+            time.sleep(0.002)
+    finally:
+        signal.signal(signal.SIGINT, old)
 
 
 def _connect(scheduler: str):
@@ -351,9 +385,9 @@ def run_sweep(spec: Sweep, out: Path, version: str, workers: int, scheduler: str
                 else:
                     engine = dask(todo, bundles, on_result)
         finally:
-            if dask is not None:
-                dask.close()
-            with held():
+            with held():                 # (a signal now: once all of it is done)
+                if dask is not None:
+                    dask.close()
                 close_gl()               # (this process's, when cells ran here)
                 remove_copies(run)       # (this machine's, whoever made them)
         facts = _facts(tasks, ran, [results[k] for k in keys], engine, t0)
