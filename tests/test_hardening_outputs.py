@@ -94,13 +94,13 @@ def test_a_folder_with_the_users_own_frames_is_refused_and_kept(tmp_path, capsys
     code = main(["video", scene, "--modes", "off", "--frames", "4", "--out", str(photos)])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1
-    assert "frame_0002.png, frame_0003.png" in err[0] and "no earlier hmblur video" in err[0]
+    assert "frame_0002.png, frame_0003.png" in err[0] and "hmblur did not write" in err[0]
     assert {p.name: p.read_bytes() for p in photos.iterdir()} == mine
 
 
 def test_frames_past_the_clip_that_hmblur_did_not_write_are_kept(tmp_path):
-    # Beside a longer earlier clip (4 frames, its video.json says so), a shorter one
-    # removes that clip's frames 2 and 3, not a user's frame_0007.png.
+    # Beside a longer earlier clip (4 frames, the folder's list of hmblur's files says
+    # so), a shorter one removes that clip's frames 2 and 3, not a user's frame_0007.png.
     scene = slide(tmp_path)
     out = tmp_path / "frames"
     assert main(["video", scene, "--modes", "off", "--frames", "4", "--out", str(out)]) == 0
@@ -108,12 +108,14 @@ def test_frames_past_the_clip_that_hmblur_did_not_write_are_kept(tmp_path):
     (out / "notes.txt").write_bytes(b"mine too")
     assert main(["video", scene, "--modes", "off", "--frames", "2", "--out", str(out)]) == 0
     assert sorted(p.name for p in out.iterdir()) == [
-        "frame_0000.png", "frame_0001.png", "frame_0007.png", "notes.txt", "video.json"]
+        ".hmblur-outputs.json", "frame_0000.png", "frame_0001.png", "frame_0007.png",
+        "notes.txt", "video.json"]
     assert (out / "frame_0007.png").read_bytes() == b"mine"
     assert json.loads((out / "video.json").read_text())["frames"] == 2
-    # A video.json that is not an hmblur clip's owns nothing.
+    # A file of hmblur's that the user changed since is the user's.
     (out / "video.json").write_text('{"frames": 9}')
     assert main(["video", scene, "--modes", "off", "--frames", "1", "--out", str(out)]) == 2
+    assert (out / "video.json").read_text() == '{"frames": 9}'
 
 
 # --- the camera's own motion bends screen paths ------------------------------------------

@@ -10,7 +10,7 @@ import pytest
 
 from viewer.commands.main import main, version
 from viewer.sweep import run as sweep_run
-from viewer.sweep.bundle import materialise, scene_bundle
+from viewer.sweep.bundle import materialise, remove_copies, scene_bundle
 from viewer.sweep.cells import run_cell
 from viewer.sweep.spec import load_sweep
 
@@ -32,6 +32,19 @@ TINY = """
 """
 
 
+@pytest.fixture(autouse=True)
+def own_temp_dir(tmp_path, monkeypatch):
+    """The workers' copies in a temp dir of the test's own (workers inherit TMPDIR): every
+    sweep removes its copies, so the test ends with none of hmblur's there."""
+    import tempfile
+    temp = tmp_path / "temp"
+    temp.mkdir()
+    monkeypatch.setenv("TMPDIR", str(temp))
+    monkeypatch.setattr(tempfile, "tempdir", str(temp))
+    yield temp
+    assert sorted(p.name for p in temp.iterdir() if "hmblur" in p.name) == []
+
+
 def sweep_file(tmp_path, text=TINY, name="sweep.toml"):
     shutil.copy(BASIC, tmp_path / "basic.toml")
     p = tmp_path / name
@@ -41,11 +54,11 @@ def sweep_file(tmp_path, text=TINY, name="sweep.toml"):
 
 def in_process(calls=None):
     """A runner for run_sweep: every cell here, through the same run_cell as a worker."""
-    def runner(tasks, on_result):
+    def runner(tasks, bundles, on_result):
         for t in tasks:
             if calls is not None:
                 calls.append(t.scene)
-            on_result(t, run_cell(t))
+            on_result(t, run_cell(t, bundles[t.digest]))
         return {"engine": "test"}
     return runner
 
@@ -72,7 +85,7 @@ def sweep(tmp_path, path, out, runner=None, **kw):
     ("scenes = ['living_room']\ntimes = [0.0, 0.0]\n[variants.a]\nmode = 'off'\n",
      "times[2]", "listed twice"),
     ("scenes = ['living_room']\nshutters = [-1]\n[variants.a]\nmode = 'off'\n", "shutters[1]",
-     ">= 0"),
+     "from 0 to 1e+07 s"),
     ("scenes = ['living_room']\nsize = '32by18'\n[variants.a]\nmode = 'off'\n", "size", "WxH"),
     ("scenes = ['living_room']\nsamples = 0\n[variants.a]\nmode = 'off'\n", "samples",
      "integer >= 1"),
@@ -193,10 +206,11 @@ def test_a_bad_scene_is_one_error_row_and_the_others_complete(tmp_path):
     assert {r["scene"] for r in rows if r["error"] is None} == {"living_room", "basic"}
     assert len([r for r in rows if r["error"] is None]) == 16
     assert "broken" in (out / "summary.md").read_text()
-    # a failed cell is tried again on the next run; the finished ones are not
+    # a failed cell is tried again on the next run, the finished ones are not; a scene
+    # whose file is missing fails where it is bundled, and no worker receives it
     calls = []
-    sweep(tmp_path, p, out, in_process(calls))
-    assert calls == ["broken"]
+    again = sweep(tmp_path, p, out, in_process(calls))
+    assert [c["scene"] for c in again["ran"]] == ["broken"] and calls == []
 
 
 def test_table_columns_csv_and_parquet_agree_plots_and_images(tmp_path):
@@ -235,13 +249,14 @@ def test_an_interrupted_sweep_leaves_whole_cells_and_continues(tmp_path, capsys)
     p = sweep_file(tmp_path)
     out = tmp_path / "out"
 
-    def stop_after_one(tasks, on_result):
-        on_result(tasks[0], run_cell(tasks[0]))
+    def stop_after_one(tasks, bundles, on_result):
+        on_result(tasks[0], run_cell(tasks[0], bundles[tasks[0].digest]))
         raise KeyboardInterrupt
     with pytest.raises(KeyboardInterrupt):
         sweep(tmp_path, p, out, stop_after_one)
-    left = sorted(f.name for f in out.rglob("*") if f.is_file())
-    assert len(left) == 1 and left[0].endswith(".json")         # one whole cell, no temp
+    left = sorted(str(f.relative_to(out)) for f in out.rglob("*") if f.is_file())
+    # one whole cell (and hmblur's list of its files), no temp
+    assert len(left) == 2 and left[0] == ".hmblur-outputs.json" and left[1].startswith("cells/")
     assert not (out / "table.csv").exists()
     calls = []
     sweep(tmp_path, p, out, in_process(calls))
@@ -257,8 +272,7 @@ def test_a_scene_travels_with_its_meshes_images_and_gltf_files(tmp_path):
     by their uris, a .glb its JSON chunk's."""
     import struct
     src = tmp_path / "proj"
-    (src / "scenes").mkdir(parents=True)
-    (src / "assets").mkdir()
+    (src / "assets").mkdir(parents=True)
     shutil.copy(ROOT / "scenes/assets/quad_uv.obj", src / "assets/quad.obj")
     shutil.copy(ROOT / "scenes/assets/painting.png", src / "assets/p.png")
     with open(src / "assets/quad.obj", "a") as f:
@@ -275,31 +289,31 @@ def test_a_scene_travels_with_its_meshes_images_and_gltf_files(tmp_path):
                                        + struct.pack("<I4s", len(chunk), b"JSON") + chunk)
     (src / "assets/glb.bin").write_bytes(b"x")
     (src / "assets/unrelated.png").write_bytes(b"not named by the scene")
-    scene = src / "scenes/room.toml"
+    scene = src / "room.toml"
     scene.write_text(textwrap.dedent("""
         [camera]
         position = [0.0, 0.0, 3.0]
         look_at = [0.0, 0.0, 0.0]
         fov_y = 45.0
         [[objects]]
-        mesh = "../assets/quad.obj"
-        material = { texture = { kind = "image", path = "../assets/p.png" } }
+        mesh = "assets/quad.obj"
+        material = { texture = { kind = "image", path = "assets/p.png" } }
         [[objects]]
-        gltf = "../assets/box.gltf"
+        gltf = "assets/box.gltf"
         [[objects]]
-        gltf = "../assets/b.glb"
+        gltf = "assets/b.glb"
     """))
     b = scene_bundle(scene)
-    assert b.entry == "scenes/room.toml" and b.origin == str(src)
+    assert b.entry == "room.toml" and b.origin == str(src) and b.error is None
     assert [rel for rel, _ in b.files] == sorted([
-        "scenes/room.toml", "assets/quad.obj", "assets/quad.mtl", "assets/tex.png",
+        "room.toml", "assets/quad.obj", "assets/quad.mtl", "assets/tex.png",
         "assets/p.png", "assets/box.gltf", "assets/box data.bin", "assets/wood.png",
         "assets/b.glb", "assets/glb.bin"])
     assert [rel for rel, _ in scene_bundle(src / "assets/box.gltf").files] == [
         "box data.bin", "box.gltf", "wood.png"]            # a bare glTF as the scene
-    copy = materialise(b)
+    copy = materialise(b, "t1")
     assert copy.read_bytes() == scene.read_bytes()
-    assert (copy.parent.parent / "assets/box data.bin").read_bytes() == b"bin"
+    assert (copy.parent / "assets/box data.bin").read_bytes() == b"bin"
     assert scene_bundle(scene).digest == b.digest
     (src / "assets/wood.png").write_bytes(b"other wood")
     assert scene_bundle(scene).digest != b.digest          # an asset's bytes are in the key
@@ -307,9 +321,10 @@ def test_a_scene_travels_with_its_meshes_images_and_gltf_files(tmp_path):
     # a built-in scene with an OBJ and an image loads from its copy as from its file
     from world.loader import builtin_scene_path, load_scene
     b = scene_bundle(builtin_scene_path("living_room"))
-    a, c = load_scene(builtin_scene_path("living_room")), load_scene(materialise(b))
+    a, c = load_scene(builtin_scene_path("living_room")), load_scene(materialise(b, "t1"))
     assert [o.name for o in a.objects] == [o.name for o in c.objects]
     assert (a.objects[-1].mesh.vertices == c.objects[-1].mesh.vertices).all()
+    remove_copies("t1")
 
 
 # --- compare's variants ---------------------------------------------------------------------
@@ -322,7 +337,7 @@ def test_compare_shows_two_settings_of_one_mode_side_by_side(tmp_path, capsys):
     names = {f.name for f in out.iterdir()}
     assert names == {"lin.png", "lin.json", "seg4.png", "seg4.json", "reference.png",
                      "reference.json", "regions.png", "strip.png", "flip.png", "metrics.md",
-                     "metrics.json"}
+                     "metrics.json", ".hmblur-outputs.json"}
     m = json.loads((out / "metrics.json").read_text())
     assert list(m["metrics"]) == ["lin", "seg4"]
     assert m["variants"]["seg4"] == {"mode": "hybrid",
@@ -402,19 +417,20 @@ def test_a_gltf_entry_with_external_files_renders_on_a_worker_from_its_bundle(tm
         mode = "hybrid"
     """))
     spec = load_sweep(p)
-    tasks = sweep_run.tasks_of(spec, version(), False, False)
-    assert [rel for rel, _ in tasks[0].bundle.files] == [
+    tasks, bundles = sweep_run.tasks_of(spec, version(), False, False, "t2")
+    assert [rel for rel, _ in bundles[tasks[0].digest].files] == [
         "assets/BoxTextured.gltf", "assets/box data.bin", "assets/box.gltf", "ext.toml"]
-    a, b = run_cell(tasks[0]), run_cell(tasks[1])
+    a, b = run_cell(tasks[0], bundles[tasks[0].digest]), run_cell(tasks[1], bundles[tasks[1].digest])
     assert a["error"] is None and b["error"] is None, (a["error"], b["error"])
     assert a["rows"] == b["rows"] and a["time"] == 1.6
-    bare = run_cell(tasks[2])                 # the asset alone, as a scene made around it
-    assert [rel for rel, _ in tasks[2].bundle.files] == ["box data.bin", "box.gltf"]
+    bare = run_cell(tasks[2], bundles[tasks[2].digest])   # the asset alone, as a scene
+    assert [rel for rel, _ in bundles[tasks[2].digest].files] == ["box data.bin", "box.gltf"]
     assert bare["error"] is None and len(bare["rows"]) == 4 and tasks[2].scene == "box"
+    remove_copies("t2")
 
 
 def test_a_worker_of_another_version_gives_an_error_not_numbers(tmp_path):
     spec = load_sweep(sweep_file(tmp_path))
-    task = sweep_run.tasks_of(spec, "0.0.0-other", False, False)[0]
-    got = run_cell(task)
+    tasks, bundles = sweep_run.tasks_of(spec, "0.0.0-other", False, False, "t3")
+    got = run_cell(tasks[0], bundles[tasks[0].digest])
     assert got["rows"] == [] and "the sweep was started with 0.0.0-other" in got["error"]

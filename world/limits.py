@@ -1,6 +1,7 @@
 """What the program can hold: every count, size and rate a user can give (flags, scene
 keys, sidecar keys, asset files) is checked against these before work starts, and a value
 past one is a one-line error naming it (docs/scene-format.md, "Limits")."""
+import os
 
 # Scene numbers: the shaders compute in float32 (7 significant digits, at most 3.4e38), a
 # position or velocity past 1e7 loses every centimetre and products of two overflow.
@@ -53,3 +54,28 @@ MAX_FRAMES = 100_000
 MIN_FPS, MAX_FPS = 1e-3, 1e3
 # Seeds: the jitter keys use the low 32 bits.
 MAX_SEED = 2 ** 32 - 1
+# Exposure times (`camera.shutter`, `compare --shutter`, a sweep's `shutters`): a scene
+# number, like any other the scene file gives.
+MAX_SHUTTER = MAX_SCENE_NUMBER
+# Variants of one comparison (`compare --modes/--variant`, a sweep's variants after grid
+# expansion), and the pixels of the images it holds at once (each variant's and the
+# reference's, kept for the metrics and the strip): 6 frames of the largest size.
+MAX_VARIANTS = 32
+MAX_COMPARE_PIXELS = 6 * MAX_FRAME_PIXELS
+# A sweep: cells (scenes x times x shutters x sizes x samples x seeds), renders (cells x
+# variants: the table holds 4 rows each), scenes a glob may bring, directory entries a
+# glob may visit (it never follows a symlinked folder), the bytes of every scene and
+# asset file its workers receive, a cell file it reads back, and the sweep file.
+MAX_SWEEP_CELLS = 10_000
+MAX_SWEEP_RENDERS = 50_000
+MAX_SWEEP_SCENES = 1_000
+MAX_GLOB_ENTRIES = 100_000
+MAX_SWEEP_BYTES = 512 << 20
+MAX_CELL_FILE_BYTES = 16 << 20
+MAX_SWEEP_FILE_BYTES = 1 << 20
+# The list of the files hmblur wrote in an output folder (viewer/io/outdir.py): a video's
+# 100000 frames take ~6 MB.
+MAX_OUTPUTS_MANIFEST_BYTES = 32 << 20
+# Local sweep workers: a worker renders on every core (llvmpipe's threads, the ray
+# kernels), so more workers than cores only add memory (~600 MB each).
+MAX_LOCAL_WORKERS = os.cpu_count() or 1

@@ -206,6 +206,22 @@ def parse_seed(flag: str, text: str) -> int:
     return parse_int(flag, text, 0, limits.MAX_SEED)
 
 
+def shutter_expected(s: float) -> str | None:
+    """What is wrong with `s` as an exposure time (the bound a scene file's camera.shutter
+    has: a scene number >= 0), or None: one rule for --shutter and a sweep's shutters."""
+    if not 0 <= s <= limits.MAX_SHUTTER:
+        return f"expected an exposure time from 0 to {limits.MAX_SHUTTER:g} s"
+    return None
+
+
+def parse_shutter(flag: str, text: str) -> float:
+    s = parse_float(flag, text)
+    expected = shutter_expected(s)
+    if expected:
+        raise UserError(f"{flag} {text!r}: {expected}")
+    return s
+
+
 @dataclass
 class Setup:
     scene: Scene

@@ -10,13 +10,15 @@ from viewer.io.sidecar import FIRST_FRAME_NOTE, sidecar
 from viewer.glcontext import create_headless, device_name
 from viewer.io.imageio import OutputSet, linear_to_srgb8
 import hybrid_mblur as hm
-from viewer.eval.comparison import REALTIME, Variant, parse_variant
+from viewer.io.outdir import OutputFolder
+from viewer.eval.comparison import REALTIME, Variant, check_capacity, parse_variant
 from viewer.eval.metrics import SPACE
 from viewer.io.progress import Progress
 from viewer.render.modes.regions import DEFINITIONS, region_counts
 from viewer.render.modes import MODE_GROUPS, MODES
 from viewer.eval.strip import choose_inset, error_strip, make_strip, metrics_markdown, region_picture
 
+FILES = ("regions.png", "strip.png", "flip.png", "metrics.md", "metrics.json")
 LABELS = {"off": "off (sharp)", "mcguire": "McGuire 2012", "ue4": "UE4-style",
           "guertin": "Guertin 2014",
           "hybrid": "hybrid", "reference": "reference"}
@@ -32,7 +34,8 @@ def register(sub):
                        "region, with pixel counts and the space they are computed in).")
     cliargs.add_scene_args(p)
     p.add_argument("--out", required=True, metavar="DIR",
-                   help="output folder (made, with missing parents, if missing)")
+                   help="output folder (made, with missing parents, if missing; a file of "
+                        "yours there is never replaced: only the files hmblur wrote there)")
     p.add_argument("--modes", default=None, metavar="M1,M2",
                    help=f"comma-separated real-time modes (default: every one of {', '.join(REALTIME)} that exists)")
     p.add_argument("--variant", action="append", default=[], metavar="NAME=MODE[:G.F=V,...]",
@@ -76,9 +79,13 @@ def label(v: Variant) -> str:
 def run(args) -> int:
     s = cliargs.setup(args)
     variants = choose_variants(args)
+    check_capacity(len(variants), s.size, "--modes/--variant")
     cliargs.check_set_groups(args.set, [v.runs_as for v in variants] + ["reference"],
                              {**MODE_GROUPS, **{v.runs_as: v.groups for v in variants}})
-    out = cliargs.check_output_dir(args.out, "--out")
+    folder = OutputFolder(cliargs.check_output_dir(args.out, "--out"), "--out")
+    out = folder.path
+    folder.check([f"{n}{suffix}" for n in [v.name for v in variants] + ["reference"]
+                  for suffix in (".png", ".json")] + list(FILES))
     w, h = s.size
     inset = cliargs.parse_size(args.inset, "--inset") if args.inset else (max(8, h // 4),) * 2
     ctx = create_headless()
@@ -100,7 +107,7 @@ def run(args) -> int:
                          metrics=[[f"mean {table[n]['all']['flip']:.4f}"] for n in names],
                          inset_box=box)
 
-    files = OutputSet()                  # all of them, or none
+    files = OutputSet(folder)            # all of them, or none
     for v in variants:                   # each image with the sidecar that remakes it
         vs = replace(s, params=c.params[v.name])
         side = sidecar(vs, v.mode, c.results[v.name], ctx, args.scene, first_frame=True,

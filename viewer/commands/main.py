@@ -95,11 +95,13 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _terminated(signum: int) -> int:
-    if signum == signal.SIGINT:
-        print("hmblur: interrupted", file=sys.stderr)
-    else:
-        print(f"hmblur: terminated ({signal.Signals(signum).name})", file=sys.stderr)
+def _terminated(signum: int, exc: BaseException | None = None) -> int:
+    """One line: the signal, and what the command noted on the way out (a sweep: the
+    cells it kept)."""
+    said = "interrupted" if signum == signal.SIGINT else \
+        f"terminated ({signal.Signals(signum).name})"
+    notes = getattr(exc, "__notes__", None) or []
+    print(printable("; ".join([f"hmblur: {said}", *notes])), file=sys.stderr)
     return 128 + signum
 
 
@@ -136,10 +138,9 @@ def main(argv=None) -> int:
     except BrokenPipeError:
         return _reader_gone()
     except Terminated as exc:
-        return _terminated(exc.signum)
-    except KeyboardInterrupt:
-        print("hmblur: interrupted", file=sys.stderr)
-        return 130
+        return _terminated(exc.signum, exc)
+    except KeyboardInterrupt as exc:
+        return _terminated(signal.SIGINT, exc)
     except Exception as exc:
         if received:
             # Raised inside C code (numpy's tofile, ...), Terminated can come out as
@@ -147,6 +148,11 @@ def main(argv=None) -> int:
             return _terminated(received[0])
         if isinstance(exc, UserError):
             print(f"hmblur: error: {exc}", file=sys.stderr)
+            return 2
+        if isinstance(exc, MemoryError):   # (what was allocated is freed by now)
+            print("hmblur: error: out of memory: this machine (or the process's memory "
+                  "limit) cannot hold the work: give a smaller size, fewer samples, "
+                  "variants or frames", file=sys.stderr)
             return 2
         if isinstance(exc, OSError):       # an output that cannot be written (full disk, ...)
             where = f"{exc.filename}: " if exc.filename else ""

@@ -2,12 +2,12 @@
 from __future__ import annotations
 
 import time
-from pathlib import Path
 
 from viewer.cli import args as cliargs
 from viewer.glcontext import create_headless
 import hybrid_mblur as hm
 from viewer.io.imageio import OutputSet
+from viewer.io.outdir import OutputFolder
 from viewer.io.sidecar import sidecar
 from viewer.render.modes import MODE_GROUPS, MODES
 from viewer.io.buffer_docs import buffers_readme
@@ -42,9 +42,10 @@ def run(args) -> int:
     out = cliargs.check_output_file(args.out, suffix=".png")
     side = out.with_suffix(".json")
     cliargs.check_output_file(str(side), "--out's sidecar")
-    bufdir = cliargs.check_output_dir(args.buffers, "--buffers") if args.buffers is not None else None
+    bufdir = (OutputFolder(cliargs.check_output_dir(args.buffers, "--buffers"), "--buffers")
+              if args.buffers is not None else None)
     ctx = create_headless()
-    files = OutputSet()
+    files = OutputSet(bufdir)
     with hm.Renderer(s.size, context=ctx) as r:     # (the context outlives it: the sidecar)
         t0 = time.perf_counter()
         res = r.render(s.scene, mode, s.time, s.params, s.seed, buffers=bufdir is not None)
@@ -59,8 +60,13 @@ def run(args) -> int:
     return 0
 
 
-def add_buffers(files: OutputSet, bufs: dict, folder: Path, mode: str):
-    """Every texture the frame made (name -> array), as .npy and .png, with README.txt."""
+def add_buffers(files: OutputSet, bufs: dict, out: OutputFolder, mode: str):
+    """Every texture the frame made (name -> array), as .npy and .png, with README.txt,
+    into a folder of hmblur's rule (its names are checked once the frame says which they
+    are, before any is written)."""
+    folder = out.path
+    out.check([f"{name}{suffix}" for name in bufs for suffix in (".npy", ".png")]
+              + ["README.txt"])
     for name, a in bufs.items():
         files.npy(folder / f"{name}.npy", a)
         files.png(folder / f"{name}.png", visualise(name, a))

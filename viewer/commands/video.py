@@ -142,7 +142,7 @@ def run(args) -> int:
                 writer.add(compose(images))
                 progress(k, frames)
             seconds = time.perf_counter() - t0
-            files = OutputSet()
+            files = out.output_set()
             doc = sidecar(s, scene, modes, frames, fps, out, device_name(ctx), seconds)
             if metrics is not None:
                 doc["flicker"] = metrics.flicker()

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from world import limits
 from world.errors import UserError
 from .metrics import metric_maps, region_metrics
 from viewer.render.graph.params import ParamSet
@@ -23,6 +24,7 @@ REALTIME = ("off", "mcguire", "ue4", "guertin", "hybrid")
 # Names an image or table of compare's folder already uses: no variant may take them.
 RESERVED = ("reference", "regions", "strip", "flip", "metrics")
 NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.+-]*")
+MAX_NAME = 100                 # a variant's name is a file name (NAME.png, NAME.json)
 
 
 @dataclass
@@ -62,9 +64,11 @@ class Variant:
 def check_variant(v: Variant, label: str, available=REALTIME, values: bool = True):
     """One line naming `label` for a bad name, mode, a group the mode does not read or
     (with `values`) a value of the wrong type or out of range."""
-    if not NAME.fullmatch(v.name):
-        raise UserError(f"{label}: variant name {v.name!r}: expected letters, digits and "
-                        "_ . + - (a file name), starting with a letter or digit")
+    if not NAME.fullmatch(v.name) or len(v.name) > MAX_NAME:
+        shown = repr(v.name) if len(v.name) <= MAX_NAME else f"{v.name[:20]!r}... ({len(v.name)} characters)"
+        raise UserError(f"{label}: variant name {shown}: expected letters, digits and "
+                        f"_ . + - (a file name), starting with a letter or digit, at most "
+                        f"{MAX_NAME} characters")
     if v.name in RESERVED:
         raise UserError(f"{label}: variant name {v.name!r} is taken by compare's own "
                         f"outputs ({', '.join(RESERVED)})")
@@ -83,6 +87,20 @@ def check_variant(v: Variant, label: str, available=REALTIME, values: bool = Tru
                             f"parameters (used by {', '.join(readers) or 'no mode'})")
     if values:                           # every value's type and range, before any render
         v.params(ParamSet(), label)
+
+
+def check_capacity(n_variants: int, size, where: str):
+    """A comparison of `n_variants` at `size` holds every variant's image and the
+    reference's at once: both counts within world/limits.py, checked before any render."""
+    if n_variants > limits.MAX_VARIANTS:
+        raise UserError(f"{where}: {n_variants} variants, more than the "
+                        f"{limits.MAX_VARIANTS} a comparison may show")
+    w, h = size
+    pixels = (n_variants + 1) * w * h
+    if pixels > limits.MAX_COMPARE_PIXELS:
+        raise UserError(f"{where}: {n_variants} variants and the reference at {w}x{h} are "
+                        f"{pixels:,} pixels, more than the {limits.MAX_COMPARE_PIXELS:,} a "
+                        "comparison may hold: show fewer variants or give a smaller size")
 
 
 def parse_variant(text: str, available=REALTIME) -> Variant:

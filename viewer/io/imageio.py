@@ -121,10 +121,22 @@ class OutputSet:
     images and metrics): each is written to a temp file beside its path, and only when
     every one is written are they renamed into place, after creating their folders (and
     any missing parents). A
-    failure on the way (a full disk, a directory where a file goes) leaves none of them."""
+    failure on the way (a full disk, a directory where a file goes) leaves none of them.
 
-    def __init__(self):
+    `folder` (viewer.io.outdir.OutputFolder): the files inside it follow its rule (none
+    replaces a file hmblur did not write there; checked before any is written), and its
+    list of hmblur's files is renamed into place with them; `remove(path)` unlinks a file
+    of hmblur's there once the others are in place (a longer earlier clip's last frames)."""
+
+    def __init__(self, folder=None):
         self._files: list[tuple[Path, Callable]] = []
+        self._folder = folder
+        self._remove: list[Path] = []
+
+    def remove(self, path):
+        if self._folder is None or self._folder.rel(Path(path)) is None:
+            raise ValueError(f"OutputSet.remove: {path} is not in the set's folder")
+        self._remove.append(Path(path))
 
     def add(self, path, write: Callable[[io.BufferedWriter], None]):
         self._files.append((Path(path), write))
@@ -145,6 +157,9 @@ class OutputSet:
         for path, _ in self._files:       # what a rename would fail on, or replace
             if path.exists() and not path.is_file():
                 raise IsADirectoryError(21, "exists and is not a regular file", str(path))
+        rule = self._folder
+        doc = rule.before([p for p, _ in self._files] + self._remove) if rule else None
+        files = list(self._files)
         done: list[Path] = []
         made: list[Path] = []
         try:
@@ -158,12 +173,21 @@ class OutputSet:
                     with signals_held():
                         folder.mkdir()
                         made.append(folder)
-            for path, write in self._files:
+            for path, write in files:
                 _write_temp(path, write, done)
+            if rule is not None:              # hmblur's list of its files there, renamed last
+                removed = [rule.rel(p) for p in self._remove]
+                listed = rule.after(doc, list(zip(done, [p for p, _ in files])), removed)
+                if listed is not None:
+                    from .outdir import MANIFEST
+                    files.append((rule.path / MANIFEST, lambda f: f.write(listed)))
+                    _write_temp(rule.path / MANIFEST, files[-1][1], done)
             with signals_held():              # the renames: all of them, then a signal
-                for tmp, (path, _) in zip(done, self._files):
+                for tmp, (path, _) in zip(done, files):
                     os.replace(tmp, path)
                     PARTIAL.discard(tmp)
+                for path in self._remove:
+                    path.unlink(missing_ok=True)
         except BaseException:
             for tmp in done:
                 if tmp in PARTIAL:

@@ -9,8 +9,8 @@ removes the staging folder and leaves the destination as it was.
 """
 from __future__ import annotations
 
-import json
 import os
+import re
 import shutil
 import tempfile
 from dataclasses import dataclass
@@ -23,6 +23,7 @@ from PIL import Image
 from viewer.cli import args as cliargs
 from world.errors import UserError
 from .imageio import PARTIAL, OutputSet, forget_partial, signals_held, write_png_atomic
+from .outdir import OutputFolder
 
 KINDS = ("mp4", "gif", "png")
 SUFFIXES = {".mp4": "mp4", ".gif": "gif"}
@@ -34,6 +35,7 @@ OUT_HELP = ("PATH.mp4 (H.264), PATH.gif, or a folder of PNG frames (a path witho
 # with the same matrix.
 CRF = "18"
 PRESET = "medium"
+FRAME = re.compile(r"frame_(\d{4,})\.png")
 
 
 @dataclass(frozen=True)
@@ -46,6 +48,11 @@ class VideoPaths:
     def folder(self) -> Path:
         """Where the sidecar and metrics files go."""
         return self.video if self.kind == "png" else self.video.parent
+
+    def output_set(self) -> OutputSet:
+        """The set the video and its files are committed in (a folder of frames: under
+        viewer/io/outdir's rule)."""
+        return OutputSet(OutputFolder(self.video, self.flag) if self.kind == "png" else None)
 
     def beside(self, name: str, suffix: str) -> Path:
         """A file that belongs to the video: `clip.mp4` -> clip_NAME.SUFFIX (clip.json for
@@ -81,52 +88,14 @@ def video_paths(text: str, flag: str = "--out", extra: tuple[tuple[str, str], ..
     return out
 
 
-def earlier_clip(folder: Path) -> dict | None:
-    """The sidecar of an earlier `hmblur video` into this folder of frames (video.json,
-    format "png", its frame count), else None: what says which files hmblur wrote there."""
-    path = folder / "video.json"
-    try:
-        if not path.is_file() or path.stat().st_size > 1 << 20:
-            return None
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError, RecursionError):
-        return None
-    if not isinstance(doc, dict) or doc.get("format") != "png":
-        return None
-    frames = doc.get("frames")
-    if not isinstance(frames, int) or isinstance(frames, bool) or not 0 < frames <= 10 ** 9:
-        return None
-    return doc
-
-
-def owned_names(folder: Path, extra=()) -> set[str]:
-    """The files in `folder` an earlier hmblur video wrote, by its sidecar: its frames,
-    video.json, and its metrics files where it measured (its sidecar has "flicker")."""
-    doc = earlier_clip(folder)
-    if doc is None:
-        return set()
-    names = {f"frame_{k:04d}.png" for k in range(doc["frames"])} | {"video.json"}
-    if "flicker" in doc:
-        names |= {f"{n}{s}" for n, s in extra}
-    return names
-
-
 def check_folder_collisions(out: VideoPaths, frames: int, extra=()):
-    """A folder of frames may hold files of its own: the ones this run would write over
-    must be an earlier hmblur video's (owned_names), else one line naming them, before any
-    frame is rendered: a user's own frame_0002.png is never replaced or removed."""
-    if out.kind != "png" or not out.video.is_dir():
+    """A folder of frames may hold files of its own: the ones this run writes must be
+    absent or hmblur's (viewer/io/outdir's rule), checked before any frame is rendered."""
+    if out.kind != "png":
         return
-    writes = [f"frame_{k:04d}.png" for k in range(frames)]
-    writes += ["video.json"] + [f"{n}{s}" for n, s in extra]
-    owned = owned_names(out.video, extra)
-    present = {p.name for p in out.video.iterdir()}
-    clash = [n for n in writes if n in present and n not in owned]
-    if clash:
-        more = f" and {len(clash) - 3} more" if len(clash) > 3 else ""
-        raise UserError(f"{out.flag} {out.video}: holds files that no earlier hmblur video "
-                        f"there wrote and this one would replace: {', '.join(clash[:3])}{more}; "
-                        "give an empty or new folder, or move them")
+    OutputFolder(out.video, out.flag).check(
+        [f"frame_{k:04d}.png" for k in range(frames)] + ["video.json"]
+        + [f"{n}{s}" for n, s in extra])
 
 
 def even_size(frame: np.ndarray) -> np.ndarray:
@@ -159,9 +128,6 @@ class VideoWriter:
                                                dir=parent))
             PARTIAL.add(self.stage)
         self.count = 0
-        # (frames of an earlier hmblur clip in the folder: the only ones removed after)
-        self._earlier = earlier_clip(out.video) if out.kind == "png" and out.video.is_dir() \
-            else None
         self.size: tuple[int, int] | None = None
         self._container = self._stream = None
         self._gif: list[np.ndarray] = []
@@ -249,26 +215,22 @@ class VideoWriter:
                        duration=gif_durations(len(frames), self.fps), loop=0, optimize=False)
 
     def commit(self, files: OutputSet | None = None):
-        """Move the video into place with `files` (sidecar, metrics): all or none."""
-        files = files or OutputSet()
+        """Move the video into place with `files` (sidecar, metrics; made by
+        VideoPaths.output_set): all or none. In a folder, the frames past this clip's end
+        that a longer earlier hmblur clip wrote there go with it (no other file is
+        touched)."""
+        files = files or self.out.output_set()
         try:
             for staged, dest in self._finish():
                 files.add(dest, lambda f, src=staged: _copy(src, f))
-            files.commit()
             if self.out.kind == "png":
-                self._remove_stale_frames()
+                for name in OutputFolder(self.out.video, self.out.flag).owned_files():
+                    m = FRAME.fullmatch(name)
+                    if m and int(m.group(1)) >= self.count:
+                        files.remove(self.out.video / name)
+            files.commit()
         finally:
             self.abort()
-
-    def _remove_stale_frames(self):
-        """Frames past this clip's end that a longer earlier hmblur clip wrote in the same
-        folder (its video.json, read before this one replaced it, says how many); no
-        other file is touched."""
-        earlier = self._earlier["frames"] if self._earlier is not None else 0
-        for k in range(self.count, earlier):
-            p = self.out.video / self.frame_name(k)
-            if p.is_file() and not p.is_symlink():
-                p.unlink()
 
     def abort(self):
         if self._container is not None:

@@ -3,8 +3,9 @@ with every variant. The reference is rendered once and shared; the numbers come 
 viewer.eval.comparison.compare_frame, the function `hmblur compare` runs.
 
 A cell never raises for its own failure (a scene that does not load, a render that fails):
-it returns its error, which becomes one row of the table. Each worker process keeps one
-headless EGL context, made on its first cell, and a few Renderers by scene.
+it returns its error, which becomes one row of the table. Each worker keeps one headless
+EGL context in the thread that runs its cells (made by the sweep's worker plugin when the
+worker joins, or on the first cell) and a few Renderers by scene, until close_gl().
 """
 from __future__ import annotations
 
@@ -21,12 +22,12 @@ from collections import OrderedDict
 from dataclasses import dataclass, field
 
 from world.errors import UserError
-from viewer.eval.comparison import compare_frame
+from viewer.eval.comparison import check_capacity, compare_frame
 from viewer.io.imageio import json_safe, linear_to_srgb8, png_bytes
 from viewer.render.graph.params import ParamSet
 from ..render.modes import MODE_GROUPS
 from viewer.eval.strip import REGION_ORDER, choose_inset, make_strip, region_picture
-from .bundle import Bundle, copy_root, materialise
+from .bundle import Bundle, materialise, unplace
 
 TIMING_FRAMES = 5          # warm frames per variant whose median is frame_ms (--timing)
 RENDERERS_KEPT = 3         # per worker: scenes whose GPU scene and ray tracer stay built
@@ -35,8 +36,9 @@ FORMAT = 1                 # of a cell's result file; part of its key
 
 @dataclass
 class CellTask:
+    """What a worker needs besides the scene's bundle (which travels once per worker)."""
     scene: str                     # the table's label
-    bundle: Bundle
+    digest: str                    # the scene bundle's (Bundle.digest)
     time: float | None             # None: the scene's own
     shutter: float | None
     size: tuple | None
@@ -47,6 +49,7 @@ class CellTask:
     version: str
     images: bool = False
     timing: bool = False
+    run: str = ""                  # the sweep's token: its copies folder on each machine
     key: str = field(default="", init=False)
 
     def __post_init__(self):
@@ -66,7 +69,7 @@ def cell_key(task: CellTask) -> str:
     variant's resolved parameters (defaults included) and a user pass's file (its
     digest: the method's bytes travel with the task), the project's version."""
     base = base_params(task)
-    doc = {"format": FORMAT, "version": task.version, "scene": task.bundle.digest,
+    doc = {"format": FORMAT, "version": task.version, "scene": task.digest,
            "time": task.time, "shutter": task.shutter,
            "size": list(task.size) if task.size else None, "seed": task.seed,
            "reference": base.to_dict(MODE_GROUPS["reference"]),
@@ -87,19 +90,44 @@ class _WorkerState(threading.local):
 _state = _WorkerState()
 
 
-def _renderer(bundle: Bundle, size):
-    """(scene, Renderer) for the bundle, made or reused; the least recent one released
-    when more than RENDERERS_KEPT are kept."""
-    from world.loader import load_scene
+def open_gl():
+    """This thread's GL context, made once (the worker plugin calls this in the thread
+    that runs the worker's cells)."""
     from ..glcontext import create_headless
-    from ..render.renderer import Renderer
     if _state.ctx is None:
         _state.ctx = create_headless()
         _state.renderers = OrderedDict()
     _state.ctx.__enter__()        # current again (a caller may have made another one current)
+    return _state.ctx
+
+
+def close_gl():
+    """Release this thread's Renderers and GL context (made again if a cell comes)."""
+    if _state.ctx is None:
+        return
+    _state.ctx.__enter__()
+    try:
+        for _, r, _ in _state.renderers.values():
+            r.release()
+    finally:
+        _state.renderers = OrderedDict()
+        ctx, _state.ctx = _state.ctx, None
+        ctx.release()
+
+
+def gl_is_open() -> bool:
+    return _state.ctx is not None
+
+
+def _renderer(bundle: Bundle, size, run: str):
+    """(scene, Renderer) for the bundle, made or reused; the least recent one released
+    when more than RENDERERS_KEPT are kept."""
+    from world.loader import load_scene
+    from ..render.renderer import Renderer
+    open_gl()
     kept = _state.renderers
     if bundle.digest not in kept:
-        scene = load_scene(materialise(bundle))
+        scene = load_scene(materialise(bundle, run))
         kept[bundle.digest] = (scene, Renderer(_state.ctx, scene, size or scene_size(scene)),
                                scene.camera.shutter)
         while len(kept) > RENDERERS_KEPT:
@@ -118,22 +146,27 @@ def scene_size(scene) -> tuple[int, int]:
     return scene.render.width, scene.render.height
 
 
-def run_cell(task: CellTask) -> dict:
+def run_cell(task: CellTask, bundle: Bundle) -> dict:
     """The cell's result: its resolved values, one row per variant and region, the images
-    (PNG bytes) when asked, or its error; and the worker's peak memory."""
+    (PNG bytes) when asked, or its error; and the worker's peak memory. `bundle`: the
+    scene's (its digest is the task's)."""
     t_start = time.perf_counter()
     out = {"key": task.key, "scene": task.scene, "time": task.time, "shutter": task.shutter,
            "size": list(task.size) if task.size else None, "samples": task.samples,
            "seed": task.seed, "rows": [], "images": {}, "error": None,
            "timing": task.timing, "worker": f"{socket.gethostname()}:{os.getpid()}"}
     try:
+        if bundle.digest != task.digest:
+            raise RuntimeError("the scene bundle given is not the task's")
+        if bundle.error is not None:
+            raise UserError(bundle.error)
         _check_version(task)
-        _run(task, out)
+        _run(task, bundle, out)
     except UserError as exc:
-        out["error"] = _unplace(str(exc), task.bundle)
+        out["error"] = unplace(str(exc), bundle, task.run)
     except Exception as exc:      # a failed render is this cell's error; the sweep goes on
-        _forget(task.bundle)      # (its renderer may be half-way through a frame)
-        out["error"] = (f"{type(exc).__name__}: {_unplace(str(exc), task.bundle)} "
+        _forget(bundle)           # (its renderer may be half-way through a frame)
+        out["error"] = (f"{type(exc).__name__}: {unplace(str(exc), bundle, task.run)} "
                         f"({traceback.extract_tb(exc.__traceback__)[-1].name})")
     if out["error"] is not None:
         out["rows"], out["images"] = [], {}
@@ -150,17 +183,13 @@ def _check_version(task: CellTask):
                         f"{task.version}: install the same version on every worker")
 
 
-def _unplace(text: str, bundle: Bundle) -> str:
-    """An error as the user's own files would give it: the worker's copy's folder replaced
-    by the folder the bundle was made from."""
-    return text.replace(str(copy_root(bundle)), bundle.origin)
-
-
-def _run(task: CellTask, out: dict):
+def _run(task: CellTask, bundle: Bundle, out: dict):
     from ..glcontext import device_name
-    scene, r, shutter0 = _renderer(task.bundle, task.size)
+    scene, r, shutter0 = _renderer(bundle, task.size, task.run)
     out["device"] = device_name(_state.ctx)
     size = tuple(task.size) if task.size else scene_size(scene)
+    if task.size is None:         # (a size the sweep gives is checked with the sweep file)
+        check_capacity(len(task.variants), size, f"{task.scene}: [render] size")
     if r.size != size:
         r.resize(size)
     # the scene's own shutter unless the sweep replaces it (the kept scene is shared by

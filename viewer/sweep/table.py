@@ -119,15 +119,30 @@ def _mean(values):
     return statistics.fmean(vals) if vals else None
 
 
+def plot_axes(spec: Sweep) -> list[tuple[str, str, str]]:
+    """(axis, series by, x label) of every plot the sweep may make."""
+    return ([(a, "variant", AXIS_LABEL[a]) for a in spec.swept()]
+            + [(k, "family", k) for k in spec.grid_keys()])
+
+
+def plot_name(metric: str, axis: str) -> str:
+    return f"{metric}_vs_{axis.replace('.', '_')}.png"
+
+
+def plot_names(spec: Sweep, timing: bool) -> list[str]:
+    """Every plot file the sweep may write (the ones its cells' values make are some)."""
+    metrics = list(METRICS) + (["frame_ms"] if timing else [])
+    return [plot_name(m, a) for a, _, _ in plot_axes(spec) for m in metrics]
+
+
 def plots(spec: Sweep, rows: list[dict], timing: bool) -> dict[str, bytes]:
     """{file name: PNG}: each metric against each swept cell parameter (series: the
     variants) and against each variant grid key (series: the variant tables using it),
     a panel per region, each point the mean over everything else (scenes, other axes)."""
     from viewer.io.imageio import png_bytes
     ok = [r for r in rows if r["error"] is None]
-    axes = [(a, "variant", AXIS_LABEL[a]) for a in spec.swept()]
-    axes += [(k, "family", k) for k in spec.grid_keys()
-             if len({str(r[k]) for r in ok if r.get(k) is not None}) > 1]
+    axes = [(a, by, label) for a, by, label in plot_axes(spec)
+            if by == "variant" or len({str(r[a]) for r in ok if r.get(a) is not None}) > 1]
     family = {v.name: v.family for v in spec.variants}
     metrics = list(METRICS) + (["frame_ms"] if timing else [])
     out = {}
@@ -157,7 +172,7 @@ def plots(spec: Sweep, rows: list[dict], timing: bool) -> dict[str, bytes]:
             colours = {n: PALETTE[i % len(PALETTE)] for i, n in enumerate(names)}
             img = line_plots(panels, colours, x_label, METRIC_LABEL[metric],
                              title=f"{metric} against {axis}")
-            out[f"{metric}_vs_{axis.replace('.', '_')}.png"] = png_bytes(img)
+            out[plot_name(metric, axis)] = png_bytes(img)
     return out
 
 
@@ -218,11 +233,14 @@ def summary(spec: Sweep, rows: list[dict], cells: list[dict], facts: dict,
     return "\n".join(lines)
 
 
-def write_outputs(out, spec: Sweep, cells: list[dict], facts: dict, timing: bool) -> list[dict]:
-    """table.csv, table.parquet, plots/*.png and summary.md, all or none; the rows."""
+def write_outputs(folder, spec: Sweep, cells: list[dict], facts: dict, timing: bool) -> list[dict]:
+    """table.csv, table.parquet, plots/*.png and summary.md, all or none, into `folder`
+    (an outdir.OutputFolder; an earlier run's plots that this one does not make go); the
+    rows."""
     rows = rows_of(spec, cells, timing)
     cols = columns(spec, timing)
-    files = OutputSet()
+    out = folder.path
+    files = OutputSet(folder)
     data_csv = csv_bytes(rows, cols)
     data_pq = parquet_bytes(arrow_table(rows, cols))
     files.add(out / "table.csv", lambda f: f.write(data_csv))
@@ -232,5 +250,8 @@ def write_outputs(out, spec: Sweep, cells: list[dict], facts: dict, timing: bool
         files.add(out / "plots" / name, lambda f, d=data: f.write(d))
     text = summary(spec, rows, cells, facts, list(pngs), timing).encode("utf-8")
     files.add(out / "summary.md", lambda f: f.write(text))
+    for name in folder.owned_files():
+        if name.startswith("plots/") and name.removeprefix("plots/") not in pngs:
+            files.remove(out / name)
     files.commit()
     return rows

@@ -2,6 +2,7 @@
 --params FILE.json --mode M` reproduces it), and the window's own pixels (panel included)."""
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import moderngl
@@ -15,9 +16,10 @@ from ..render.renderer import Renderer
 
 
 def next_path(folder: Path, stem: str) -> Path:
-    """folder/stem_NNN.png with the first number not taken."""
+    """folder/stem_NNN.png with the first number whose .png and .json (the sidecar) are
+    both free: a screenshot only takes names where nothing is."""
     k = 0
-    while (folder / f"{stem}_{k:03d}.png").exists():
+    while any(os.path.lexists(folder / f"{stem}_{k:03d}{suffix}") for suffix in (".png", ".json")):
         k += 1
     return folder / f"{stem}_{k:03d}.png"
 

@@ -11,7 +11,6 @@ import numpy as np
 
 from viewer.io.sidecar import camera_dict
 from viewer.io.sidecar import scene_for_sidecar
-from viewer.io.imageio import OutputSet
 from viewer.io.video_writer import VideoPaths, VideoWriter, video_paths
 
 
@@ -65,7 +64,7 @@ class Recorder:
             self.writer.abort()
             return None
         self.side["frames"] = self.writer.count
-        files = OutputSet()
+        files = self.out.output_set()
         files.json(self.out.beside("", ".json"), self.side)
         self.writer.commit(files)
         return self.out.video
