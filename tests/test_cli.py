@@ -503,8 +503,8 @@ def test_shared_flags_act_or_are_refused(tmp_path, capsys):
     capsys.readouterr()
     refused = [
         (["shot", BASIC, "--mode", "off", "--shutter", "0.1"], "--shutter 0.1: mode off"),
-        (["shot", BASIC, "--shutter", "-1"], "--shutter '-1': expected seconds from 0 to 1e+07"),
-        (["shot", BASIC, "--shutter", "1e8"], "--shutter '1e8': expected seconds from 0"),
+        (["shot", BASIC, "--shutter", "-1"], "--shutter '-1': expected an exposure time from 0"),
+        (["shot", BASIC, "--shutter", "1e8"], "--shutter '1e8': expected an exposure time from 0"),
         (["compare", BASIC, "--shutter", "inf"], "--shutter 'inf': expected a finite number"),
         (["video", BASIC, "--modes", "off", "--shutter", "0.1"], "--shutter 0.1: mode off"),
         (["video", BASIC, "--modes", "off,hybrid", "--samples", "4"],

@@ -185,8 +185,8 @@ def test_a_signal_at_a_step_of_a_videos_commit(tmp_path, step, which):
     assert partial_files(tmp_path) == [], err
     written = sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*"))
     if step == "rename" and which != 3:
-        assert written == ["frames", "frames/frame_0000.png", "frames/frame_0001.png",
-                           "frames/frame_0002.png", "frames/frame_0003.png",
-                           "frames/video.json"], written
+        assert written == ["frames", "frames/.hmblur-outputs.json", "frames/frame_0000.png",
+                           "frames/frame_0001.png", "frames/frame_0002.png",
+                           "frames/frame_0003.png", "frames/video.json"], written
     else:
         assert written == [], written

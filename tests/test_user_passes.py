@@ -181,13 +181,14 @@ def test_a_sweep_carries_the_method_bytes_and_keys_cells_by_them(tmp_path):
         mode = "py:blur.py:gather"
         """))
     spec = load_sweep(spec_file)
-    (task,) = sweep_run.tasks_of(spec, version(), False, False)
+    (task,), bundles = sweep_run.tasks_of(spec, version(), False, False, "u1")
     moved = pickle.loads(pickle.dumps(task))          # as Dask sends it to a worker
     key = task.key
     method.write_text(method.read_text() + "\n// an edit\n")
-    assert sweep_run.tasks_of(load_sweep(spec_file), version(), False, False)[0].key != key
+    assert sweep_run.tasks_of(load_sweep(spec_file), version(), False, False,
+                              "u2")[0][0].key != key
     method.unlink()                                   # the worker needs no copy of it
-    result = run_cell(moved)
+    result = run_cell(moved, bundles[moved.digest])
     assert result["error"] is None
     rows = {(r["variant"], r["region"]): r for r in result["rows"]}
     assert rows[("mine", "all")]["flip"] == pytest.approx(rows[("np", "all")]["flip"], abs=1e-3)

@@ -51,7 +51,7 @@ class VideoPaths:
 
     def output_set(self) -> OutputSet:
         """The set the video and its files are committed in (a folder of frames: under
-        viewer/io/outdir's rule)."""
+        the rule of viewer/io/outdir.py)."""
         return OutputSet(OutputFolder(self.video, self.flag) if self.kind == "png" else None)
 
     def beside(self, name: str, suffix: str) -> Path:
@@ -90,7 +90,7 @@ def video_paths(text: str, flag: str = "--out", extra: tuple[tuple[str, str], ..
 
 def check_folder_collisions(out: VideoPaths, frames: int, extra=()):
     """A folder of frames may hold files of its own: the ones this run writes must be
-    absent or hmblur's (viewer/io/outdir's rule), checked before any frame is rendered."""
+    absent or hmblur's (the rule of viewer/io/outdir.py), checked before any frame is rendered."""
     if out.kind != "png":
         return
     OutputFolder(out.video, out.flag).check(

@@ -5,7 +5,7 @@ References are found by reading the TOML (scene format v1.2; a bare .gltf/.glb s
 its own asset): `mesh = "file"`, image textures' `path`, glTF entries' `gltf = "file"`;
 inside those, an OBJ's `mtllib` and the material's texture maps, a .gltf's external `uri`s
 (buffers, images) and a .glb's JSON chunk's. Each one passes the loader's asset-file rule
-(world/assets.asset_file: inside the scene's folder or the built-in assets, a regular
+(world/assets.py, asset_file: inside the scene's folder or the built-in assets, a regular
 file, within its size limit) before it is opened, and is read through a descriptor that is
 checked again (a file swapped for a FIFO after the check cannot make a read hang). The
 bytes of every bundle of a sweep together stay within limits.MAX_SWEEP_BYTES, counted

@@ -129,7 +129,7 @@ def _image_dir(c: dict) -> str:
 
 
 def output_folder(out: Path, spec: Sweep, images: bool, timing: bool) -> OutputFolder:
-    """DIR under viewer/io/outdir's rule, checked before any work: the table, summary and
+    """DIR under the rule of viewer/io/outdir.py, checked before any work: the table, summary and
     plots replace only hmblur's own, cells/ and images/ are folders hmblur made."""
     folder = OutputFolder(out, "--out", whole=("cells", "images"))
     folder.check(["table.csv", "table.parquet", "summary.md"]
