@@ -16,6 +16,7 @@ from typing import Callable, Mapping
 
 import moderngl
 
+from world import jit_notice
 from world.scene import Scene
 from viewer.eval.comparison import Comparison, Variant, check_variant, compare_frame
 from viewer.glcontext import create_headless, device_name
@@ -53,6 +54,7 @@ class Renderer:
                  context: moderngl.Context | None = None):
         """`size`: (W, H) of every render (None: each scene's [render] size); `context`: a
         moderngl context of the caller's (kept, not released), else a headless EGL one."""
+        jit_notice.install()          # (a cold kernel cache: one line before the wait)
         self._owns = context is None
         self.context = create_headless() if context is None else context
         self.size = None if size is None else (int(size[0]), int(size[1]))

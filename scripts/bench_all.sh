@@ -13,7 +13,7 @@ B=scenes/bench      # bench-only scenes: many moving objects (crowd), and with c
 $H bench living_room --size 640x360 --frames 30 --speeds 0.25,0.5,1,2 --json $out/living_room_640x360.json
 $H bench living_room --size 1280x720 --frames 12 --speeds 0.5,1,2 --json $out/living_room_1280x720.json
 $H bench spinner --size 640x360 --frames 15 --speeds 0.25,0.5,1,2 --json $out/spinner_640x360.json
-for s in thin pan wheel rover $C/basic.toml $C/keys_arc.toml $C/vase_pan.toml $B/crowd.toml $B/crowd_pan.toml; do
+for s in fan thin pan wheel rover $C/basic.toml $C/keys_arc.toml $C/vase_pan.toml $B/crowd.toml $B/crowd_pan.toml; do
   n=$(basename "$s" .toml)
   $H bench "$s" --size 640x360 --frames 15 --json "$out/${n}_640x360.json"
 done
@@ -23,7 +23,7 @@ for s in spinner pan $C/basic.toml $C/vase_pan.toml $B/crowd.toml $B/crowd_pan.t
 done
 # The same frames in an animation (frame k at t + k / 60 s after the frame before it):
 # nothing kept from the last frame (tiles, clears) is then the same as in the timed one.
-for s in living_room spinner thin pan wheel rover $C/basic.toml $C/vase_pan.toml $B/crowd.toml $B/crowd_pan.toml; do
+for s in living_room fan spinner thin pan wheel rover $C/basic.toml $C/vase_pan.toml $B/crowd.toml $B/crowd_pan.toml; do
   n=$(basename "$s" .toml)
   $H bench "$s" --size 640x360 --frames 15 --modes mcguire,hybrid --animate 60 \
     --json "$out/${n}_640x360_animated.json"

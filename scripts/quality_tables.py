@@ -22,7 +22,7 @@ SIZE = "640x360"
 CONFORMANCE = ROOT / "tests" / "conformance"
 
 # (label, scene argument)
-SCENES = [("living_room", "living_room"), ("spinner", "spinner"), ("thin", "thin"),
+SCENES = [("living_room", "living_room"), ("fan", "fan"), ("spinner", "spinner"), ("thin", "thin"),
           ("pan", "pan"), ("wheel", "wheel"), ("rover", "rover"),
           ("basic", str(CONFORMANCE / "basic.toml")),
           ("vase_pan", str(CONFORMANCE / "vase_pan.toml")),
@@ -32,13 +32,15 @@ SCENES = [("living_room", "living_room"), ("spinner", "spinner"), ("thin", "thin
           ("gltf_box", str(CONFORMANCE / "gltf" / "gltf_box.toml")),
           ("gltf_skin", str(CONFORMANCE / "gltf" / "gltf_skin.toml"))]
 # Curved motion, on the scenes whose motion bends: the hybrid's default (curve steps:
-# 2 sub-frames where the paths bend), the linear hybrid (one chord, one frame), the
-# linear hybrid with 2 path segments, and every real-time mode with 4 sub-exposure steps.
-CURVED_SCENES = ("spinner", "wheel", "keys_arc", "turning_car")
+# 2 sub-frames where the paths bend), the linear hybrid (one chord, one frame), inverse
+# motion (one frame along each point's curve), the linear hybrid with 2 path segments,
+# and every real-time mode with 4 sub-exposure steps.
+CURVED_SCENES = ("fan", "spinner", "wheel", "keys_arc", "turning_car")
 ORDER = ("off", "mcguire", "ue4", "guertin", "hybrid")
 LABELS = {"mcguire": "McGuire 2012", "ue4": "UE4-style", "guertin": "Guertin 2014"}
 LINEAR = ["--set", "hybrid.curve_steps=1"]
 VARIANTS = {"linear": ("linear", ["--modes", "hybrid", *LINEAR]),
+            "inverse": ("inverse", ["--modes", "hybrid", "--set", "hybrid.curve=inverse"]),
             "2 segments": ("seg2", ["--modes", "hybrid", "--set", "hybrid.segments=2", *LINEAR]),
             "4 steps": ("steps4", ["--set", "motion.steps=4"])}
 
@@ -76,15 +78,17 @@ def modes_table() -> str:
 
 def curved_table() -> str:
     lines = ["| scene | hybrid, linear (one chord) | hybrid (default: curve steps) | "
-             "hybrid, linear, 2 segments | McGuire, 4 steps | UE4-style, 4 steps | "
-             "hybrid, 4 steps |", "|---|---|---|---|---|---|---|"]
+             "hybrid, inverse motion | hybrid, linear, 2 segments | McGuire, 4 steps | "
+             "UE4-style, 4 steps | hybrid, 4 steps |", "|---|---|---|---|---|---|---|---|"]
     for label in CURVED_SCENES:
         default = metrics(OUT / label)["hybrid"]
         linear = metrics(OUT / f"{label}_linear")["hybrid"]
+        inverse = metrics(OUT / f"{label}_inverse")["hybrid"]
         seg2 = metrics(OUT / f"{label}_seg2")["hybrid"]
         steps = metrics(OUT / f"{label}_steps4")
-        lines.append(f"| {label} | {cell(linear)} | {cell(default)} | {cell(seg2)} | "
-                     f"{cell(steps['mcguire'])} | {cell(steps['ue4'])} | {cell(steps['hybrid'])} |")
+        lines.append(f"| {label} | {cell(linear)} | {cell(default)} | {cell(inverse)} | "
+                     f"{cell(seg2)} | {cell(steps['mcguire'])} | {cell(steps['ue4'])} | "
+                     f"{cell(steps['hybrid'])} |")
     return "\n".join(lines)
 
 

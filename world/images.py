@@ -18,7 +18,7 @@ import io
 from pathlib import Path
 
 import numpy as np
-from PIL import Image
+from PIL import Image, UnidentifiedImageError
 
 from world import limits
 from world.scene import Texture
@@ -75,7 +75,12 @@ class ImageError(Exception):
 
 
 def _undecodable(e: Exception) -> ImageError:
-    return ImageError(f"cannot decode the image ({type(e).__name__}: {str(e)[:80]})")
+    """The reason in the user's words, not Pillow's: not an image format it reads, or an
+    image whose data is damaged or cut short."""
+    if isinstance(e, UnidentifiedImageError):
+        return ImageError("cannot decode the image: not an image file Pillow reads "
+                          "(PNG, JPEG, ...)")
+    return ImageError("cannot decode the image: its data is damaged or cut short")
 
 
 class _Decoded:

@@ -594,9 +594,10 @@ class _Loader:
                 raise
             except MemoryError:
                 self.fail(k, f"{path}: out of memory reading the mesh")
-            except Exception as e:   # trimesh raises many types for bad files
-                self.fail(k, f"expected a readable mesh file, {path} failed: "
-                          f"{type(e).__name__}: {e}")
+            except Exception:        # trimesh raises many types for bad files
+                self.fail(k, f"expected a readable mesh file (.obj, .ply, .stl, .glb, .off), "
+                          f"{path} could not be read as one (damaged, cut short, or another "
+                          "kind of file)")
             return self.mesh_arrays(tm, k, str(path))
         if not isinstance(v, dict):
             self.fail(k, f"expected a file path or a primitive table ({', '.join(PRIMITIVES)}), "

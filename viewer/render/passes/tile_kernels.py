@@ -7,11 +7,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from world import jit_notice
 from world.conventions import flip_row
 
 _JIT = dict(cache=True, nogil=True)
-jit_notice.install()
 _flip_row = njit(inline="always")(flip_row)     # conventions' row flip, compiled in
 
 # Two triangles per tile, corners as (x1?, y1?): (x0,y0) (x1,y0) (x0,y1), (x1,y0) (x1,y1) (x0,y1).

@@ -35,10 +35,16 @@ class HybridParams:
     curve_steps: int = curve_steps_param(2)
     curve: str = param("steps", choices=CURVES, effect="recompile",
                        help="how motion that bends (more than motion.curve_px) is "
-                            "followed: inverse, in one frame, each pixel's time samples "
-                            "mapped back along every candidate object's exact motion "
-                            "(docs/algorithms.md 7.1) on the tiles that bending movers "
-                            "reach; steps, curve_steps sub-frames (each a whole frame)")
+                            "followed: steps (default), curve_steps sub-frames, each a "
+                            "whole frame; inverse, in one frame, each pixel's time "
+                            "samples mapped back along every candidate object's exact "
+                            "motion (docs/algorithms.md 6.1) on the tiles movers reach: "
+                            "less error where bodies turn fast (fan 0.63x, turning_car "
+                            "0.76x, spinner 0.88x the steps' whole-image FLIP), more "
+                            "where a straight mover or a moving camera gains from two "
+                            "sub-frames (keys_arc, basic, shapes, rover), at 2-5.6x "
+                            "McGuire's frame against the steps' 1.9-2.7x on software GL "
+                            "(docs/performance.md)")
     curve_samples: int = param(32, unit="times", lo=1, hi=64,
                                help="curve = inverse: the times of the exposure (centres "
                                     "of equal parts) at which every mover's and the "
