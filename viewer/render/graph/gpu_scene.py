@@ -180,7 +180,8 @@ class GpuScene:
                                      f"driver's limit), got {w}x{h}")
                 # (UV origin bottom-left: GL rows, the image's rows flipped)
                 img = to_image(tex.image).astype(np.float32, copy=False)
-                t = ctx.texture((img.shape[1], img.shape[0]), 3, img.tobytes(), dtype="f4")
+                t = ctx.texture((img.shape[1], img.shape[0]), 3, np.ascontiguousarray(img),
+                                dtype="f4")      # (the array itself: no bytes copy)
                 t.filter = (moderngl.LINEAR, moderngl.LINEAR)
                 t.repeat_x = t.repeat_y = True
                 self.images[id(tex)] = t
