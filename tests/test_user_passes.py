@@ -269,3 +269,30 @@ def test_a_raising_method_in_a_sweep_is_an_error_row(tmp_path):
                                 False, stream=open(tmp_path / "log", "w"))
     assert facts["failed"] == 1
     assert "method bad (py:bad.py:f): RuntimeError: no" in (tmp_path / "out/summary.md").read_text()
+
+
+def test_shot_renders_a_user_pass_and_its_sidecar_renders_it_again(tmp_path, capsys):
+    """`hmblur shot --mode glsl:PATH` (and py:PATH:FUNCTION): the pass's image, the same
+    pixels as the API's, and a sidecar that `--params` renders again byte for byte."""
+    for spec in (f"glsl:{GLSL}", f"py:{ROOT / 'docs/examples/numpy_gather.py'}:gather"):
+        out = tmp_path / "a.png"
+        assert main(["shot", str(CONFORMANCE / "basic.toml"), "--size", "64x36", "--mode",
+                     spec, "--out", str(out)]) == 0
+        side = json.loads(out.with_suffix(".json").read_text())
+        assert side["mode"] == spec and sorted(side["params"]) == ["blur", "motion"]
+        again = tmp_path / "b.png"
+        assert main(["shot", "--params", str(out.with_suffix(".json")), "--out",
+                     str(again)]) == 0
+        assert again.read_bytes() == out.read_bytes()
+        with hm.Renderer((64, 36)) as r:
+            r.register("mine", spec)
+            api = r.render(str(CONFORMANCE / "basic.toml"), "mine")
+        from PIL import Image
+        assert np.array_equal(np.asarray(Image.open(out))[..., :3], api.srgb)
+    capsys.readouterr()
+    bad = tmp_path / "broken.frag"
+    bad.write_text("#version 330 core\nout vec4 c;\nvoid main() { c = nothing; }\n")
+    assert main(["shot", str(CONFORMANCE / "basic.toml"), "--mode", f"glsl:{bad}",
+                 "--out", str(tmp_path / "c.png")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "broken.frag:3" in err and not (tmp_path / "c.png").exists()

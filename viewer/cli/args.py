@@ -372,11 +372,14 @@ def sidecar_animations(value, source: str) -> dict:
 DEFAULT_MODE = "hybrid"
 
 
-def add_mode_arg(p, modes):
-    """--mode, for a command that renders one of `modes` (shot, view)."""
+def add_mode_arg(p, modes, user: bool = False):
+    """--mode, for a command that renders one of `modes` (shot, view); `user`: or a user's
+    blur pass (docs/api.md)."""
     p.add_argument("--mode", default=None,
-                   help=f"one of: {', '.join(modes)} (default: {DEFAULT_MODE}, or the "
-                        "--params file's)")
+                   help=f"one of: {', '.join(modes)}"
+                        + (", or a user's blur pass glsl:PATH or py:PATH:FUNCTION "
+                           "(docs/api.md)" if user else "")
+                        + f" (default: {DEFAULT_MODE}, or the --params file's)")
 
 
 def pick_mode(flag: str | None, sidecar: dict | None, modes) -> str:

@@ -10,6 +10,8 @@ from viewer.io.imageio import OutputSet
 from viewer.io.outdir import OutputFolder
 from viewer.io.sidecar import sidecar
 from viewer.render.modes import MODE_GROUPS, MODES
+from viewer.render.modes.user import USER_GROUPS, UserPass, parse_method
+from viewer.render.modes.user.method import KINDS
 from viewer.io.buffer_docs import buffers_readme
 from viewer.io.visualize import visualise
 
@@ -22,7 +24,7 @@ def register(sub):
                        "frame's counters; 'hmblur shot --params x.json --out y.png' "
                        "reproduces it byte for byte.")
     cliargs.add_scene_args(p)
-    cliargs.add_mode_arg(p, MODES)
+    cliargs.add_mode_arg(p, MODES, user=True)
     p.add_argument("--out", required=True, metavar="PATH.png",
                    help="output PNG path (missing folders are made; the .json sidecar goes "
                         "beside it)")
@@ -32,10 +34,22 @@ def register(sub):
     p.set_defaults(run=run)
 
 
+def user_mode(flag: str | None, sidecar: dict | None) -> UserPass | None:
+    """--mode glsl:PATH or py:PATH:FUNCTION (or the --params file's): a user's pass."""
+    text = flag if flag is not None else (sidecar or {}).get("mode")
+    if isinstance(text, str) and text.partition(":")[0] in KINDS:
+        return parse_method(text, label=f"--mode {text}")
+    return None
+
+
 def run(args) -> int:
     s = cliargs.setup(args)
-    mode = cliargs.pick_mode(args.mode, s.sidecar, MODES)
-    cliargs.check_set_groups(args.set, [mode], MODE_GROUPS)
+    method = user_mode(args.mode, s.sidecar)
+    # (a user's pass renders under its file's name; the sidecar keeps its spec)
+    mode = (method.path.stem + (f".{method.function}" if method.function else "")
+            if method else cliargs.pick_mode(args.mode, s.sidecar, MODES))
+    groups = {**MODE_GROUPS, **({mode: USER_GROUPS} if method else {})}
+    cliargs.check_set_groups(args.set, [mode], groups)
     cliargs.check_samples_read(args.samples, [mode])
     if args.buffers is None:          # (the buffers hold the exposure's velocities)
         cliargs.check_shutter_read(args.shutter, [mode], " (only --buffers would show its velocities)")
@@ -47,13 +61,16 @@ def run(args) -> int:
     ctx = create_headless()
     files = OutputSet(bufdir)
     with hm.Renderer(s.size, context=ctx) as r:     # (the context outlives it: the sidecar)
+        if method is not None:
+            r.register(mode, method)
         t0 = time.perf_counter()
         res = r.render(s.scene, mode, s.time, s.params, s.seed, buffers=bufdir is not None)
         ms = (time.perf_counter() - t0) * 1e3
     if bufdir is not None:
         add_buffers(files, res.buffers, bufdir, mode)
     files.png(out, res.srgb)
-    files.json(side, sidecar(s, mode, res, ctx, args.scene, first_frame=True, ms=ms))
+    files.json(side, sidecar(s, method.spec if method else mode, res, ctx, args.scene,
+                             first_frame=True, ms=ms, groups=groups[mode]))
     files.commit()
     print(f"{out}: {mode} {s.size[0]}x{s.size[1]} t={s.time:g} in {ms:.0f} ms "
           "(first frame: set-up included; 'hmblur bench' times warm frames)")
