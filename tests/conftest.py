@@ -92,3 +92,12 @@ def synthetic_frame(ctx):
     yield make
     for pool, programs, gpu in made:
         pool.release(), programs.clear(), gpu.release()
+
+
+def default_signals():
+    """preexec_fn of a child that must end on a signal: SIGINT, SIGTERM and SIGHUP at their
+    defaults whatever the suite was started under (a background job ignores SIGINT,
+    nohup SIGHUP, and a child inherits that)."""
+    import signal
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, signal.SIG_DFL)

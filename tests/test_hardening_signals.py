@@ -15,7 +15,7 @@ import time
 
 import pytest
 
-from conftest import ROOT
+from conftest import ROOT, default_signals
 
 BASIC = str(ROOT / "tests" / "conformance" / "basic.toml")
 
@@ -26,11 +26,6 @@ def partial_files(folder):
 
 
 ENDING = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
-
-
-def default_signals():
-    for sig in ENDING:
-        signal.signal(sig, signal.SIG_DFL)
 
 
 def signal_when(argv, folder, sig, ready, timeout=120.0):

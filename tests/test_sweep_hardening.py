@@ -28,7 +28,7 @@ from viewer.sweep.spec import load_sweep
 from world import limits
 from world.errors import UserError
 
-from conftest import CONFORMANCE, ROOT
+from conftest import CONFORMANCE, ROOT, default_signals
 
 BASIC = CONFORMANCE / "basic.toml"
 PROPS = dict(derandomize=True, deadline=None,
@@ -504,6 +504,7 @@ def test_ctrl_c_at_a_terminal_after_the_last_cell_is_one_line_and_no_table(tmp_p
     env = dict(os.environ, PYTHONPATH=str(ROOT), TMPDIR=str(own_temp_dir))
     argv = [sys.executable, "-m", "viewer", "sweep", str(p), "--out", str(out), "--workers", "1"]
     proc = subprocess.Popen(argv, env=env, cwd=ROOT, stdout=subprocess.DEVNULL,
+                            preexec_fn=default_signals,
                             stderr=subprocess.PIPE, text=True, start_new_session=True)
     sent = False
     try:
@@ -560,6 +561,7 @@ def test_ctrl_c_at_a_terminal_while_workers_start_or_restart_prints_no_traceback
     env = dict(os.environ, PYTHONPATH=str(ROOT), TMPDIR=str(own_temp_dir))
     proc = subprocess.Popen([sys.executable, "-m", "viewer", "sweep", str(p), "--out", str(out),
                              "--workers", "1"], env=env, cwd=ROOT, stdout=subprocess.DEVNULL,
+                            preexec_fn=default_signals,
                             stderr=subprocess.PIPE, text=True, start_new_session=True)
     sent = False
     try:
