@@ -169,27 +169,24 @@ def test_straight_motion_gives_the_linear_composites_image_to_the_byte(ctx):
             r.release()
 
 
-BLADE = """
-    [camera]
-    position = [0.0, 0.0, 4.0]
-    look_at = [0.0, 0.0, 0.0]
-    fov_y = 40.0
-    shutter = 0.1
-    [[lights]]
-    direction = [0.0, 0.0, -1.0]
-    color = [0.0, 0.0, 0.0]
-    [[objects]]
-    name = "backdrop"
-    mesh = { box = [8.0, 8.0, 0.1] }
-    position = [0.0, 0.0, -1.0]
-    material = { albedo = [0.0, 0.0, 0.0] }
-    [[objects]]
-    name = "blade"
-    mesh = { box = [1.6, 0.12, 0.02] }
-    position = [0.8, 0.0, 0.0]
-    parent = "hub"
-    material = { albedo = [1.0, 1.0, 1.0] }
-"""
+def facing(light: str, backdrop: str, objects: str) -> str:
+    """A scene seen down -z from 4 m (fov 40 degrees, shutter 0.1 s), a backdrop 1 m behind
+    the origin, one light along the view, then `objects`."""
+    return f"""
+        [camera]
+        position = [0.0, 0.0, 4.0]
+        look_at = [0.0, 0.0, 0.0]
+        fov_y = 40.0
+        shutter = 0.1
+        [[lights]]
+        direction = [0.0, 0.0, -1.0]
+        color = {light}
+        [[objects]]
+        name = "backdrop"
+        mesh = {{ box = [8.0, 8.0, 0.1] }}
+        position = [0.0, 0.0, -1.0]
+        material = {backdrop}
+        {objects}"""
 
 
 def test_a_turning_blade_blurs_along_its_arc(ctx, tmp_path):
@@ -197,14 +194,19 @@ def test_a_turning_blade_blurs_along_its_arc(ctx, tmp_path):
     ambient light alone, over black: at any radius the reference's streak is an arc whose
     brightness is the blade's angular width over the turn. The inverse composite follows
     it (close to the reference everywhere) where the linear composite draws a chord."""
-    text = BLADE.replace('[[objects]]\n    name = "blade"', '''[[objects]]
-    name = "hub"
-    mesh = { box = [0.01, 0.01, 0.01] }
-    material = { albedo = [0.0, 0.0, 0.0] }
-    angular_velocity = [0.0, 0.0, 10.471976]
-    [[objects]]
-    name = "blade"''').replace('ambient = [1.0, 1.0, 1.0]', '')
-    scene = scene_from(tmp_path, 'ambient = [1.0, 1.0, 1.0]\n' + text)
+    scene = scene_from(tmp_path, "ambient = [1.0, 1.0, 1.0]\n" + facing(
+        "[0.0, 0.0, 0.0]", "{ albedo = [0.0, 0.0, 0.0] }", """
+        [[objects]]
+        name = "hub"
+        mesh = { box = [0.01, 0.01, 0.01] }
+        material = { albedo = [0.0, 0.0, 0.0] }
+        angular_velocity = [0.0, 0.0, 10.471976]
+        [[objects]]
+        name = "blade"
+        mesh = { box = [1.6, 0.12, 0.02] }
+        position = [0.8, 0.0, 0.0]
+        parent = "hub"
+        material = { albedo = [1.0, 1.0, 1.0] }"""))
     size = (240, 160)
     r = Renderer(ctx, scene, size)
     try:
@@ -236,20 +238,9 @@ def test_a_body_that_comes_back_is_traced_where_it_leaves_a_pixel(ctx, tmp_path)
     """A box that rises and falls back within the shutter: its chord over the exposure is
     zero, so the displacement test masks nothing; the inverse mask's checks find the
     pixels it leaves mid-exposure and the reveal traces them."""
-    scene = scene_from(tmp_path, """
-        [camera]
-        position = [0.0, 0.0, 4.0]
-        look_at = [0.0, 0.0, 0.0]
-        fov_y = 40.0
-        shutter = 0.1
-        [[lights]]
-        direction = [0.0, 0.0, -1.0]
-        color = [1.0, 1.0, 1.0]
-        [[objects]]
-        name = "backdrop"
-        mesh = { box = [8.0, 8.0, 0.1] }
-        position = [0.0, 0.0, -1.0]
-        material = { albedo = [0.8, 0.8, 0.8], texture = { kind = "checker", size = 0.3, albedo2 = [0.1, 0.1, 0.1] } }
+    scene = scene_from(tmp_path, facing(
+        "[1.0, 1.0, 1.0]", '{ albedo = [0.8, 0.8, 0.8], texture = { kind = "checker", '
+        'size = 0.3, albedo2 = [0.1, 0.1, 0.1] } }', """
         [[objects]]
         name = "hop"
         mesh = { box = [0.5, 0.5, 0.1] }
@@ -262,8 +253,7 @@ def test_a_body_that_comes_back_is_traced_where_it_leaves_a_pixel(ctx, tmp_path)
         position = [0.0, 0.0, 0.0]
         [[objects.keys]]
         time = 0.05
-        position = [0.0, -0.4, 0.0]
-        """)
+        position = [0.0, -0.4, 0.0]"""))
     r = Renderer(ctx, scene, (160, 120))
     try:
         lin = r.render("hybrid", 0.0, curve("steps", hybrid__curve_steps=1))
