@@ -460,7 +460,7 @@ COMMAND_FLAGS = {
     "compare": SHARED | {"--out", "--modes", "--variant", "--inset"},
     "bench": SHARED - {"--samples"} | {"--frames", "--warmup", "--modes", "--json", "--animate",
                                        "--pass-timers", "--speeds", "--variant"},
-    "video": SHARED | {"--start", "--out", "--modes", "--frames", "--fps", "--metrics"},
+    "video": SHARED | {"--start", "--out", "--modes", "--frames", "--fps", "--metrics", "--variant"},
     "view": SHARED | {"--mode", "--frames", "--screenshot", "--script", "--stats-json",
                       "--record", "--record-fps", "--shot-dir"},
     "params": set(),

@@ -296,3 +296,23 @@ def test_shot_renders_a_user_pass_and_its_sidecar_renders_it_again(tmp_path, cap
                  "--out", str(tmp_path / "c.png")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "broken.frag:3" in err and not (tmp_path / "c.png").exists()
+
+
+def test_video_draws_a_user_pass_as_shot_does_and_its_sidecar_draws_it_again(tmp_path):
+    """`hmblur video --variant mine=glsl:PATH`: one variant alone is its bare image, the
+    pixels shot writes at that time; the sidecar names the variant, so --params draws the
+    same frames."""
+    folder = tmp_path / "frames"
+    assert main(["video", BASIC, "--size", "64x36", "--frames", "2", "--variant",
+                 f"mine=glsl:{GLSL}", "--out", f"{folder}/"]) == 0
+    side = json.loads((folder / "video.json").read_text())
+    assert side["modes"] == [] and side["variants"] == [f"mine=glsl:{GLSL}"]
+    shot = tmp_path / "s.png"
+    assert main(["shot", BASIC, "--size", "64x36", "--mode", f"glsl:{GLSL}",
+                 "--out", str(shot)]) == 0
+    assert (folder / "frame_0000.png").read_bytes() == shot.read_bytes()
+    again = tmp_path / "again"
+    assert main(["video", "--params", str(folder / "video.json"), "--out", f"{again}/"]) == 0
+    for k in range(2):
+        name = f"frame_{k:04d}.png"
+        assert (again / name).read_bytes() == (folder / name).read_bytes()

@@ -20,7 +20,8 @@ from viewer.io.imageio import OutputSet, linear_to_srgb8
 from viewer.eval.metrics import SPACE, image_metrics
 from viewer.eval.plot import PALETTE, line_plots
 from viewer.io.progress import Progress
-from viewer.render.modes import MODES
+from viewer.eval.comparison import parse_variant
+from viewer.render.modes import MODE_GROUPS, MODES
 from viewer.render.modes.reference import REGIONS
 from viewer.eval.strip import REGION_ORDER, make_strip
 from viewer.eval.temporal import FlickerAccumulator
@@ -48,6 +49,10 @@ def register(sub):
     p.add_argument("--modes", default=None,
                    help=f"comma-separated, any of {', '.join(MODES)} (default: the --params "
                         "file's, else every mode but reference)")
+    p.add_argument("--variant", action="append", default=[], metavar="NAME=MODE[:G.F=V,...]",
+                   help="also draw a mode under a name with its own parameters, or a user's "
+                        "blur pass NAME=glsl:PATH / NAME=py:PATH:FUNCTION (as compare's "
+                        "--variant; repeatable; --modes then defaults to none)")
     p.add_argument("--frames", type=str, default=None,
                    help=f"number of frames (default {DEFAULT_FRAMES})")
     p.add_argument("--fps", type=str, default=None,
@@ -95,11 +100,24 @@ def run(args) -> int:
         modes_text = ",".join(map(str, side["modes"]))
     elif modes_text is None and isinstance(side.get("mode"), str):   # a shot's sidecar
         modes_text = side["mode"]
-    if modes_text is None:
-        modes = [m for m in MODES if m != "reference"]
+    variant_texts = args.variant or [str(v) for v in side.get("variants", [])
+                                     if args.modes is None]
+    if modes_text is None or (not modes_text and variant_texts):
+        modes = [] if variant_texts else [m for m in MODES if m != "reference"]
     else:
         flag = "--modes" if args.modes is not None else f"{src}: modes"
         modes = cliargs.parse_modes(flag, modes_text, list(MODES))
+    variants = []
+    for text in variant_texts:
+        v = parse_variant(text, [m for m in MODES if m != "reference"])
+        if v.name in modes or any(v.name == u.name for u in variants):
+            raise UserError(f"--variant {text}: the name {v.name!r} is already drawn (by "
+                            "--modes or an earlier --variant); give it another")
+        variants.append(v)
+    cliargs.check_set_groups(args.set, modes + [v.name for v in variants] + ["reference"],
+                             {**MODE_GROUPS, **{v.name: v.groups for v in variants}})
+    own = {v.name: (v.runs_as, v.params(s.params, f"variant {v.name}")) for v in variants}
+    modes = modes + [v.name for v in variants]
     frames = (cliargs.parse_int("--frames", args.frames, 1, limits.MAX_FRAMES)
               if args.frames is not None else
               cliargs.parse_int(f"{src}: frames", str(side["frames"]), 1, limits.MAX_FRAMES)
@@ -121,6 +139,9 @@ def run(args) -> int:
     from viewer.render.renderer import Renderer
     ctx = create_headless()
     r = Renderer(ctx, s.scene, s.size)
+    for v in variants:
+        if v.method is not None:
+            r.add_method(v.name, v.method)
     metrics = VideoMetrics(modes) if args.metrics else None
     progress = Progress(f"{s.scene.name}: {frames} frames of {', '.join(modes)}"
                         + (" + metrics" if metrics and "reference" not in modes else ""))
@@ -130,7 +151,8 @@ def run(args) -> int:
             for k, t in enumerate(times):
                 images, ref = {}, None
                 for m in modes:
-                    res = r.render(m, t, s.params, seed=s.seed,
+                    runs_as, params = own.get(m, (m, s.params))
+                    res = r.render(runs_as, t, params, seed=s.seed,
                                    record_visibility=metrics is not None and m == "reference")
                     images[m] = res.image
                     if m == "reference":
@@ -143,7 +165,10 @@ def run(args) -> int:
                 progress(k, frames)
             seconds = time.perf_counter() - t0
             files = out.output_set()
-            doc = sidecar(s, scene, modes, frames, fps, out, device_name(ctx), seconds)
+            doc = sidecar(s, scene, [m for m in modes if m not in own], frames, fps, out,
+                          device_name(ctx), seconds)
+            if variants:
+                doc["variants"] = [t for t in variant_texts]
             if metrics is not None:
                 doc["flicker"] = metrics.flicker()
                 doc["metrics_space"] = SPACE
