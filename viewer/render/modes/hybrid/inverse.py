@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from world.errors import UserError
 from world.path_bend import object_bends, object_points
 from world.pose_table import PoseTable
 from viewer.render.graph.frame import Frame
@@ -119,6 +120,11 @@ class MotionTable(Pass):
     def outputs(self, frame: Frame):
         k = int(frame.params["hybrid"].curve_samples)
         rows = len(frame.scene.objects) + 1
+        most = int(frame.ctx.info.get("GL_MAX_TEXTURE_SIZE") or 1024)
+        if rows > most:
+            raise UserError(f"hybrid.curve = inverse: the scene's {rows - 1} objects need a "
+                            f"motion table of {rows} rows, more than this GL driver's "
+                            f"{most}: use hybrid.curve = steps")
         return {MOTION_TABLE: TableSpec(4, "f4", width=k * COLS + TAIL, height=rows),
                 CANDIDATES: TexSpec(4, "u4", tile=FINE)}
 
