@@ -6,7 +6,6 @@ seed (hypothesis, derandomize)."""
 import json
 import os
 import time
-from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
@@ -17,25 +16,12 @@ from viewer.io.outdir import MANIFEST, OutputFolder
 from world.errors import UserError
 
 from conftest import CONFORMANCE
+from sweep_helpers import one_line_error, snapshot
 
 BASIC = CONFORMANCE / "basic.toml"
 PROPS = dict(derandomize=True, deadline=None,
              suppress_health_check=[HealthCheck.function_scoped_fixture,
                                     HealthCheck.too_slow])
-
-
-def one_line_error(capsys, *words):
-    err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and err.startswith("hmblur: error: "), err
-    assert "Traceback" not in err
-    for w in words:
-        assert w in err, (w, err)
-    return err
-
-
-def snapshot(folder: Path) -> dict:
-    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
-            if p.is_file() and not p.is_symlink()}
 
 
 NAMES = ["a.png", "a.json", "notes.md", "sub/b.png", "cells/k.json", "images/c/x.png"]

@@ -15,6 +15,7 @@ from viewer.sweep.cells import run_cell
 from viewer.sweep.spec import load_sweep
 
 from conftest import CONFORMANCE, ROOT
+from sweep_helpers import in_process, own_temp_dir, sweep  # noqa: F401 (a fixture)
 
 BASIC = str(CONFORMANCE / "basic.toml")
 TINY = """
@@ -32,43 +33,11 @@ TINY = """
 """
 
 
-@pytest.fixture(autouse=True)
-def own_temp_dir(tmp_path, monkeypatch):
-    """The workers' copies in a temp dir of the test's own (workers inherit TMPDIR): every
-    sweep removes its copies, so the test ends with none of hmblur's there."""
-    import tempfile
-    temp = tmp_path / "temp"
-    temp.mkdir()
-    monkeypatch.setenv("TMPDIR", str(temp))
-    monkeypatch.setattr(tempfile, "tempdir", str(temp))
-    yield temp
-    assert sorted(p.name for p in temp.iterdir() if "hmblur" in p.name) == []
-
-
 def sweep_file(tmp_path, text=TINY, name="sweep.toml"):
     shutil.copy(BASIC, tmp_path / "basic.toml")
     p = tmp_path / name
     p.write_text(textwrap.dedent(text))
     return p
-
-
-def in_process(calls=None):
-    """A runner for run_sweep: every cell here, through the same run_cell as a worker."""
-    def runner(tasks, bundles, on_result):
-        for t in tasks:
-            if calls is not None:
-                calls.append(t.scene)
-            on_result(t, run_cell(t, bundles[t.digest]))
-        return {"engine": "test"}
-    return runner
-
-
-def sweep(tmp_path, path, out, runner=None, **kw):
-    spec = load_sweep(path)
-    args = dict(version=version(), workers=0, scheduler=None, images=False, timing=False)
-    args.update(kw)
-    return sweep_run.run_sweep(spec, out, stream=open(tmp_path / "progress.txt", "a"),
-                               runner=runner or in_process(), **args)
 
 
 # --- the sweep file --------------------------------------------------------------------------

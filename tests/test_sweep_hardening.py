@@ -28,7 +28,9 @@ from viewer.sweep.spec import load_sweep
 from world import limits
 from world.errors import UserError
 
-from conftest import CONFORMANCE, ROOT, default_signals
+from conftest import CONFORMANCE, ROOT
+from sweep_helpers import (in_process, interrupted, one_line_error, own_temp_dir,  # noqa: F401
+                           snapshot, sweep)
 
 BASIC = CONFORMANCE / "basic.toml"
 PROPS = dict(derandomize=True, deadline=None,
@@ -43,56 +45,12 @@ ONE = """
 """
 
 
-@pytest.fixture(autouse=True)
-def own_temp_dir(tmp_path, monkeypatch):
-    """Each test's temp dir of its own (workers inherit TMPDIR): at the end it holds none
-    of hmblur's copies."""
-    import tempfile
-    temp = tmp_path / "temp"
-    temp.mkdir()
-    monkeypatch.setenv("TMPDIR", str(temp))
-    monkeypatch.setattr(tempfile, "tempdir", str(temp))
-    yield temp
-    assert sorted(p.name for p in temp.iterdir() if "hmblur" in p.name) == []
-
-
 def sweep_file(folder: Path, text=ONE, name="sweep.toml") -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     shutil.copy(BASIC, folder / "basic.toml")
     p = folder / name
     p.write_text(textwrap.dedent(text))
     return p
-
-
-def in_process(calls=None):
-    def runner(tasks, bundles, on_result):
-        for t in tasks:
-            if calls is not None:
-                calls.append(t.scene)
-            on_result(t, run_cell(t, bundles[t.digest]))
-        return {"engine": "test"}
-    return runner
-
-
-def sweep(tmp_path, path, out, runner=None, **kw):
-    args = dict(version=version(), workers=0, scheduler=None, images=False, timing=False)
-    args.update(kw)
-    return sweep_run.run_sweep(load_sweep(path), out, stream=open(tmp_path / "progress.txt", "a"),
-                               runner=runner or in_process(), **args)
-
-
-def one_line_error(capsys, *words):
-    err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and err.startswith("hmblur: error: "), err
-    assert "Traceback" not in err
-    for w in words:
-        assert w in err, (w, err)
-    return err
-
-
-def snapshot(folder: Path) -> dict:
-    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
-            if p.is_file() and not p.is_symlink()}
 
 
 # --- 1. sweep --out keeps the user's files (the rule: tests/test_output_folders.py) ----------
@@ -503,27 +461,15 @@ def test_ctrl_c_at_a_terminal_after_the_last_cell_is_one_line_and_no_table(tmp_p
     out = tmp_path / "out"
     env = dict(os.environ, PYTHONPATH=str(ROOT), TMPDIR=str(own_temp_dir))
     argv = [sys.executable, "-m", "viewer", "sweep", str(p), "--out", str(out), "--workers", "1"]
-    proc = subprocess.Popen(argv, env=env, cwd=ROOT, stdout=subprocess.DEVNULL,
-                            preexec_fn=default_signals,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True)
-    sent = False
-    try:
-        t_end = time.monotonic() + 180
-        while proc.poll() is None and time.monotonic() < t_end:
-            cells = list((out / "cells").glob("*.json")) if (out / "cells").is_dir() else []
-            if len(cells) == 2 and not (out / "table.csv").exists():
-                os.killpg(proc.pid, signal.SIGINT)
-                sent = True
-                break
-            time.sleep(0.005)
-        _, err = proc.communicate(timeout=120)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
+
+    def all_cells_written(_pid):
+        cells = list((out / "cells").glob("*.json")) if (out / "cells").is_dir() else []
+        return len(cells) == 2 and not (out / "table.csv").exists()
+
+    code, err, sent = interrupted(argv, env, ROOT, all_cells_written)
     assert sent, err
     lines = [ln for ln in err.splitlines() if not ln.startswith("sweep: ")]
-    assert proc.returncode == 130, err
+    assert code == 130, err
     assert lines == [f"hmblur: interrupted; all 2 cells kept in {out / 'cells'}; run the same "
                      "command again to write the table from them"], err
     assert not (out / "table.csv").exists()
@@ -559,41 +505,29 @@ def test_ctrl_c_at_a_terminal_while_workers_start_or_restart_prints_no_traceback
     p = sweep_file(tmp_path, ONE.replace("samples = 2", "samples = 2\nseed = [0, 1, 2, 3, 4, 5]"))
     out = tmp_path / "out"
     env = dict(os.environ, PYTHONPATH=str(ROOT), TMPDIR=str(own_temp_dir))
-    proc = subprocess.Popen([sys.executable, "-m", "viewer", "sweep", str(p), "--out", str(out),
-                             "--workers", "1"], env=env, cwd=ROOT, stdout=subprocess.DEVNULL,
-                            preexec_fn=default_signals,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True)
-    sent = False
-    try:
-        t_end = time.monotonic() + 180
-        killed = None
-        while proc.poll() is None and time.monotonic() < t_end:
-            workers = _worker_pids(proc.pid)
-            cells = len(list((out / "cells").glob("*.json"))) if (out / "cells").is_dir() else 0
-            if when == "workers starting" and workers:
-                # (in its imports: past the interpreter's start, which dies of a SIGINT
-                # quietly, and before the plugin)
-                time.sleep(0.4)
-                os.killpg(proc.pid, signal.SIGINT)
-                sent = True
-                break
-            if when == "a worker restarted":
-                if killed is None and cells >= 1 and workers:
-                    killed, at_kill = workers[0], cells
-                    os.kill(killed, signal.SIGKILL)
-                elif (killed is not None and workers and killed not in workers
-                      and cells >= at_kill + 2):   # (the new worker has run a cell)
-                    os.killpg(proc.pid, signal.SIGINT)
-                    sent = True
-                    break
-            time.sleep(0.005)
-        _, err = proc.communicate(timeout=120)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
+    argv = [sys.executable, "-m", "viewer", "sweep", str(p), "--out", str(out), "--workers", "1"]
+    killed, at_kill = None, 0
+
+    def ready(pid):
+        nonlocal killed, at_kill
+        workers = _worker_pids(pid)
+        cells = len(list((out / "cells").glob("*.json"))) if (out / "cells").is_dir() else 0
+        if when == "workers starting" and workers:
+            # (in its imports: past the interpreter's start, which dies of a SIGINT
+            # quietly, and before the plugin)
+            time.sleep(0.4)
+            return True
+        if when == "a worker restarted":
+            if killed is None and cells >= 1 and workers:
+                killed, at_kill = workers[0], cells
+                os.kill(killed, signal.SIGKILL)
+            elif killed is not None and workers and killed not in workers:
+                return cells >= at_kill + 2        # (the new worker has run a cell)
+        return False
+
+    code, err, sent = interrupted(argv, env, ROOT, ready)
     assert sent, err
-    assert proc.returncode == 130 and "Traceback" not in err, err
+    assert code == 130 and "Traceback" not in err, err
     lines = [ln for ln in err.splitlines() if not ln.startswith("sweep: ")]
     assert len(lines) == 1 and lines[0].startswith("hmblur: interrupted; "), err
     if when == "a worker restarted":       # (its scene, lost with it, scattered again)
