@@ -181,7 +181,7 @@ class MotionTable(Pass):
             candidates[room, count[room]] = o.id
             count[room] += 1
             inverse |= sel
-        if camera_bends or (camera_moves and __import__("os").environ.get("CAMALL")):
+        if camera_bends:
             inverse[:] = True
         self._upload(frame, MOTION_TABLE, table.astype(np.float32))
         self._upload(frame, CANDIDATES, candidates)
