@@ -136,13 +136,14 @@ class MotionTable(Pass):
         t_open, t_close = frame.exposure
         camera_moves = scene.camera.moving
         movers = [o for o in scene.objects if o.moving]
-        bend_px = float(frame.params["motion"].curve_px)
-        bends = object_bends(scene, cam, t, frame.shutter, movers)
-        camera_bends = camera_moves and bool(
-            (object_bends(scene, cam, t, frame.shutter,
-                          [o for o in scene.objects if not o.moving]) > bend_px).any())
+        # The movers' paths and, under a moving camera, the still objects' (the camera's
+        # own motion), measured together.
+        stills = [o for o in scene.objects if not o.moving] if camera_moves else []
+        bends = (object_bends(scene, cam, t, frame.shutter, movers + stills)
+                 > float(frame.params["motion"].curve_px))
+        camera_bends = bool(bends[len(movers):].any())
         inverse = np.zeros(shape, bool)
-        if frame.shutter <= 0.0 or not (camera_bends or (bends > bend_px).any()):
+        if frame.shutter <= 0.0 or not bends.any():
             frame.host.put(INVERSE_TILES, inverse)
             frame.stats["inverse_tiles"] = 0
             return
@@ -161,7 +162,7 @@ class MotionTable(Pass):
         candidates = np.zeros(shape + (MAX_CANDIDATES,), np.uint32)
         count = np.zeros(shape, np.int64)
         order = []
-        for o, bend in zip(movers, bends):
+        for o in movers:
             models = poses.world(o)
             boxes, near = self._reach(frame, o, times, views, models[:k])
             order.append((near, o.id, o, boxes, models))
