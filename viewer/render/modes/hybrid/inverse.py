@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from world.conventions import to_image
 from world.errors import UserError
 from world.path_bend import object_bends, object_points
 from world.pose_table import PoseTable
@@ -184,8 +185,10 @@ class MotionTable(Pass):
             inverse |= sel
         if camera_bends:
             inverse[:] = True
-        self._upload(frame, MOTION_TABLE, table.astype(np.float32))
-        self._upload(frame, CANDIDATES, candidates)
+        # Both in GL rows (a row per object id; tiles from the bottom): Frame.write takes
+        # image rows.
+        frame.write(MOTION_TABLE, to_image(table))
+        frame.write(CANDIDATES, to_image(candidates))
         frame.host.put(INVERSE_TILES, inverse)
         frame.stats["inverse_tiles"] = int(inverse.sum())
         frame.stats["inverse_dropped_candidates"] = dropped
@@ -233,10 +236,3 @@ class MotionTable(Pass):
         c1, r1 = min(int(x1 // FINE), shape[1] - 1), min(int(y1 // FINE), shape[0] - 1)
         sel[r0:r1 + 1, c0:c1 + 1] = True
         return sel
-
-    @staticmethod
-    def _upload(frame: Frame, name: str, array: np.ndarray):
-        """A GL-orientation array into its pool texture (allocated by the pipeline)."""
-        frame.pool.check_write((name,))
-        frame.pool.get(name).write(np.ascontiguousarray(array).tobytes())
-        frame.pool.mark_written((name,))
