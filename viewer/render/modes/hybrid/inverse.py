@@ -43,6 +43,7 @@ from viewer.render.graph.host import HostResource
 from viewer.render.graph.passes import Pass
 from viewer.render.graph.pool import TexSpec
 from viewer.render.passes.tile_runs import FINE
+from .tile_select import TILE_LISTS
 
 MOTION_TABLE = "hybrid_motion_table"
 CANDIDATES = "hybrid_candidates"
@@ -99,6 +100,17 @@ def lookup_uniforms(frame: Frame) -> dict:
             "u_near": float(cam.spec.near),
             "u_parts": int(frame.params["hybrid"].curve_samples),
             "u_tolerance": float(p.tolerance), "u_depth_tolerance": float(p.depth_tolerance)}
+
+
+def curved_tiles(frame: Frame) -> np.ndarray | None:
+    """INVERSE_TILES, where the frame has tile lists of the same shape and some tile
+    follows curves; else None (the linear passes everywhere). For the passes that declare
+    both host inputs (the ray mask, the composite)."""
+    tiles = frame.host.get(INVERSE_TILES)
+    lists = frame.host.get(TILE_LISTS)
+    if tiles is None or lists is None or tiles.shape != lists.shape or not tiles.any():
+        return None
+    return tiles
 
 
 LOOKUP_DEFINES = {"TABLE_COLS": COLS, "AT_L": AT_L, "AT_F": AT_F, "AT_B": AT_B,
