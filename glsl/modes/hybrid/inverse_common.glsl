@@ -1,4 +1,4 @@
-// Inverse motion (docs/algorithms.md 7.1), shared by the ray mask and the composite:
+// Inverse motion (docs/algorithms.md 6.1), shared by the ray mask and the composite:
 // which surface of an object covers this pixel at one of the table's times of the
 // exposure, found in the G-buffer at the frame time along the object's own motion (the
 // table and its layout: viewer/render/modes/hybrid/inverse.py). The includer declares

@@ -1,5 +1,5 @@
 """Inverse motion: what passes over a pixel at each time of the exposure, along every
-point's true curve, in one frame (docs/algorithms.md 7.1).
+point's true curve, in one frame (docs/algorithms.md 6.1).
 
 For a rigid object O (world matrix M(t)) seen by a camera with view V(t), the point of O
 that covers pixel p at time t_k lies on p's ray at t_k; mapped to the frame time it is
