@@ -1,7 +1,7 @@
-"""Time-interleaved sub-frames (docs/algorithms.md 7.1, the second design), measured as a
+"""Time-interleaved sub-frames (docs/algorithms.md 6.1, the second design), measured as a
 prototype beside the renderer's designs: K sub-frames, sub-frame s drawn on the image's
 columns s, s + K, s + 2K, ... (a W/K x H frame whose projection is shifted onto them) at
-the centre of the s-th of K equal parts of the exposure with the shutter s/K, each the
+the centre of the s-th of K equal parts of the exposure with 1/K of the shutter, each the
 linear hybrid; resolved to full resolution by interpolating each sub-frame along its
 rows and averaging them where a sub-frame's blur changed a pixel, the full-resolution
 sharp frame elsewhere (what nothing moves over keeps its detail). One frame's fragment

@@ -156,6 +156,54 @@ def test_candidates_are_the_movers_that_reach_a_tile_nearest_first(ctx):
         r.release()
 
 
+def test_a_camera_whose_motion_bends_maps_every_still_object_and_every_tile(ctx, tmp_path):
+    """A camera rolling about its view axis: nothing in the scene moves, yet every still
+    point's screen path is an arc. The still rows (and the background's) map by the
+    camera alone, F_k = V(t) V(t_k)^-1, and every tile takes the inverse composite."""
+    scene = scene_from(tmp_path, """
+        [camera]
+        position = [0.0, 0.0, 4.0]
+        look_at = [0.0, 0.0, 0.0]
+        fov_y = 40.0
+        shutter = 0.1
+        angular_velocity = [0.0, 0.0, 6.0]
+        [[lights]]
+        direction = [0.0, 0.0, -1.0]
+        [[objects]]
+        name = "bar"
+        mesh = { box = [2.0, 0.3, 0.1] }""")
+    r, frame = run_table(ctx, scene, curve("inverse"))
+    try:
+        table = table_of(frame)
+        k_n = int(frame.params["hybrid"].curve_samples)
+        times = inverse.table_times(*frame.exposure, k_n)
+        cam, t = frame.camera, frame.time
+        tiles = frame.host[inverse.INVERSE_TILES]
+        assert tiles.all() and frame.stats["inverse_tiles"] == tiles.size
+        for row in (table[0], table[scene.objects[0].id]):
+            assert row[k_n * inverse.COLS + inverse.AT_KIND, 0] == inverse.KIND_STILL
+            for k in (0, k_n // 2, k_n - 1):
+                want = cam.view(t) @ np.linalg.inv(cam.view(times[k]))
+                np.testing.assert_allclose(affine(row, k, inverse.AT_F), want, atol=2e-6)
+        assert not np.allclose(affine(table[0], 0, inverse.AT_F), np.eye(4), atol=1e-3)
+    finally:
+        r.release()
+
+
+def test_a_scene_with_more_rows_than_the_driver_allows_is_a_user_error():
+    from types import SimpleNamespace
+
+    from world.errors import UserError
+    scene = load_scene("fan")
+    frame = SimpleNamespace(params=curve("inverse"), scene=scene,
+                            ctx=SimpleNamespace(info={"GL_MAX_TEXTURE_SIZE": 4}))
+    with pytest.raises(UserError, match="hybrid.curve = steps"):
+        inverse.MotionTable().outputs(frame)
+    frame.ctx.info["GL_MAX_TEXTURE_SIZE"] = len(scene.objects) + 1
+    assert inverse.MotionTable().outputs(frame)[inverse.MOTION_TABLE].height == len(
+        scene.objects) + 1
+
+
 def test_straight_motion_gives_the_linear_composites_image_to_the_byte(ctx):
     for name in ("living_room", "pan"):
         scene = load_scene(name)

@@ -1,5 +1,5 @@
 #version 330 core
-// The hybrid's inverse-motion composite (docs/algorithms.md 7.1): for u_samples times of
+// The hybrid's inverse-motion composite (docs/algorithms.md 6.1): for u_samples times of
 // the exposure (stratified over the table's K times, one interleaved-gradient jitter per
 // pixel), what covers this pixel then, found by mapping the pixel back to the frame time
 // along each candidate's own motion:

@@ -1,4 +1,4 @@
-// Inverse motion (docs/algorithms.md 7.1), shared by the ray mask and the composite:
+// Inverse motion (docs/algorithms.md 6.1), shared by the ray mask and the composite:
 // which surface of an object covers this pixel at one of the table's times of the
 // exposure, found in the G-buffer at the frame time along the object's own motion (the
 // table and its layout: viewer/render/modes/hybrid/inverse.py). The includer declares
@@ -90,18 +90,25 @@ bool rigid(int id, int kind, int k, float guess, out float depth, out ivec2 at) 
             int n = guessed ? it / 2 - 1 : it / 2;
             d = n < 0 ? clamp(guess, t0, t1) : mix(t0, t1, 0.5 * float(n));
         }
+        // A miss goes on to the next start (`it |= 1`): a refinement from the same d
+        // would miss the same way.
         vec3 y = apply(f, vec4(g_ray * d, 1.0));
-        if (-y.z < u_near) continue;
         vec2 q = to_window(y);
-        if (!on_screen(q)) continue;
+        if (-y.z < u_near || !on_screen(q)) {
+            it |= 1;
+            continue;
+        }
         ivec2 qi = ivec2(q);
         vec4 g = texelFetch(u_front, qi, 0);
         if (!same(id, still, int(g.w + 0.5))) {
-            it |= 1;                                     // (the next start)
+            it |= 1;
             continue;
         }
         vec3 x = apply(b, vec4(ray_at(vec2(qi) + 0.5) * g.z, 1.0));
-        if (-x.z < u_near) continue;
+        if (-x.z < u_near) {
+            it |= 1;
+            continue;
+        }
         vec2 back = to_window(x) - g_centre;
         if (abs(g.z + y.z) <= u_depth_tolerance * g.z
             || max(abs(back.x), abs(back.y)) <= u_tolerance) {

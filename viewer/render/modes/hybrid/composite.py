@@ -26,7 +26,7 @@ from .config import HybridConfig
 from viewer.render.graph.passes import FullscreenPass, Pass
 from viewer.render.graph.pool import ReadBack, TexSpec
 from .inverse import (CANDIDATES, INVERSE_TILES, LOOKUP_DEFINES, MAX_CANDIDATES, MOTION_TABLE,
-                      lookup_uniforms)
+                      curved_tiles, lookup_uniforms)
 from .reveal import MASKED_PIXELS
 from viewer.render.passes.tile_kernels import mark_tiles, outlines_along, pixel_tiles, square_max
 from viewer.render.passes.tile_runs import FINE, tile_coords, within_reach
@@ -213,7 +213,7 @@ class Composite(FullscreenPass):
             return self._draw(frame, "time" if kind == "split" else kind, tiles)
         active = np.zeros(lists.shape, bool)
         active[tiles.tiles[:, 1], tiles.tiles[:, 0]] = True
-        curved = self._curves(frame, active)
+        curved = self._curves(frame)
         if curved is not None:
             active &= ~curved
             if kind == "time":
@@ -244,15 +244,14 @@ class Composite(FullscreenPass):
             self._draw(frame, which, tl, back, own_still, single)
         frame.stats["simple_tiles"] = int(simple.sum())
 
-    def _curves(self, frame: Frame, active: np.ndarray) -> np.ndarray | None:
+    def _curves(self, frame: Frame) -> np.ndarray | None:
         """The inverse-motion composite (glsl/modes/hybrid/hybrid_inverse.frag) on the
         tiles the movers reach over the exposure (inverse.py; a mover that comes back
         within it has a short chord, and its tiles need not be active); returns those
         tiles, or None where the configuration does not follow curves or nothing bends."""
-        inverse = frame.host.get(INVERSE_TILES) if self.inverse else None
-        if inverse is None or inverse.shape != active.shape or not inverse.any():
+        curved = curved_tiles(frame) if self.inverse else None
+        if curved is None:
             return None
-        curved = inverse
         tl = frame.host.get(TILE_LISTS).extra("inverse")
         tl.set(tile_coords(curved), FINE, frame.size)
         self.draw(frame, ("hybrid",),

@@ -1,5 +1,5 @@
 """Inverse motion: what passes over a pixel at each time of the exposure, along every
-point's true curve, in one frame (docs/algorithms.md 7.1).
+point's true curve, in one frame (docs/algorithms.md 6.1).
 
 For a rigid object O (world matrix M(t)) seen by a camera with view V(t), the point of O
 that covers pixel p at time t_k lies on p's ray at t_k; mapped to the frame time it is
@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from world.conventions import to_image
 from world.errors import UserError
 from world.path_bend import object_bends, object_points
 from world.pose_table import PoseTable
@@ -42,6 +43,7 @@ from viewer.render.graph.host import HostResource
 from viewer.render.graph.passes import Pass
 from viewer.render.graph.pool import TexSpec
 from viewer.render.passes.tile_runs import FINE
+from .tile_select import TILE_LISTS
 
 MOTION_TABLE = "hybrid_motion_table"
 CANDIDATES = "hybrid_candidates"
@@ -100,6 +102,17 @@ def lookup_uniforms(frame: Frame) -> dict:
             "u_tolerance": float(p.tolerance), "u_depth_tolerance": float(p.depth_tolerance)}
 
 
+def curved_tiles(frame: Frame) -> np.ndarray | None:
+    """INVERSE_TILES, where the frame has tile lists of the same shape and some tile
+    follows curves; else None (the linear passes everywhere). For the passes that declare
+    both host inputs (the ray mask, the composite)."""
+    tiles = frame.host.get(INVERSE_TILES)
+    lists = frame.host.get(TILE_LISTS)
+    if tiles is None or lists is None or tiles.shape != lists.shape or not tiles.any():
+        return None
+    return tiles
+
+
 LOOKUP_DEFINES = {"TABLE_COLS": COLS, "AT_L": AT_L, "AT_F": AT_F, "AT_B": AT_B,
                   "AT_BOX": AT_BOX, "AT_LO": AT_LO, "AT_HI": AT_HI, "AT_KIND": AT_KIND,
                   "AT_REACH": AT_REACH, "KIND_STILL": KIND_STILL, "KIND_RIGID": KIND_RIGID,
@@ -136,13 +149,14 @@ class MotionTable(Pass):
         t_open, t_close = frame.exposure
         camera_moves = scene.camera.moving
         movers = [o for o in scene.objects if o.moving]
-        bend_px = float(frame.params["motion"].curve_px)
-        bends = object_bends(scene, cam, t, frame.shutter, movers)
-        camera_bends = camera_moves and bool(
-            (object_bends(scene, cam, t, frame.shutter,
-                          [o for o in scene.objects if not o.moving]) > bend_px).any())
+        # The movers' paths and, under a moving camera, the still objects' (the camera's
+        # own motion), measured together.
+        stills = [o for o in scene.objects if not o.moving] if camera_moves else []
+        bends = (object_bends(scene, cam, t, frame.shutter, movers + stills)
+                 > float(frame.params["motion"].curve_px))
+        camera_bends = bool(bends[len(movers):].any())
         inverse = np.zeros(shape, bool)
-        if frame.shutter <= 0.0 or not (camera_bends or (bends > bend_px).any()):
+        if frame.shutter <= 0.0 or not bends.any():
             frame.host.put(INVERSE_TILES, inverse)
             frame.stats["inverse_tiles"] = 0
             return
@@ -161,7 +175,7 @@ class MotionTable(Pass):
         candidates = np.zeros(shape + (MAX_CANDIDATES,), np.uint32)
         count = np.zeros(shape, np.int64)
         order = []
-        for o, bend in zip(movers, bends):
+        for o in movers:
             models = poses.world(o)
             boxes, near = self._reach(frame, o, times, views, models[:k])
             order.append((near, o.id, o, boxes, models))
@@ -181,10 +195,12 @@ class MotionTable(Pass):
             candidates[room, count[room]] = o.id
             count[room] += 1
             inverse |= sel
-        if camera_bends or (camera_moves and __import__("os").environ.get("CAMALL")):
+        if camera_bends:
             inverse[:] = True
-        self._upload(frame, MOTION_TABLE, table.astype(np.float32))
-        self._upload(frame, CANDIDATES, candidates)
+        # Both in GL rows (a row per object id; tiles from the bottom): Frame.write takes
+        # image rows.
+        frame.write(MOTION_TABLE, to_image(table))
+        frame.write(CANDIDATES, to_image(candidates))
         frame.host.put(INVERSE_TILES, inverse)
         frame.stats["inverse_tiles"] = int(inverse.sum())
         frame.stats["inverse_dropped_candidates"] = dropped
@@ -232,10 +248,3 @@ class MotionTable(Pass):
         c1, r1 = min(int(x1 // FINE), shape[1] - 1), min(int(y1 // FINE), shape[0] - 1)
         sel[r0:r1 + 1, c0:c1 + 1] = True
         return sel
-
-    @staticmethod
-    def _upload(frame: Frame, name: str, array: np.ndarray):
-        """A GL-orientation array into its pool texture (allocated by the pipeline)."""
-        frame.pool.check_write((name,))
-        frame.pool.get(name).write(np.ascontiguousarray(array).tobytes())
-        frame.pool.mark_written((name,))

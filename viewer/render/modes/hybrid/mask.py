@@ -37,7 +37,8 @@ from viewer.render.passes.blur_common import max_radius_px
 from viewer.render.graph.frame import Frame
 from viewer.render.graph.host import HostResource
 from .config import HybridConfig
-from .inverse import INVERSE_TILES, LOOKUP_DEFINES, MASK_CHECKS, MOTION_TABLE, lookup_uniforms
+from .inverse import (INVERSE_TILES, LOOKUP_DEFINES, MASK_CHECKS, MOTION_TABLE, curved_tiles,
+                      lookup_uniforms)
 from viewer.render.graph.passes import FullscreenPass
 from viewer.render.graph.pool import ReadBack, TexSpec
 from viewer.render.passes.tile_runs import FINE, tile_coords, within_reach
@@ -97,14 +98,6 @@ class SurfaceTests(FullscreenPass):
                  "mask_survivors": TexSpec(1, "u1", tile=FINE), "ray_mask": RAY_MASK}
         return {n: specs[n] for n in self.produces}
 
-    def _curved(self, frame: Frame) -> np.ndarray | None:
-        """The tiles where the composite follows motion exactly (inverse.py: every tile a
-        mover reaches over the exposure, whatever its chord), or None."""
-        inverse = frame.host.get(INVERSE_TILES) if self.inverse else None
-        if inverse is None or frame.host.get(TILE_LISTS) is None or not inverse.any():
-            return None
-        return inverse
-
     def execute(self, frame: Frame):
         p = frame.params["hybrid"]
         # Only where an id boundary lies within the probes' reach can a probe see another
@@ -119,7 +112,8 @@ class SurfaceTests(FullscreenPass):
             # where the composite follows curves, also each moving pixel whose own mover
             # leaves it at some time (a reversal, an arc: what the chord misses).
             textures = {"u_front": "hybrid_front", **path_textures(self.segments)}
-            curved = self._curved(frame)
+            # (inverse.py: every tile a mover reaches over the exposure, whatever its chord)
+            curved = curved_tiles(frame) if self.inverse else None
             if curved is None:
                 return self.draw(frame, ("ray_mask",), textures, first, tiles=tiles,
                                  defines={"STEP": 3})

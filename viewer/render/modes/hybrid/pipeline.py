@@ -10,6 +10,8 @@ background behind them, shades it like the raster layer, and resolves both layer
           (host: which tiles move, which any motion reaches) (tile_select.py)
           -> hybrid tiles (+ NeighborMax read back for the bucket along the chord)
                                                              (viewer/render/modes/hybrid/composite.py)
+          -> motion_table (hybrid.curve = inverse: host, the motion table and the tiles
+          that follow curves, where motion bends)   (viewer/render/modes/hybrid/inverse.py)
           -> mask_displacement (with the range check: + the edge test -> mask_edge tiles
           -> ray_mask), on the moving tiles                  (viewer/render/modes/hybrid/mask.py)
           -> reveal (CPU rays) -> reveal_shade (hybrid_back*: packed D, depth, id, colour)
@@ -20,7 +22,7 @@ background behind them, shades it like the raster layer, and resolves both layer
 
 Parameters: the `hybrid` group (viewer/render/modes/hybrid/params.py) and the shared `blur`
 limit; the pipeline holds the passes of its configuration (viewer/render/modes/hybrid/config.py:
-segments, range_check, composite).
+segments, range_check, composite, curve).
 Stats: masked_pixels, rays, revealed_pixels, reveal_ms (host work) and its parts.
 """
 from __future__ import annotations
