@@ -13,16 +13,13 @@ import numpy as np
 
 from world import limits
 from viewer.cli import args as cliargs
-from viewer.eval.comparison import parse_variant
+from viewer.eval.comparison import REALTIME, parse_variant
 from viewer.glcontext import create_headless, device_name
 from viewer.io.imageio import write_json_atomic
 from viewer.io.progress import Progress
 from viewer.render.modes import MODE_GROUPS, MODES
 from viewer.render.renderer import Renderer
 from viewer.render.timing import PassClock, describe, gpu_timers_truthful
-
-REALTIME = ("off", "mcguire", "ue4", "guertin", "hybrid")
-
 
 # Bounds of --speeds and --animate: beyond them a scene's motion is no longer a frame's.
 MAX_SPEED = 1e3
