@@ -11,7 +11,7 @@ from viewer.glcontext import create_headless, device_name
 from viewer.io.imageio import OutputSet, linear_to_srgb8
 import hybrid_mblur as hm
 from viewer.io.outdir import OutputFolder
-from viewer.eval.comparison import REALTIME, Variant, check_capacity, parse_variant
+from viewer.eval.comparison import REALTIME, Variant, check_capacity, parse_variants
 from viewer.eval.metrics import SPACE
 from viewer.io.progress import Progress
 from viewer.render.modes.regions import DEFINITIONS, region_counts
@@ -60,15 +60,9 @@ def choose_modes(text: str | None, variants: bool = False) -> list[str]:
 
 def choose_variants(args) -> list[Variant]:
     """--modes (each mode under its own name) then each --variant, no name twice."""
-    available = [m for m in REALTIME if m in MODES]
-    variants = [Variant(m, m) for m in choose_modes(args.modes, bool(args.variant))]
-    for text in args.variant:
-        v = parse_variant(text, available)
-        if any(v.name == u.name for u in variants):
-            raise cliargs.UserError(f"--variant {text}: the name {v.name!r} is already shown "
-                                    "(by --modes or an earlier --variant); give it another")
-        variants.append(v)
-    return variants
+    modes = choose_modes(args.modes, bool(args.variant))
+    return ([Variant(m, m) for m in modes]
+            + parse_variants(args.variant, [m for m in REALTIME if m in MODES], modes, "shown"))
 
 
 def label(v: Variant) -> str:
