@@ -67,7 +67,7 @@ def choose_variants(args) -> list[Variant]:
 
 def label(v: Variant) -> str:
     """A column's label: the mode's own words when the variant is the bare mode."""
-    return LABELS[v.mode] if v.name == v.mode and not v.sets and v.method is None else v.name
+    return v.name if named(v) else LABELS[v.mode]
 
 
 def run(args) -> int:
@@ -106,7 +106,7 @@ def run(args) -> int:
         vs = replace(s, params=c.params[v.name])
         side = sidecar(vs, v.mode, c.results[v.name], ctx, args.scene, first_frame=True,
                        ms=c.ms[v.name], groups=v.groups)
-        if v.name != v.mode or v.sets or v.method is not None:
+        if named(v):
             side["variant"] = {"name": v.name, **variant_doc(v)}
         files.png(out / f"{v.name}.png", linear_to_srgb8(c.results[v.name].image))
         files.json(out / f"{v.name}.json", side)
