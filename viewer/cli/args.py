@@ -77,15 +77,6 @@ def add_scene_args(p, samples: bool = True, scene_help: str | None = None,
                         "time, size, seed and camera (flags given beside it win)")
 
 
-def parse_shutter(flag: str, text: str) -> float:
-    """An exposure time in seconds, within the bounds a scene file's camera.shutter has."""
-    v = parse_float(flag, text)
-    if not 0.0 <= v <= limits.MAX_SCENE_NUMBER:
-        raise UserError(f"{flag} {text!r}: expected seconds from 0 to "
-                        f"{limits.MAX_SCENE_NUMBER:g}")
-    return v
-
-
 def check_shutter_read(shutter: str | None, modes, what: str = ""):
     """--shutter where every mode rendered is `off` (the sharp frame at t, no exposure)
     would change nothing: one line."""
@@ -215,6 +206,7 @@ def shutter_expected(s: float) -> str | None:
 
 
 def parse_shutter(flag: str, text: str) -> float:
+    """An exposure time in seconds, within the bounds a scene file's camera.shutter has."""
     s = parse_float(flag, text)
     expected = shutter_expected(s)
     if expected:

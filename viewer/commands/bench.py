@@ -13,16 +13,13 @@ import numpy as np
 
 from world import limits
 from viewer.cli import args as cliargs
-from viewer.eval.comparison import parse_variant
+from viewer.eval.comparison import REALTIME, parse_variants, prepare_variants
 from viewer.glcontext import create_headless, device_name
 from viewer.io.imageio import write_json_atomic
 from viewer.io.progress import Progress
 from viewer.render.modes import MODE_GROUPS, MODES
 from viewer.render.renderer import Renderer
 from viewer.render.timing import PassClock, describe, gpu_timers_truthful
-
-REALTIME = ("off", "mcguire", "ue4", "guertin", "hybrid")
-
 
 # Bounds of --speeds and --animate: beyond them a scene's motion is no longer a frame's.
 MAX_SPEED = 1e3
@@ -236,13 +233,7 @@ def run(args) -> int:
         modes = [] if args.variant else available
     else:
         modes = cliargs.parse_modes("--modes", args.modes, available)
-    variants = []
-    for text in args.variant:
-        v = parse_variant(text, available)
-        if v.name in modes or any(v.name == u.name for u in variants):
-            raise cliargs.UserError(f"--variant {text}: the name {v.name!r} is already timed "
-                                    "(by --modes or an earlier --variant); give it another")
-        variants.append(v)
+    variants = parse_variants(args.variant, available, modes, "timed")
     groups = {**MODE_GROUPS, **{v.name: v.groups for v in variants}}
     cliargs.check_set_groups(args.set, modes + [v.name for v in variants], groups)
     speeds = None
@@ -272,11 +263,8 @@ def run(args) -> int:
         method = "gpu" if gpu_timers_truthful(ctx) else "cpu"
     r = Renderer(ctx, s.scene, s.size)
     try:
-        for v in variants:
-            if v.method is not None:
-                r.add_method(v.name, v.method)
+        own = prepare_variants(r, variants, s.params)
         names = modes + [v.name for v in variants]
-        own = {v.name: (v.runs_as, v.params(s.params, f"variant {v.name}")) for v in variants}
         results = time_modes(r, names, s, frames, warmup, Progress(f"bench {'/'.join(names)}"),
                              fps, PassClock(ctx, method), own)
         reveal = reveal_summary(results)

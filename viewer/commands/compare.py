@@ -11,7 +11,7 @@ from viewer.glcontext import create_headless, device_name
 from viewer.io.imageio import OutputSet, linear_to_srgb8
 import hybrid_mblur as hm
 from viewer.io.outdir import OutputFolder
-from viewer.eval.comparison import REALTIME, Variant, check_capacity, parse_variant
+from viewer.eval.comparison import REALTIME, Variant, check_capacity, parse_variants
 from viewer.eval.metrics import SPACE
 from viewer.io.progress import Progress
 from viewer.render.modes.regions import DEFINITIONS, region_counts
@@ -60,20 +60,14 @@ def choose_modes(text: str | None, variants: bool = False) -> list[str]:
 
 def choose_variants(args) -> list[Variant]:
     """--modes (each mode under its own name) then each --variant, no name twice."""
-    available = [m for m in REALTIME if m in MODES]
-    variants = [Variant(m, m) for m in choose_modes(args.modes, bool(args.variant))]
-    for text in args.variant:
-        v = parse_variant(text, available)
-        if any(v.name == u.name for u in variants):
-            raise cliargs.UserError(f"--variant {text}: the name {v.name!r} is already shown "
-                                    "(by --modes or an earlier --variant); give it another")
-        variants.append(v)
-    return variants
+    modes = choose_modes(args.modes, bool(args.variant))
+    return ([Variant(m, m) for m in modes]
+            + parse_variants(args.variant, [m for m in REALTIME if m in MODES], modes, "shown"))
 
 
 def label(v: Variant) -> str:
     """A column's label: the mode's own words when the variant is the bare mode."""
-    return LABELS[v.mode] if v.name == v.mode and not v.sets and v.method is None else v.name
+    return v.name if named(v) else LABELS[v.mode]
 
 
 def run(args) -> int:
@@ -112,7 +106,7 @@ def run(args) -> int:
         vs = replace(s, params=c.params[v.name])
         side = sidecar(vs, v.mode, c.results[v.name], ctx, args.scene, first_frame=True,
                        ms=c.ms[v.name], groups=v.groups)
-        if v.name != v.mode or v.sets or v.method is not None:
+        if named(v):
             side["variant"] = {"name": v.name, **variant_doc(v)}
         files.png(out / f"{v.name}.png", linear_to_srgb8(c.results[v.name].image))
         files.json(out / f"{v.name}.json", side)

@@ -85,13 +85,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser,
                                 metavar="COMMAND", title="commands")
     for name in COMMANDS:
-        try:
-            module = importlib.import_module(f"viewer.commands.{name}")
-        except ModuleNotFoundError as exc:    # a command not written yet does not exist
-            if exc.name == f"viewer.commands.{name}":
-                continue
-            raise
-        module.register(sub)
+        importlib.import_module(f"viewer.commands.{name}").register(sub)
     return parser
 
 

@@ -20,7 +20,7 @@ from viewer.io.imageio import OutputSet, linear_to_srgb8
 from viewer.eval.metrics import SPACE, image_metrics
 from viewer.eval.plot import PALETTE, line_plots
 from viewer.io.progress import Progress
-from viewer.eval.comparison import parse_variant
+from viewer.eval.comparison import parse_variants, prepare_variants
 from viewer.render.modes import MODE_GROUPS, MODES
 from viewer.render.modes.reference import REGIONS
 from viewer.eval.strip import REGION_ORDER, make_strip
@@ -107,16 +107,10 @@ def run(args) -> int:
     else:
         flag = "--modes" if args.modes is not None else f"{src}: modes"
         modes = cliargs.parse_modes(flag, modes_text, list(MODES))
-    variants = []
-    for text in variant_texts:
-        v = parse_variant(text, [m for m in MODES if m != "reference"])
-        if v.name in modes or any(v.name == u.name for u in variants):
-            raise UserError(f"--variant {text}: the name {v.name!r} is already drawn (by "
-                            "--modes or an earlier --variant); give it another")
-        variants.append(v)
+    variants = parse_variants(variant_texts, [m for m in MODES if m != "reference"], modes,
+                              "drawn")
     cliargs.check_set_groups(args.set, modes + [v.name for v in variants] + ["reference"],
                              {**MODE_GROUPS, **{v.name: v.groups for v in variants}})
-    own = {v.name: (v.runs_as, v.params(s.params, f"variant {v.name}")) for v in variants}
     modes = modes + [v.name for v in variants]
     frames = (cliargs.parse_int("--frames", args.frames, 1, limits.MAX_FRAMES)
               if args.frames is not None else
@@ -139,9 +133,7 @@ def run(args) -> int:
     from viewer.render.renderer import Renderer
     ctx = create_headless()
     r = Renderer(ctx, s.scene, s.size)
-    for v in variants:
-        if v.method is not None:
-            r.add_method(v.name, v.method)
+    own = prepare_variants(r, variants, s.params)
     metrics = VideoMetrics(modes) if args.metrics else None
     progress = Progress(f"{s.scene.name}: {frames} frames of {', '.join(modes)}"
                         + (" + metrics" if metrics and "reference" not in modes else ""))

@@ -130,6 +130,31 @@ def parse_variant(text: str, available=REALTIME) -> Variant:
     return v
 
 
+def parse_variants(texts, available, shown, verb: str) -> list[Variant]:
+    """Each --variant text in order (parse_variant), none under a name of `shown` (the
+    --modes rendered beside them) or an earlier variant's; `verb` says what the command
+    does with them ("shown", "timed", "drawn") in the one line."""
+    out: list[Variant] = []
+    for text in texts:
+        v = parse_variant(text, available)
+        if v.name in shown or any(v.name == u.name for u in out):
+            raise UserError(f"--variant {text}: the name {v.name!r} is already {verb} (by "
+                            "--modes or an earlier --variant); give it another")
+        out.append(v)
+    return out
+
+
+def prepare_variants(r: Renderer, variants: list[Variant], base: ParamSet
+                     ) -> dict[str, tuple[str, ParamSet]]:
+    """The variants' user passes registered with `r` (a shader that does not compile
+    stops here, before any frame), and what each renders: name -> (what `r` renders, the
+    parameters: `base` with the variant's assignments)."""
+    for v in variants:
+        if v.method is not None:
+            r.add_method(v.name, v.method)
+    return {v.name: (v.runs_as, v.params(base, f"variant {v.name}")) for v in variants}
+
+
 @dataclass
 class Comparison:
     reference: RenderResult
@@ -147,18 +172,16 @@ def compare_frame(r: Renderer, t: float, base: ParamSet, variants: list[Variant]
     renderer, each measured against the reference per region. `log(variant, line)` is
     told each variant's headline numbers. User passes are registered with the renderer
     first (a shader that does not compile stops here, before the reference)."""
-    for v in variants:
-        if v.method is not None:
-            r.add_method(v.name, v.method)
+    plan = prepare_variants(r, variants, base)
     t0 = time.perf_counter()
     ref = r.render("reference", t, base, seed=seed, record_visibility=True, progress=progress)
     ms = {"reference": (time.perf_counter() - t0) * 1e3}
     region = ref.host[REGIONS]
     out = Comparison(ref, region, {}, {}, {}, {}, ms)
     for v in variants:
-        params = v.params(base, f"variant {v.name}")
+        runs_as, params = plan[v.name]
         t0 = time.perf_counter()
-        res = r.render(v.runs_as, t, params, seed=seed)
+        res = r.render(runs_as, t, params, seed=seed)
         ms[v.name] = (time.perf_counter() - t0) * 1e3
         maps = metric_maps(res.image, ref.image)
         out.params[v.name], out.results[v.name] = params, res

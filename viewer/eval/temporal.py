@@ -20,8 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from viewer.render.modes.regions import NAMES
-
-REGIONS = ("all",) + tuple(NAMES[c] for c in sorted(NAMES))
+from .strip import REGION_ORDER
 
 
 def _masks(region_a, region_b, shape) -> dict[str, np.ndarray]:
@@ -62,7 +61,7 @@ class FlickerAccumulator:
     def result(self) -> dict[str, dict]:
         """{region: {"flicker", "change", "reference_change", "pairs"}} for every region
         (values None where no pair had pixels in it)."""
-        regions = REGIONS if (self._prev is not None and self._prev[2] is not None) else ("all",)
+        regions = REGION_ORDER if (self._prev is not None and self._prev[2] is not None) else ("all",)
         out = {}
         for name in regions:
             s = self._sums.get(name)
