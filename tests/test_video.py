@@ -119,6 +119,13 @@ def test_the_sidecar_reproduces_the_video_from_another_folder(tmp_path, monkeypa
     assert main(["video", "--params", "a/video.json", "--frames", "1", "--out", "c"]) == 0
     assert pngs(tmp_path / "c") == ["frame_0000.png"]
     assert (tmp_path / "c" / "frame_0000.png").read_bytes() == (tmp_path / "a" / "frame_0000.png").read_bytes()
+    # a built-in scene is stored as shot's sidecar stores it: its name beside its file
+    assert main(["video", "spinner", "--modes", "off", "--size", "32x18", "--frames", "1",
+                 "--out", str(tmp_path / "d")]) == 0
+    side = json.loads((tmp_path / "d" / "video.json").read_text())
+    assert side["scene_builtin"] == "spinner" and side["scene"] == str(ROOT / "scenes" / "spinner.toml")
+    assert main(["video", "--params", "d/video.json", "--out", "e"]) == 0
+    assert (tmp_path / "e" / "frame_0000.png").read_bytes() == (tmp_path / "d" / "frame_0000.png").read_bytes()
 
 
 def test_a_shorter_clip_into_the_same_folder_leaves_no_stale_frames(tmp_path):

@@ -14,7 +14,7 @@ from pathlib import Path
 from world import limits
 from viewer.cli import args as cliargs
 from viewer.commands.compare import LABELS
-from viewer.io.sidecar import camera_dict, scene_for_sidecar
+from viewer.io.sidecar import camera_dict
 from world.errors import UserError
 from viewer.io.imageio import OutputSet, linear_to_srgb8
 from viewer.eval.metrics import SPACE, image_metrics
@@ -86,8 +86,11 @@ def compose(images: dict) -> "np.ndarray":
 
 def run(args) -> int:
     side = cliargs.read_sidecar(args.params) if args.params else {}
-    scene = args.scene if args.scene is not None else side.get("scene")
-    if not isinstance(scene, str) or not scene:
+    if args.scene is not None:
+        scene = args.scene
+    elif args.params:
+        scene = cliargs.sidecar_scene(side, args.params)
+    else:
         raise UserError("video: expected a SCENE (a file or built-in name), or --params "
                         "with the sidecar of an earlier video")
     setup_args = argparse.Namespace(scene=scene, time=args.time, size=args.size,
@@ -196,7 +199,7 @@ def check_gif_memory(out: VideoPaths, frames: int, size, n_modes: int):
 def sidecar(s: cliargs.Setup, scene: str, modes, frames: int, fps: float, out: VideoPaths,
             device: str, seconds: float) -> dict:
     return {
-        "scene": scene_for_sidecar(scene),
+        **cliargs.scene_source(scene),
         **({"animations": dict(s.animations)} if s.animations else {}),
         "scene_name": s.scene.name,
         "modes": list(modes),

@@ -34,13 +34,6 @@ def camera_dict(spec) -> dict:
     return spec.to_dict()
 
 
-def scene_for_sidecar(arg: str) -> str:
-    """A scene argument that works from any folder: a file as its absolute path, a
-    built-in scene by its name."""
-    p = Path(arg)
-    return str(p.resolve()) if p.is_file() else arg
-
-
 def sidecar(s: cliargs.Setup, mode: str, result, ctx, scene_arg: str,
             first_frame: bool = False, ms: float | None = None,
             groups: tuple[str, ...] | None = None) -> dict:

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from viewer.io.sidecar import camera_dict
-from viewer.io.sidecar import scene_for_sidecar
+from viewer.cli import args as cliargs
 from viewer.io.video_writer import VideoPaths, VideoWriter, video_paths
 
 
@@ -36,7 +36,7 @@ class Recorder:
 
     def _state_at_start(self, s):
         self.side = {
-            "scene": scene_for_sidecar(s.scene_arg), "scene_name": s.scene.name,
+            **cliargs.scene_source(s.scene_arg), "scene_name": s.scene.name,
             **({"animations": dict(s.animations)} if s.animations else {}),
             "modes": [s.mode], "fps": self.fps, "size": list(self.size),
             "seed": s.seed, "params": s.params.to_dict(), "camera": camera_dict(s.scene.camera),
