@@ -67,9 +67,11 @@ def base_params(task: CellTask) -> ParamSet:
 def cell_key(task: CellTask) -> str:
     """sha256 of all a cell's numbers depend on: the scene's files, the cell's values, every
     variant's resolved parameters (defaults included) and a user pass's file (its
-    digest: the method's bytes travel with the task), the project's version."""
+    digest: the method's bytes travel with the task), the project's version; and the
+    scene's label, which its file holds (two scenes of the same bytes are two cells)."""
     base = base_params(task)
     doc = {"format": FORMAT, "version": task.version, "scene": task.digest,
+           "label": task.scene,
            "time": task.time, "shutter": task.shutter,
            "size": list(task.size) if task.size else None, "seed": task.seed,
            "reference": base.to_dict(MODE_GROUPS["reference"]),
