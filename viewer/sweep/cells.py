@@ -148,15 +148,20 @@ def scene_size(scene) -> tuple[int, int]:
     return scene.render.width, scene.render.height
 
 
+def blank_result(task: CellTask, worker: str | None) -> dict:
+    """A cell's result with no rows yet: its values as the task gives them, no error."""
+    return {"key": task.key, "scene": task.scene, "time": task.time, "shutter": task.shutter,
+            "size": list(task.size) if task.size else None, "samples": task.samples,
+            "seed": task.seed, "rows": [], "images": {}, "error": None,
+            "timing": task.timing, "worker": worker}
+
+
 def run_cell(task: CellTask, bundle: Bundle) -> dict:
     """The cell's result: its resolved values, one row per variant and region, the images
     (PNG bytes) when asked, or its error; and the worker's peak memory. `bundle`: the
     scene's (its digest is the task's)."""
     t_start = time.perf_counter()
-    out = {"key": task.key, "scene": task.scene, "time": task.time, "shutter": task.shutter,
-           "size": list(task.size) if task.size else None, "samples": task.samples,
-           "seed": task.seed, "rows": [], "images": {}, "error": None,
-           "timing": task.timing, "worker": f"{socket.gethostname()}:{os.getpid()}"}
+    out = blank_result(task, f"{socket.gethostname()}:{os.getpid()}")
     try:
         if bundle.digest != task.digest:
             raise RuntimeError("the scene bundle given is not the task's")
