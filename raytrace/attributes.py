@@ -10,19 +10,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from world.scene import SceneObject
+from world.scene import Mesh, SceneObject
 
 
 class SurfaceTable:
-    """Every object's mesh in one set of arrays (built once per scene): the first face row
-    of each object (face_offset) and each face's corners, one texture for the GPU."""
+    """Every object's mesh in one table (built once per scene): the first face row of each
+    object (face_offset), and each face's corners as one texture for the GPU, made when
+    asked (the hybrid uploads it once; the meshes are the scene's, not copied here)."""
 
     def __init__(self, objects: dict[int, SceneObject]):
         objs = [objects[k] for k in sorted(objects)]
         max_id = max(objects, default=0)
         self.face_offset = np.zeros(max_id + 1, dtype=np.int64)
-        verts, vnorms, uvs, faces, fnorms, flat = [], [], [], [], [], []
-        nv = nf = 0
+        self._rows: list[tuple[Mesh, bool]] = []     # each mesh's faces once, in row order
+        nf = 0
         seen: dict[tuple, int] = {}      # a mesh shared by rigid objects: its faces once
         for o in objs:
             m = o.mesh
@@ -33,30 +34,21 @@ class SurfaceTable:
             if o.skin is None:
                 seen[same] = nf
             self.face_offset[o.id] = nf
-            verts.append(m.vertices)
-            vnorms.append(m.vertex_normals)
-            uvs.append(m.uv if m.uv is not None else np.zeros((len(m.vertices), 2)))
-            faces.append(np.asarray(m.faces, dtype=np.int64) + nv)
-            fnorms.append(m.face_normals)
-            flat.append(np.full(len(m.faces), o.shading == "flat"))
-            nv += len(m.vertices)
+            self._rows.append((m, o.shading == "flat"))
             nf += len(m.faces)
-
-        def cat(parts, shape):
-            return np.concatenate(parts) if parts else np.zeros(shape)
-        vertices = cat(verts, (0, 3)).astype(np.float64)
-        faces = cat(faces, (0, 3)).astype(np.int64)
-        # Per face, its three corners' values (F, 3, k).
-        self.corner_position = vertices[faces]
-        self.corner_normal = cat(vnorms, (0, 3)).astype(np.float64)[faces]
-        self.corner_uv = cat(uvs, (0, 2)).astype(np.float64)[faces]
-        self.face_normals = cat(fnorms, (0, 3)).astype(np.float64)
-        self.flat = cat(flat, (0,)).astype(bool)
+        self.faces = nf
 
     def gpu_corners(self) -> np.ndarray:
         """(faces, 3 corners, 8) float32: position, shading normal (the face normal at all
         three corners of a flat face), uv: what glsl/modes/hybrid/reveal_shade.frag interpolates."""
-        normal = np.where(self.flat[:, None, None], self.face_normals[:, None, :],
-                          self.corner_normal)
-        return np.concatenate([self.corner_position, normal, self.corner_uv],
-                              axis=2).astype(np.float32)
+        out = np.empty((self.faces, 3, 8), np.float32)
+        row = 0
+        for m, flat in self._rows:
+            f = np.asarray(m.faces, dtype=np.int64)
+            rows = out[row: row + len(f)]
+            rows[:, :, 0:3] = np.asarray(m.vertices, dtype=np.float64)[f]
+            rows[:, :, 3:6] = (np.asarray(m.face_normals, dtype=np.float64)[:, None, :] if flat
+                               else np.asarray(m.vertex_normals, dtype=np.float64)[f])
+            rows[:, :, 6:8] = 0.0 if m.uv is None else np.asarray(m.uv, dtype=np.float64)[f]
+            row += len(f)
+        return out

@@ -565,6 +565,28 @@ def test_static_hits_are_kept_per_view_and_change_nothing():
     assert primary_view(Camera(panning, 48, 40), 0.05) is None
 
 
+def test_the_view_key_changes_with_each_thing_a_primary_ray_depends_on():
+    """primary_view's key (what the static hits are kept by): the same for the same view at
+    another time; another for each of the camera's pose, lens, clipping and image size."""
+    s = busy_scene().camera
+    key = primary_view(Camera(s, 48, 40), 0.05)[0]
+    assert primary_view(Camera(dataclasses.replace(s), 48, 40), 0.3)[0] == key
+    changed = {
+        "position": Camera(dataclasses.replace(s, position=s.position + [0.0, 0.1, 0.0]), 48, 40),
+        "look_at": Camera(dataclasses.replace(s, look_at=s.look_at + [0.1, 0.0, 0.0]), 48, 40),
+        "up": Camera(dataclasses.replace(s, up=np.array([0.1, 1.0, 0.0])), 48, 40),
+        "fov_y": Camera(dataclasses.replace(s, fov_y=s.fov_y + 1.0), 48, 40),
+        "near": Camera(dataclasses.replace(s, near=s.near * 2.0), 48, 40),
+        "far": Camera(dataclasses.replace(s, far=s.far / 2.0), 48, 40),
+        "width": Camera(s, 40, 40),
+        "height": Camera(s, 48, 48),
+    }
+    keys = {name: primary_view(cam, 0.05)[0] for name, cam in changed.items()}
+    for name, k in keys.items():
+        assert k != key, name
+    assert len(set(keys.values())) == len(keys)
+
+
 def test_reveal_of_no_pixels():
     s = busy_scene()
     res = reveal(RayScene(s), Camera(s.camera, 4, 4), 0.0, np.zeros((0, 2), int), [])

@@ -577,9 +577,35 @@ def test_the_cell_key_changes_with_each_thing_it_depends_on(tmp_path):
     keys["an asset's bytes"] = sweep_run.tasks_of(
         load_sweep(asset / "sweep.toml"), "1.0", False, False, "key")[0][0].key
     assert keys["an asset's bytes"] != k1
+    keys["scene's label"] = sweep_run.tasks_of(
+        load_sweep(_two_copies(tmp_path / "copies")), "1.0", False, False, "key")[0][1].key
     for name, key in keys.items():
         assert key != base.key, name
     assert len(set(keys.values())) == len(keys)
+
+
+def _two_copies(folder: Path) -> Path:
+    """A sweep of two copies of basic.toml, a/ and b/: one bundle, two labels."""
+    for sub in ("a", "b"):
+        (folder / sub).mkdir(parents=True)
+        shutil.copy(BASIC, folder / sub / "basic.toml")
+    return sweep_file(folder, ONE.replace('["basic.toml"]', '["a/basic.toml", "b/basic.toml"]'))
+
+
+def test_two_copies_of_a_scene_are_two_cells_each_with_its_label(tmp_path):
+    """Two scene files of the same bytes share a bundle but not a cell: both run, each
+    row under its own label; a rerun runs neither."""
+    p = _two_copies(tmp_path / "s")
+    tasks, bundles = sweep_run.tasks_of(load_sweep(p), version(), False, False, "copies")
+    assert len(bundles) == 1 and tasks[0].digest == tasks[1].digest
+    calls = []
+    sweep(tmp_path, p, tmp_path / "out", in_process(calls))
+    assert calls == ["a/basic.toml", "b/basic.toml"]
+    rows = pq.read_table(tmp_path / "out/table.parquet").to_pylist()
+    assert sorted({r["scene"] for r in rows}) == ["a/basic.toml", "b/basic.toml"]
+    calls.clear()
+    sweep(tmp_path, p, tmp_path / "out", in_process(calls))
+    assert calls == []
 
 
 @pytest.mark.parametrize("first, then", [({}, {"timing": True}), ({}, {"images": True})])

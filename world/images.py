@@ -1,8 +1,8 @@
 """Image textures as the renderers take them: linear RGB, float32, (H, W, 3), top row first.
 
 The program's one sRGB decoding (IEC 61966-2-1): scene files' image textures
-(world/loader.py), glTF base-colour images (world/gltf/reader.py) and the viewer's 8-bit
-images (viewer/io/imageio.py) all decode through it.
+(world/loader.py) and glTF base-colour images (world/gltf/reader.py) both decode through
+it.
 
 A scene's images are decoded by one SceneImages: each distinct content once (files with
 the same bytes, glTF images named by several materials), shared read-only, every texel it
@@ -41,11 +41,6 @@ WIDE_GREY = {"I;16": 65535.0, "I;16L": 65535.0, "I;16B": 65535.0, "I;16N": 65535
              "I": 65535.0, "F": 1.0}
 
 STRIP_PIXELS = 1 << 16       # pixels converted at a time
-
-
-def srgb8_to_linear(codes) -> np.ndarray:
-    """8-bit sRGB codes (any shape) -> float32 linear."""
-    return SRGB8_LINEAR[np.asarray(codes)]
 
 
 def linear_rgb(im: Image.Image) -> np.ndarray:

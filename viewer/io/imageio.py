@@ -27,7 +27,6 @@ from typing import Any, Callable
 import numpy as np
 from PIL import Image
 
-from world.images import srgb8_to_linear  # noqa: F401  (the decoding is world's)
 from .ending import held
 
 _SRGB_LINEAR_MAX = 0.0031308   # linear-side breakpoint of the sRGB curve

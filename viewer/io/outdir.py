@@ -56,7 +56,7 @@ class OutputFolder:
         raise UserError(f"{self.flag} {self.path}: {p.name} {problem}: hmblur keeps the list "
                         "of the files it wrote there under that name; move that file away")
 
-    def _owned_whole(self, rel: str, doc: dict) -> str | None:
+    def _owned_whole(self, rel: str) -> str | None:
         """The whole subfolder `rel` lies in, if any of this folder's."""
         top = rel.split("/", 1)[0]
         return top if "/" in rel and top in self.whole else None
@@ -64,7 +64,7 @@ class OutputFolder:
     def _problem(self, rel: str, doc: dict) -> str | None:
         """Why hmblur may not write `rel` (None: it may)."""
         p = self.path / rel
-        folder = self._owned_whole(rel, doc)
+        folder = self._owned_whole(rel)
         if folder is not None:
             f = self.path / folder
             if os.path.lexists(f) and (folder not in doc["folders"] or f.is_symlink()
@@ -127,7 +127,7 @@ class OutputFolder:
             r = self.rel(dest)
             if r is None or r == MANIFEST:
                 continue
-            folder = self._owned_whole(r, doc)
+            folder = self._owned_whole(r)
             if folder is not None:
                 if folder not in folders:
                     folders.append(folder)

@@ -122,9 +122,9 @@ def _read(real: Path, cap: int, budget: Budget, error) -> bytes:
         if st.st_size > cap:
             raise error(f"{real} holds {st.st_size} bytes, more than the {cap} a scene may load")
         budget.take(st.st_size, real)
-        data = f.read(cap + 1)
-    if len(data) > cap:
-        raise error(f"{real} grew past {cap} bytes while it was read")
+        data = f.read(st.st_size + 1)         # (read(n) allocates n bytes first)
+    if len(data) > st.st_size:
+        raise error(f"{real} grew while it was read")
     return data
 
 

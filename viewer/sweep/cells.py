@@ -67,9 +67,11 @@ def base_params(task: CellTask) -> ParamSet:
 def cell_key(task: CellTask) -> str:
     """sha256 of all a cell's numbers depend on: the scene's files, the cell's values, every
     variant's resolved parameters (defaults included) and a user pass's file (its
-    digest: the method's bytes travel with the task), the project's version."""
+    digest: the method's bytes travel with the task), the project's version; and the
+    scene's label, which its file holds (two scenes of the same bytes are two cells)."""
     base = base_params(task)
     doc = {"format": FORMAT, "version": task.version, "scene": task.digest,
+           "label": task.scene,
            "time": task.time, "shutter": task.shutter,
            "size": list(task.size) if task.size else None, "seed": task.seed,
            "reference": base.to_dict(MODE_GROUPS["reference"]),
@@ -146,15 +148,20 @@ def scene_size(scene) -> tuple[int, int]:
     return scene.render.width, scene.render.height
 
 
+def blank_result(task: CellTask, worker: str | None) -> dict:
+    """A cell's result with no rows yet: its values as the task gives them, no error."""
+    return {"key": task.key, "scene": task.scene, "time": task.time, "shutter": task.shutter,
+            "size": list(task.size) if task.size else None, "samples": task.samples,
+            "seed": task.seed, "rows": [], "images": {}, "error": None,
+            "timing": task.timing, "worker": worker}
+
+
 def run_cell(task: CellTask, bundle: Bundle) -> dict:
     """The cell's result: its resolved values, one row per variant and region, the images
     (PNG bytes) when asked, or its error; and the worker's peak memory. `bundle`: the
     scene's (its digest is the task's)."""
     t_start = time.perf_counter()
-    out = {"key": task.key, "scene": task.scene, "time": task.time, "shutter": task.shutter,
-           "size": list(task.size) if task.size else None, "samples": task.samples,
-           "seed": task.seed, "rows": [], "images": {}, "error": None,
-           "timing": task.timing, "worker": f"{socket.gethostname()}:{os.getpid()}"}
+    out = blank_result(task, f"{socket.gethostname()}:{os.getpid()}")
     try:
         if bundle.digest != task.digest:
             raise RuntimeError("the scene bundle given is not the task's")

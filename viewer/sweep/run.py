@@ -33,7 +33,7 @@ from viewer.io.ending import held
 from viewer.io.imageio import OutputSet, json_safe
 from viewer.io.outdir import OutputFolder
 from .bundle import Budget, remove_copies, scene_bundle
-from .cells import CellTask, close_gl, run_cell
+from .cells import CellTask, blank_result, close_gl, run_cell
 from .spec import Sweep
 from .table import plot_names, write_outputs
 
@@ -333,10 +333,7 @@ def _connect(scheduler: str):
 
 
 def _failed(task: CellTask, error: str) -> dict:
-    return {"key": task.key, "scene": task.scene, "time": task.time, "shutter": task.shutter,
-            "size": list(task.size) if task.size else None, "samples": task.samples,
-            "seed": task.seed, "rows": [], "images": {}, "error": error,
-            "timing": task.timing, "worker": None}
+    return {**blank_result(task, None), "error": error}
 
 
 def run_sweep(spec: Sweep, out: Path, version: str, workers: int, scheduler: str | None,

@@ -12,7 +12,7 @@ import numpy as np
 
 from world import limits
 from world.gltf.document import GltfError, array, fail, integer, obj, ref
-from world.gltf.model import GltfAsset, GltfNode, GltfPart
+from world.gltf.model import GltfAsset, GltfNode, GltfPart, walk
 
 _BIG = 1e300                    # bounds are capped here: past every limit, never inf or NaN
 _HERMITE = 8.0 / 27.0           # |h10| + |h11| at most: a cubic segment's tangents' weight
@@ -21,7 +21,7 @@ _HERMITE = 8.0 / 27.0           # |h10| + |h11| at most: a cubic segment's tange
 def check_drawn(doc: dict, accessors: list[dict], nodes: list[GltfNode], roots: list[int]) -> None:
     """The scene's mesh nodes against limits.MAX_OBJECTS, their meshes' triangles against
     limits.MAX_TRIANGLES and vertices against limits.MAX_GLTF_VERTICES."""
-    drawn = [i for i in _walk(nodes, roots) if nodes[i].mesh is not None]
+    drawn = [i for i in walk(nodes, roots) if nodes[i].mesh is not None]
     if len(drawn) > limits.MAX_OBJECTS:
         fail(f"the scene has {len(drawn)} mesh nodes, more than the limit of "
              f"{limits.MAX_OBJECTS} objects")
@@ -41,15 +41,6 @@ def check_drawn(doc: dict, accessors: list[dict], nodes: list[GltfNode], roots: 
             fail(f"the scene draws {total} {what}, more than the limit of {most} (a mesh counts "
                  f"once for each node drawing it: meshes[{m}]'s {counts[m][k]} by {uses[m]} "
                  f"node{'s' if uses[m] > 1 else ''})")
-
-
-def _walk(nodes: list[GltfNode], roots: list[int]) -> list[int]:
-    out, stack = [], list(reversed(roots))
-    while stack:
-        i = stack.pop()
-        out.append(i)
-        stack.extend(reversed(nodes[i].children))
-    return out
 
 
 def _mesh_counts(mesh, where: str, accessors: list[dict]) -> tuple[int, int]:
@@ -122,7 +113,7 @@ def _world_bounds(asset: GltfAsset) -> tuple[list[float], list[float]]:
             target = scale if ch.path == "scale" else move
             target[ch.node] = max(target[ch.node], top)
     lin, off = [0.0] * n, [0.0] * n
-    for i in _walk(asset.nodes, [nd.index for nd in asset.nodes if nd.parent is None]):
+    for i in walk(asset.nodes, [nd.index for nd in asset.nodes if nd.parent is None]):
         p = asset.nodes[i].parent
         if p is None:
             lin[i], off[i] = scale[i], move[i]

@@ -72,6 +72,17 @@ class GltfAnimation:
     time_span: tuple[float, float] | None = None
 
 
+def walk(nodes: list[GltfNode], starts) -> list[int]:
+    """The nodes below `starts` (indices into `nodes`), pre-order: children in array order."""
+    out: list[int] = []
+    stack = list(reversed(starts))
+    while stack:
+        i = stack.pop()
+        out.append(i)
+        stack.extend(reversed(nodes[i].children))
+    return out
+
+
 class GltfAsset:
     """A loaded asset (world.gltf.load_gltf). Node lists are indexed by glTF node index."""
 
@@ -89,13 +100,7 @@ class GltfAsset:
 
     def walk(self, starts) -> list[int]:
         """The nodes below `starts`, pre-order: children in array order."""
-        out: list[int] = []
-        stack = list(reversed(starts))
-        while stack:
-            i = stack.pop()
-            out.append(i)
-            stack.extend(reversed(self.nodes[i].children))
-        return out
+        return walk(self.nodes, starts)
 
     def depth_first(self) -> list[int]:
         """The scene's nodes, pre-order: roots in array order, children in array order."""

@@ -35,7 +35,7 @@ from world.gltf.curves import INTERPOLATIONS, GltfSampler
 from world.gltf.document import (GltfError, array, fail, integer, is_int, kept, name, numbers,
                                  obj, ref, show, string, within)
 from world.gltf.model import (GltfAnimation, GltfAsset, GltfChannel, GltfMaterial, GltfNode,
-                              GltfPart, GltfSkin)
+                              GltfPart, GltfSkin, walk)
 
 TRS_PATHS = ("translation", "rotation", "scale")
 WXYZ = [3, 0, 1, 2]                    # glTF's (x, y, z, w) -> (w, x, y, z)
@@ -187,14 +187,9 @@ class _Reader:
             out[i].parent = p
         # cycles: with one parent each, the nodes on (or below) a cycle are exactly those
         # that a walk down from the parentless nodes never reaches
-        reached = [False] * n
-        stack = [i for i in range(n) if parent[i] is None]
-        while stack:
-            i = stack.pop()
-            reached[i] = True
-            stack.extend(out[i].children)
-        if not all(reached):
-            fail(f"nodes[{reached.index(False)}]: the node graph has a cycle")
+        reached = set(walk(out, [i for i in range(n) if parent[i] is None]))
+        if len(reached) < n:
+            fail(f"nodes[{min(set(range(n)) - reached)}]: the node graph has a cycle")
         return out
 
     def scene(self, nodes: list[GltfNode]) -> list[int]:

@@ -22,7 +22,7 @@ def record_inputs(px, height, object_id, prim_id, face_offset, static_view, stat
     """pack_blocks' per-ray inputs in one pass: the GL pixel (gx, gy) of image pixel px
     (i, j) in an image `height` rows high, the key (1 + object id, or static_key >= 0
     where static_view), and the face row in the SurfaceTable (face_offset[object id] +
-    prim id; -1 on a miss, as SurfaceTable.face_index)."""
+    prim id; -1 on a miss)."""
     n = px.shape[0]
     gx = np.empty(n, np.int64)
     gy = np.empty(n, np.int64)
