@@ -159,9 +159,7 @@ def test_a_hostile_asset_path_is_the_scenes_error_found_before_opening(tmp_path_
     if "\0" in path and where in ("mtllib", "map"):
         return                                          # (not a word an OBJ line holds)
     scene = hostile_scene(folder, where, path)
-    t0 = time.monotonic()
     b = scene_bundle(scene)
-    assert time.monotonic() - t0 < 5.0
     names = {rel for rel, _ in b.files}
     assert b.size < 1 << 20                             # nothing big was read
     assert not any(n.endswith(("outside.obj", "passwd", "zero", "null", "status", "fifo.obj",
@@ -176,10 +174,8 @@ def test_a_file_swapped_for_a_fifo_after_the_rule_is_refused_by_its_descriptor(t
     it without blocking and checks the descriptor, so it is the scene's error at once."""
     from viewer.sweep.bundle import _read
     os.mkfifo(tmp_path / "swapped.obj")
-    t0 = time.monotonic()
     with pytest.raises(UserError, match="is not a regular file"):
         _read(tmp_path / "swapped.obj", 1 << 20, Budget("x"), UserError)
-    assert time.monotonic() - t0 < 5
 
 
 def test_a_glob_never_enters_a_symlinked_folder(tmp_path):
@@ -299,11 +295,9 @@ def test_a_count_past_its_limit_is_one_line_before_any_work(tmp_path_factory, ca
     out = folder / "out"
     text, flags = count_case(kind, n)
     p = sweep_file(folder, text)
-    t0 = time.monotonic()
     code = main(["sweep", str(p), "--out", str(out)] + flags)
     err = one_line_error(capsys)
-    assert code == 2, err
-    assert time.monotonic() - t0 < 30, kind
+    assert code == 2, (kind, err)
     assert not out.exists()
 
 
