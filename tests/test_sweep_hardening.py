@@ -394,11 +394,16 @@ def _damage(kind: str, path: Path, rng: int):
         path.write_text("null")
 
 
-@settings(max_examples=14, **PROPS)
-@given(st.sampled_from(["truncated", "not json", "a field missing", "a field of another type",
-                        "a row's field missing", "a variant's rows missing",
-                        "another cell's key", "deep", "huge", "a link", "null"]),
-       st.integers(min_value=0, max_value=10 ** 6))
+# Each kind is a case of its own (drawn from the list, hypothesis need not reach them all);
+# hypothesis draws where a kind cuts the file or which field it drops.
+DAMAGE = ["truncated", "not json", "a field missing", "a field of another type",
+          "a row's field missing", "a variant's rows missing", "another cell's key", "deep",
+          "huge", "a link", "null"]
+
+
+@pytest.mark.parametrize("kind", DAMAGE)
+@settings(max_examples=2, **PROPS)
+@given(st.integers(min_value=0, max_value=10 ** 6))
 def test_a_damaged_cell_file_is_run_again(tmp_path_factory, kind, rng):
     tmp = tmp_path_factory.mktemp("damaged")
     p = sweep_file(tmp)
