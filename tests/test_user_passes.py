@@ -15,11 +15,13 @@ import pytest
 import hybrid_mblur as hm
 from viewer.commands.main import main
 from viewer.sweep import run as sweep_run
+from viewer.sweep.bundle import remove_copies
 from viewer.sweep.cells import run_cell
 from viewer.sweep.spec import load_sweep
 from viewer.commands.main import version
 
 from conftest import CONFORMANCE, ROOT
+from sweep_helpers import own_temp_dir  # noqa: F401 (a fixture: no sweep copy left behind)
 
 BASIC = str(CONFORMANCE / "basic.toml")
 GLSL = str(ROOT / "docs/examples/naive_gather.frag")
@@ -189,6 +191,7 @@ def test_a_sweep_carries_the_method_bytes_and_keys_cells_by_them(tmp_path):
                               "u2")[0][0].key != key
     method.unlink()                                   # the worker needs no copy of it
     result = run_cell(moved, bundles[moved.digest])
+    remove_copies("u1")                               # (a sweep's end removes them)
     assert result["error"] is None
     rows = {(r["variant"], r["region"]): r for r in result["rows"]}
     assert rows[("mine", "all")]["flip"] == pytest.approx(rows[("np", "all")]["flip"], abs=1e-3)
