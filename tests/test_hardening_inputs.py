@@ -13,7 +13,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from PIL import Image
 
-from conftest import CONFORMANCE, ROOT
+from conftest import CONFORMANCE, ROOT, srgb_to_linear
 from viewer.commands.main import main
 from world import images, limits
 from world import loader as loader_mod
@@ -295,7 +295,7 @@ def test_textures_decode_to_the_same_float32_as_the_float64_formula(mode):
         srgb = np.repeat(np.clip(np.asarray(im, np.float64) / scale, 0, 1)[..., None], 3, -1)
     else:
         srgb = np.asarray(im.convert("RGB"), np.float64) / 255.0
-    want = np.where(srgb <= 0.04045, srgb / 12.92, ((srgb + 0.055) / 1.055) ** 2.4).astype(np.float32)
+    want = srgb_to_linear(srgb).astype(np.float32)
     assert got.dtype == np.float32 and got.shape == (5, 7, 3)
     np.testing.assert_array_equal(got, want)
 
