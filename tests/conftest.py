@@ -52,12 +52,17 @@ def scene_from(tmp_path, text, name="s"):
     return load_scene(p)
 
 
+def srgb_to_linear(srgb) -> np.ndarray:
+    """sRGB values in [0, 1] -> linear, in float64: the sRGB decoding written out, the
+    oracle for world/images.py's."""
+    c = np.asarray(srgb, dtype=np.float64)
+    return np.where(c <= 0.04045, c / 12.92, np.power((c + 0.055) / 1.055, 2.4))
+
+
 def srgb8_to_linear(srgb8) -> np.ndarray:
     """uint8 sRGB -> float32 linear (the sRGB decoding, in float64): the inverse of
     imageio.linear_to_srgb8, for tests that start from 8-bit pictures."""
-    c = np.asarray(srgb8, dtype=np.float64) / 255.0
-    lin = np.where(c <= 0.04045, c / 12.92, np.power((c + 0.055) / 1.055, 2.4))
-    return lin.astype(np.float32)
+    return srgb_to_linear(np.asarray(srgb8, dtype=np.float64) / 255.0).astype(np.float32)
 
 
 def empty_scene(shutter: float = 0.04):

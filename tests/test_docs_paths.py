@@ -46,10 +46,11 @@ def test_every_path_the_docs_name_exists():
 def test_every_path_the_code_comments_name_exists():
     found = {}
     for top in ("hybrid_mblur", "viewer", "world", "raytrace", "glsl", "scripts", "docs/examples"):
-        for pattern in SOURCES:
-            for f in sorted((ROOT / top).rglob(pattern)):
-                for p in missing(paths_in(f.read_text())):
-                    found.setdefault(p, []).append(str(f.relative_to(ROOT)))
+        files = [f for pattern in SOURCES for f in sorted((ROOT / top).rglob(pattern))]
+        assert files, f"{top}/ holds no source to read: a folder renamed here goes unchecked"
+        for f in files:
+            for p in missing(paths_in(f.read_text())):
+                found.setdefault(p, []).append(str(f.relative_to(ROOT)))
     assert found == {}
 
 

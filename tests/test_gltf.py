@@ -27,6 +27,7 @@ from PIL import Image
 
 import world.gltf.reader as gl
 from world import limits
+from conftest import srgb8_to_linear
 from gltf_builder import BYTE, FLOAT, SHORT, UBYTE, UINT, USHORT, Builder, make_glb
 from world.gltf import GltfError, GltfSampler, load_gltf, sample
 from world.gltf_scene import NodeTree
@@ -152,9 +153,7 @@ def test_box_textured_image_uv_and_matrix():
     # independent decode of the embedded PNG: top row first, sRGB -> linear
     doc = json.loads(BOX_TEXTURED.read_text())
     png = base64.b64decode(doc["images"][0]["uri"].split(",", 1)[1])
-    srgb = np.asarray(Image.open(io.BytesIO(png)).convert("RGB"), dtype=np.float64) / 255.0
-    lin = np.where(srgb <= 0.04045, srgb / 12.92, ((srgb + 0.055) / 1.055) ** 2.4)
-    np.testing.assert_array_equal(img, lin.astype(np.float32))
+    np.testing.assert_array_equal(img, srgb8_to_linear(Image.open(io.BytesIO(png)).convert("RGB")))
     # nodes[0].matrix is stored column-major: columns (1,0,0), (0,0,-1), (0,1,0)
     m = a.nodes[0].matrix
     np.testing.assert_array_equal(m[:3, :3], [[1, 0, 0], [0, 0, 1], [0, -1, 0]])

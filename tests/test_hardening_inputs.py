@@ -6,14 +6,13 @@ from __future__ import annotations
 import json
 import os
 import textwrap
-import time
 
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 from PIL import Image
 
-from conftest import CONFORMANCE, ROOT
+from conftest import CONFORMANCE, ROOT, srgb_to_linear
 from viewer.commands.main import main
 from world import images, limits
 from world import loader as loader_mod
@@ -131,16 +130,18 @@ def test_render_time_is_bounded_as_the_time_flag_is(tmp_path, capsys):
     assert "within +-1e+06" in line
 
 
-def test_a_huge_revolve_is_refused_before_it_is_built(tmp_path):
+def test_a_huge_revolve_is_refused_before_it_is_built(tmp_path, monkeypatch):
+    import trimesh
     points = ", ".join(f"[1.0, {i * 1e-3:.3f}]" for i in range(3000))
     path = write_scene(tmp_path, f"""
         [[objects]]
         mesh = {{ revolve = [{points}], sections = 10000 }}
     """)
-    t0 = time.perf_counter()
+    built = []
+    monkeypatch.setattr(trimesh.creation, "revolve", lambda *a, **k: built.append(a))
     with pytest.raises(SceneError, match="60000000 triangles.*2000000"):
         load_scene(path)
-    assert time.perf_counter() - t0 < 5.0
+    assert built == []
 
 
 def test_the_scene_triangle_budget_counts_every_mesh(tmp_path, monkeypatch):
@@ -189,9 +190,7 @@ def test_counts_sizes_and_rates_are_refused_before_work(tmp_path, capsys, flags,
                       else "o.png")
     rest = [f for f in rest if f != "--out-gif"]
     argv = [command, BASIC, *rest] + ([] if command == "bench" else ["--out", str(out)])
-    t0 = time.perf_counter()
     assert needle in one_line(capsys, argv)
-    assert time.perf_counter() - t0 < 20.0
     assert os.listdir(tmp_path) == []
 
 
@@ -218,10 +217,9 @@ def test_hostile_params_files_are_one_line(tmp_path, capsys):
     fifo = tmp_path / "fifo.json"
     os.mkfifo(fifo)
     for special in ("/dev/zero", str(fifo), str(tmp_path)):
-        t0 = time.perf_counter()
         line = one_line(capsys, ["shot", BASIC, "--params", special, "--out",
                                  str(tmp_path / "o.png")])
-        assert "not a regular file" in line and time.perf_counter() - t0 < 10.0
+        assert "not a regular file" in line
     assert not (tmp_path / "o.png").exists()
 
 
@@ -295,7 +293,7 @@ def test_textures_decode_to_the_same_float32_as_the_float64_formula(mode):
         srgb = np.repeat(np.clip(np.asarray(im, np.float64) / scale, 0, 1)[..., None], 3, -1)
     else:
         srgb = np.asarray(im.convert("RGB"), np.float64) / 255.0
-    want = np.where(srgb <= 0.04045, srgb / 12.92, ((srgb + 0.055) / 1.055) ** 2.4).astype(np.float32)
+    want = srgb_to_linear(srgb).astype(np.float32)
     assert got.dtype == np.float32 and got.shape == (5, 7, 3)
     np.testing.assert_array_equal(got, want)
 

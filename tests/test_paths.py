@@ -14,13 +14,13 @@ import pytest
 
 import numpy_hybrid as nh
 from conftest import CONFORMANCE
+from test_hybrid import composite_stage
 from world.camera import Camera
 from world.conventions import to_image
 from viewer.render.graph.params import ParamSet
 from viewer.render.passes.gbuffer import GBUFFER, path_targets, path_times
 from viewer.render.modes.hybrid.config import HybridConfig
 from viewer.render.modes.hybrid.mask import raymask_passes
-from viewer.render.modes.hybrid.pipeline import hybrid_pipeline
 from viewer.render.renderer import Renderer
 from viewer.render.modes.hybrid.reveal import BACK, PACKED
 from world.loader import load_scene
@@ -109,12 +109,6 @@ def test_one_segment_writes_no_path_and_a_straight_path_masks_the_same(ctx):
 
 
 # ---- the ray mask and the composite on synthetic paths ------------------------------------------
-
-def composite_stage(config: HybridConfig = HybridConfig()) -> list:
-    """The hybrid pipeline's composite and its displacement tiles (the passes named
-    hybrid_*), run here on a frame whose G-buffer and revealed layer a test uploaded."""
-    return [p for p in hybrid_pipeline(config).passes if p.name.startswith("hybrid_")]
-
 
 def params(segments, **hy):
     p = ParamSet()

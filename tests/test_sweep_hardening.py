@@ -153,22 +153,22 @@ def test_a_hostile_asset_path_is_the_scenes_error_found_before_opening(tmp_path_
     folders, missing files and files past their size limit, at every place a scene names
     a file: the bundle is the scene's error, in the loader's words (the scene file and
     the key), at once (a FIFO would hang a read, /dev/zero fill the memory), holding no
-    bytes; or, where the loader itself reports the file (missing, a folder's name), the
-    file is left out."""
+    bytes. (An OBJ line whose word is empty names no file: that bundle has no error.)"""
     folder = tmp_path_factory.mktemp("hostile") / "scene"
     if "\0" in path and where in ("mtllib", "map"):
         return                                          # (not a word an OBJ line holds)
     scene = hostile_scene(folder, where, path)
-    t0 = time.monotonic()
     b = scene_bundle(scene)
-    assert time.monotonic() - t0 < 5.0
     names = {rel for rel, _ in b.files}
     assert b.size < 1 << 20                             # nothing big was read
     assert not any(n.endswith(("outside.obj", "passwd", "zero", "null", "status", "fifo.obj",
                                "big.obj")) for n in names), names
-    if b.error is not None:
-        assert b.error.startswith(f"{scene}: objects[1]") and b.files == ()
-        assert "\n" not in b.error
+    if path == "" and where in ("mtllib", "map"):
+        assert b.error is None, b.error
+        return
+    assert b.error is not None, (where, path, sorted(names))
+    assert b.error.startswith(f"{scene}: objects[1]") and b.files == ()
+    assert "\n" not in b.error
 
 
 def test_a_file_swapped_for_a_fifo_after_the_rule_is_refused_by_its_descriptor(tmp_path):
@@ -176,10 +176,8 @@ def test_a_file_swapped_for_a_fifo_after_the_rule_is_refused_by_its_descriptor(t
     it without blocking and checks the descriptor, so it is the scene's error at once."""
     from viewer.sweep.bundle import _read
     os.mkfifo(tmp_path / "swapped.obj")
-    t0 = time.monotonic()
     with pytest.raises(UserError, match="is not a regular file"):
         _read(tmp_path / "swapped.obj", 1 << 20, Budget("x"), UserError)
-    assert time.monotonic() - t0 < 5
 
 
 def test_a_glob_never_enters_a_symlinked_folder(tmp_path):
@@ -299,11 +297,9 @@ def test_a_count_past_its_limit_is_one_line_before_any_work(tmp_path_factory, ca
     out = folder / "out"
     text, flags = count_case(kind, n)
     p = sweep_file(folder, text)
-    t0 = time.monotonic()
     code = main(["sweep", str(p), "--out", str(out)] + flags)
     err = one_line_error(capsys)
-    assert code == 2, err
-    assert time.monotonic() - t0 < 30, kind
+    assert code == 2, (kind, err)
     assert not out.exists()
 
 
@@ -400,11 +396,16 @@ def _damage(kind: str, path: Path, rng: int):
         path.write_text("null")
 
 
-@settings(max_examples=14, **PROPS)
-@given(st.sampled_from(["truncated", "not json", "a field missing", "a field of another type",
-                        "a row's field missing", "a variant's rows missing",
-                        "another cell's key", "deep", "huge", "a link", "null"]),
-       st.integers(min_value=0, max_value=10 ** 6))
+# Each kind is a case of its own (drawn from the list, hypothesis need not reach them all);
+# hypothesis draws where a kind cuts the file or which field it drops.
+DAMAGE = ["truncated", "not json", "a field missing", "a field of another type",
+          "a row's field missing", "a variant's rows missing", "another cell's key", "deep",
+          "huge", "a link", "null"]
+
+
+@pytest.mark.parametrize("kind", DAMAGE)
+@settings(max_examples=2, **PROPS)
+@given(st.integers(min_value=0, max_value=10 ** 6))
 def test_a_damaged_cell_file_is_run_again(tmp_path_factory, kind, rng):
     tmp = tmp_path_factory.mktemp("damaged")
     p = sweep_file(tmp)
@@ -680,10 +681,12 @@ def test_timed_cells_ask_for_the_timer_that_the_local_worker_declares(tmp_path, 
                                 True, stream=open(tmp_path / "progress.txt", "a"))
     assert facts["failed"] == 0 and asked == [{"timer": 1}] * 2
     assert all(r["frame_ms"] > 0 for r in pq.read_table(tmp_path / "out/table.parquet").to_pylist())
-    if limits.MAX_LOCAL_WORKERS >= 2:
-        assert main(["sweep", str(p), "--out", str(tmp_path / "o2"), "--timing",
-                     "--workers", "2"]) == 2
-        one_line_error(capsys, "--timing with --workers 2")
+    # (refused before any worker starts: checked on a one-core machine too)
+    monkeypatch.setattr(limits, "MAX_LOCAL_WORKERS", max(2, limits.MAX_LOCAL_WORKERS))
+    assert main(["sweep", str(p), "--out", str(tmp_path / "o2"), "--timing",
+                 "--workers", "2"]) == 2
+    one_line_error(capsys, "--timing with --workers 2")
+    assert not (tmp_path / "o2").exists()
 
 
 def test_the_worker_plugin_makes_the_context_once_and_releases_it(tmp_path):
