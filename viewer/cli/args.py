@@ -6,12 +6,12 @@ import json
 import math
 import os
 import re
-import stat
 from dataclasses import dataclass
 from pathlib import Path
 
 from world import limits
 from world.errors import SceneError, UserError
+from world.regular_file import Grew, NotRegular, TooLarge, read_regular
 from viewer.render.graph.params import ParamSet
 from world.scene import Scene
 from world.loader import (builtin_dir, builtin_scene_names, builtin_scene_path,
@@ -262,40 +262,20 @@ def sidecar_size(value, source: str) -> tuple[int, int]:
     return check_size(value[0], value[1], f"{source}: size")
 
 
-class _NotRegular(OSError):
-    pass
-
-
 def read_user_file(flag: str, path: str, max_bytes: int, what: str) -> bytes:
     """The bytes of a file a flag names: a regular file (not a device, FIFO or folder,
     refused before any read) of at most `max_bytes`; else one line naming the flag."""
     try:
-        with open(path, "rb", opener=_open_regular) as f:
-            raw = f.read(max_bytes + 1)
+        return read_regular(path, max_bytes)
     except FileNotFoundError:
         raise UserError(f"{flag} {path}: file not found") from None
-    except _NotRegular as exc:
+    except NotRegular as exc:
         raise UserError(f"{flag} {path}: {exc}") from None
+    except (TooLarge, Grew):
+        raise UserError(f"{flag} {path}: larger than {max_bytes} bytes: not {what}") from None
     except (OSError, ValueError) as exc:
         raise UserError(f"{flag} {path}: cannot read "
                         f"({getattr(exc, 'strerror', None) or exc.__class__.__name__})") from None
-    if len(raw) > max_bytes:
-        raise UserError(f"{flag} {path}: larger than {max_bytes} bytes: not {what}")
-    return raw
-
-
-def _open_regular(path, flags):
-    """os.open that refuses what is not a regular file before any read (a FIFO is opened
-    without blocking, /dev/zero is never read)."""
-    fd = os.open(path, flags | getattr(os, "O_NONBLOCK", 0))
-    try:
-        if not stat.S_ISREG(os.fstat(fd).st_mode):
-            raise _NotRegular("not a regular file")
-        os.set_blocking(fd, True)
-    except BaseException:
-        os.close(fd)
-        raise
-    return fd
 
 
 def setup(args) -> Setup:

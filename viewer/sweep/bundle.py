@@ -23,7 +23,6 @@ import hashlib
 import json
 import os
 import shutil
-import stat
 import struct
 import tempfile
 import tomllib
@@ -35,6 +34,7 @@ from urllib.parse import unquote, urlsplit
 from world import limits
 from world.assets import asset_file
 from world.errors import SceneError, UserError
+from world.regular_file import Grew, NotRegular, TooLarge, read_regular
 
 COPIES_PREFIX = "hmblur-sweep-"
 MAX_GLTF_BYTES = limits.MAX_GLTF_FILE_BYTES
@@ -110,22 +110,17 @@ def _read(real: Path, cap: int, budget: Budget, error) -> bytes:
     blocking and checked again (a regular file of at most `cap` bytes), counted against
     the sweep's budget before they are read. `error(expected)` makes the exception."""
     try:
-        fd = os.open(real, os.O_RDONLY | os.O_NONBLOCK)
+        return read_regular(real, cap, lambda size: budget.take(size, real))
     except FileNotFoundError:
         raise error(f"file not found: {real}") from None
+    except NotRegular:
+        raise error(f"{real} is not a regular file (a folder, device or FIFO)") from None
+    except TooLarge as e:
+        raise error(f"{real} holds {e.size} bytes, more than the {cap} a scene may load") from None
+    except Grew:
+        raise error(f"{real} grew while it was read") from None
     except OSError as e:
         raise error(f"{real} cannot be read ({e.strerror or e})") from None
-    with os.fdopen(fd, "rb") as f:
-        st = os.fstat(f.fileno())
-        if not stat.S_ISREG(st.st_mode):
-            raise error(f"{real} is not a regular file (a folder, device or FIFO)")
-        if st.st_size > cap:
-            raise error(f"{real} holds {st.st_size} bytes, more than the {cap} a scene may load")
-        budget.take(st.st_size, real)
-        data = f.read(st.st_size + 1)         # (read(n) allocates n bytes first)
-    if len(data) > st.st_size:
-        raise error(f"{real} grew while it was read")
-    return data
 
 
 def scene_references(data: bytes) -> list[tuple[str, str, str]]:

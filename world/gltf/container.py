@@ -9,13 +9,14 @@ import base64
 import binascii
 import json
 import os
-import stat
 import struct
 import urllib.parse
 from pathlib import Path
 
 from world import limits
 from world.gltf.document import GltfError, fail, integer, kept, obj, ref, show, string
+from world import regular_file
+from world.regular_file import Grew, NotRegular, TooLarge
 
 _GLB_MAGIC = 0x46546C67               # b"glTF"
 _CHUNK_JSON = 0x4E4F534A
@@ -26,21 +27,15 @@ def read_regular(path: Path, what: str) -> bytes:
     """The bytes of a regular file of at most limits.MAX_GLTF_FILE_BYTES."""
     cap = limits.MAX_GLTF_FILE_BYTES
     try:
-        st = os.stat(path)
+        return regular_file.read_regular(path, cap)
+    except NotRegular:
+        raise GltfError(f"{what}: {path} is not a regular file") from None
+    except TooLarge as e:
+        raise GltfError(f"{what}: {path} is {e.size} bytes, more than the limit of {cap}") from None
+    except Grew:
+        raise GltfError(f"{what}: {path} grew while it was read") from None
     except OSError as e:
         raise GltfError(f"{what}: cannot read {path}: {e.strerror or e}") from None
-    if not stat.S_ISREG(st.st_mode):
-        raise GltfError(f"{what}: {path} is not a regular file")
-    if st.st_size > cap:
-        raise GltfError(f"{what}: {path} is {st.st_size} bytes, more than the limit of {cap}")
-    try:
-        with open(path, "rb") as f:
-            data = f.read(st.st_size + 1)        # (read(n) allocates n bytes first)
-    except OSError as e:
-        raise GltfError(f"{what}: cannot read {path}: {e.strerror or e}") from None
-    if len(data) > st.st_size:
-        raise GltfError(f"{what}: {path} grew while it was read")
-    return data
 
 
 def read_document(path: Path) -> tuple[dict, bytes | None]:

@@ -14,7 +14,6 @@ from __future__ import annotations
 import hashlib
 import linecache
 import os
-import stat
 import sys
 import traceback
 import types
@@ -24,6 +23,7 @@ from typing import Callable
 
 from world import limits
 from world.errors import UserError, printable
+from world.regular_file import Grew, NotRegular, TooLarge, read_regular
 
 KINDS = ("glsl", "py")
 GLSL_VERSION = "#version 330 core"
@@ -127,23 +127,18 @@ def from_callable(fn: Callable, name: str | None = None) -> UserPass:
 def read_method_file(path: Path, where: str) -> bytes:
     """The file's bytes: a regular file of at most limits.MAX_METHOD_BYTES, else one line."""
     try:
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+        data = read_regular(path, limits.MAX_METHOD_BYTES)
     except FileNotFoundError:
         raise UserError(f"{where}: {path}: file not found") from None
+    except NotRegular:
+        raise UserError(f"{where}: {path}: not a regular file") from None
+    except TooLarge as exc:
+        raise UserError(f"{where}: {path}: {exc.size} bytes, more than the "
+                        f"{limits.MAX_METHOD_BYTES} a method file may hold") from None
+    except Grew:
+        raise UserError(f"{where}: {path}: grew while it was read") from None
     except OSError as exc:
         raise UserError(f"{where}: {path}: cannot read ({exc.strerror or exc})") from None
-    try:
-        st = os.fstat(fd)
-        if not stat.S_ISREG(st.st_mode):
-            raise UserError(f"{where}: {path}: not a regular file")
-        if st.st_size > limits.MAX_METHOD_BYTES:
-            raise UserError(f"{where}: {path}: {st.st_size} bytes, more than the "
-                            f"{limits.MAX_METHOD_BYTES} a method file may hold")
-        os.set_blocking(fd, True)
-        with os.fdopen(fd, "rb", closefd=False) as f:
-            data = f.read(limits.MAX_METHOD_BYTES + 1)
-    finally:
-        os.close(fd)
     try:
         data.decode("utf-8")
     except UnicodeDecodeError as exc:
